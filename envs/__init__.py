@@ -1,0 +1,1 @@
+"""Gymnasium handover environments, installed as :mod:`sandbox.envs`."""
