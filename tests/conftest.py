@@ -1,0 +1,54 @@
+"""Shared fixtures.
+
+Tests that need the recorded handovers or a browser use the fixtures below: on
+a user's machine they skip when the resource is absent; under CI
+(``SANDBOX_REQUIRE_DATA=1`` / ``SANDBOX_REQUIRE_BROWSER=1``) a missing resource
+is a failure, not a skip.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+RECORDED_SET = "birl-handover-20180329"
+
+
+def _require(flag: str) -> bool:
+    return os.environ.get(flag, "") not in ("", "0", "false", "no")
+
+
+def _missing(what: str, flag: str) -> None:
+    if _require(flag):
+        pytest.fail(f"{what} is required here ({flag}=1) but was not found")
+    pytest.skip(f"{what} not found")
+
+
+def recorded_root() -> Path:
+    """Folder holding the shared recordings: ``$SANDBOX_DATA`` or ``../shared/data``."""
+    env = os.environ.get("SANDBOX_DATA")
+    return Path(env) if env else REPO.parent / "shared" / "data"
+
+
+@pytest.fixture(scope="session")
+def recorded_dir() -> Path:
+    """The recorded object-handover set (``<root>/birl-handover-20180329``)."""
+    path = recorded_root() / RECORDED_SET
+    if not path.is_dir():
+        _missing(f"the recorded handovers ({path})", "SANDBOX_REQUIRE_DATA")
+    return path
+
+
+@pytest.fixture(scope="session")
+def chromium() -> str:
+    """Path of a Chromium executable for headless browser tests."""
+    for name in ("chromium", "chromium-browser", "google-chrome"):
+        exe = shutil.which(name)
+        if exe:
+            return exe
+    _missing("a Chromium browser", "SANDBOX_REQUIRE_BROWSER")
+    raise AssertionError("unreachable")
