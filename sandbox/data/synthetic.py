@@ -97,3 +97,33 @@ def two_task_demos(
                 )
             )
     return demos
+
+
+#: Names accepted by :func:`make_dataset`.
+DATASETS = ("two_task",)
+
+
+def make_dataset(
+    name: str, n_per_task: int, rng: np.random.Generator, **options
+) -> list[Demonstration]:
+    """Generate a named synthetic dataset of paired human/robot demonstrations.
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`DATASETS`.
+    n_per_task : int
+        Demonstrations per task.
+    rng : numpy.random.Generator
+        Source of randomness; the same seed gives the same demonstrations.
+    **options
+        Keyword options of the dataset's generator (e.g. :func:`two_task_demos`).
+
+    Returns
+    -------
+    list of Demonstration
+        The demonstrations, grouped by task.
+    """
+    if name not in DATASETS:
+        raise ValueError(f"name: expected one of {list(DATASETS)}, got {name!r}")
+    return two_task_demos(n_per_task, rng, **options)
