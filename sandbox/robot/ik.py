@@ -1,0 +1,274 @@
+"""Batched damped-least-squares inverse kinematics with joint limits (pure numpy).
+
+All targets are solved together: each iteration takes, for every target not
+yet converged, the damped least-squares step (Wampler 1986; Buss 2004)
+
+.. math::
+
+    \\Delta q = J_W^T (J_W J_W^T + \\lambda^2 I)^{-1} e,
+
+where ``e`` is the task error (position, and optionally orientation as an
+axis-angle vector scaled by ``angle_weight``), clamped in length, and ``J_W``
+is the Jacobian with the columns of joints that sit on a limit and are pushed
+beyond it removed; the new ``q`` is clipped to the limits. A target that has
+not converged after ``max_iter`` steps, or that stalls, is restarted from the
+next configuration of a fixed list (the home configuration, then a
+deterministic low-discrepancy set over the joint ranges), up to ``restarts``
+times; the best solution found is kept. Unreachable targets end as failures
+with their smallest error; nothing raises.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from sandbox.core.validation import check_array, check_positive
+
+FloatArray = NDArray[np.float64]
+#: ``forward(q (n, 7), jacobian: bool) -> (pose (n, 4, 4), jacobian (n, 6, 7) or None)``
+Forward = Callable[[FloatArray, bool], tuple[FloatArray, FloatArray | None]]
+
+
+@dataclass(frozen=True)
+class IKResult:
+    """Result of :func:`solve` for n targets.
+
+    Attributes
+    ----------
+    q : ndarray, shape (n, 7)
+        Joint configurations (rad), within the joint limits.
+    error : ndarray, shape (n,)
+        Position error achieved (m).
+    success : ndarray of bool, shape (n,)
+        ``error <= tol`` (and ``angle_error <= angle_tol`` with orientations).
+    angle_error : ndarray, shape (n,)
+        Orientation error (rad); zeros when no orientation was asked.
+    iterations : ndarray of int, shape (n,)
+        Steps taken per target, restarts included.
+    """
+
+    q: FloatArray
+    error: FloatArray
+    success: NDArray[np.bool_]
+    angle_error: FloatArray
+    iterations: NDArray[np.int64]
+
+
+def _rotation_error(target: FloatArray, current: FloatArray) -> FloatArray:
+    """Axis-angle vectors (n, 3) of ``target @ current.T`` (rad), in the base frame."""
+    rel = target @ np.swapaxes(current, -1, -2)
+    vec = 0.5 * np.stack(
+        [rel[:, 2, 1] - rel[:, 1, 2], rel[:, 0, 2] - rel[:, 2, 0], rel[:, 1, 0] - rel[:, 0, 1]], -1
+    )
+    sin = np.linalg.norm(vec, axis=-1)
+    cos = np.clip((np.trace(rel, axis1=1, axis2=2) - 1.0) / 2.0, -1.0, 1.0)
+    angle = np.arctan2(sin, cos)
+    scale = np.where(sin > 1e-9, angle / np.maximum(sin, 1e-12), 1.0)
+    out = vec * scale[:, None]
+    # Near pi, the antisymmetric part vanishes: take any axis from the symmetric part.
+    flip = (sin < 1e-6) & (cos < 0)
+    if flip.any():
+        sym = (rel[flip] + np.eye(3)) / 2.0
+        col = np.argmax(np.linalg.norm(sym, axis=1), axis=-1)
+        axis = sym[np.arange(len(col)), :, col]
+        out[flip] = np.pi * axis / np.linalg.norm(axis, axis=-1, keepdims=True)
+    return out
+
+
+def _restart_seeds(lower: FloatArray, upper: FloatArray, count: int) -> FloatArray:
+    """Deterministic configurations (count, 7) spread over the limits (Halton, no scrambling)."""
+    primes = np.array([2, 3, 5, 7, 11, 13, 17])
+    out = np.zeros((count, len(lower)))
+    for k in range(count):
+        index = k + 1
+        for d, base in enumerate(primes[: len(lower)]):
+            f, r, i = 1.0, 0.0, index
+            while i > 0:
+                f /= base
+                r += f * (i % base)
+                i //= base
+            out[k, d] = r
+    # Stay in the inner 80 % of each range: configurations far from the limits.
+    return lower + (0.1 + 0.8 * out) * (upper - lower)
+
+
+def _check_inputs(targets, q_seed, orientations, lower):
+    targets = np.asarray(targets)
+    if targets.ndim == 1:
+        targets = targets[None]
+    targets = check_array(targets, "targets", 2, shape=(None, 3))
+    n, dof = len(targets), len(lower)
+    seed = np.asarray(q_seed)
+    if seed.ndim == 1:
+        seed = np.broadcast_to(seed, (n, seed.shape[0]))
+    seed = check_array(seed, "q_seed", 2, shape=(n, dof))
+    if orientations is not None:
+        orientations = np.asarray(orientations)
+        if orientations.ndim == 2:
+            orientations = np.broadcast_to(orientations, (n, 3, 3))
+        orientations = check_array(orientations, "orientations", 3, shape=(n, 3, 3))
+        if not np.allclose(orientations @ np.swapaxes(orientations, 1, 2), np.eye(3), atol=1e-6):
+            raise ValueError("orientations: expected rotation matrices (orthonormal), got others")
+    return targets, seed, orientations
+
+
+def _task_error(pose, targets, orientations, angle_weight):
+    """Position error (n, 3) m, and the stacked task error (n, 3 or 6)."""
+    dp = targets - pose[:, :3, 3]
+    if orientations is None:
+        return dp, dp, None
+    dr = _rotation_error(orientations, pose[:, :3, :3])
+    return dp, np.concatenate([dp, angle_weight * dr], axis=1), dr
+
+
+def _dls_step(jac, err, q, lower, upper, damping, max_step):
+    """Damped least-squares joint step (n, 7), dropping joints pushed past a limit."""
+    norm = np.linalg.norm(err, axis=1, keepdims=True)
+    err = err * np.minimum(1.0, max_step / np.maximum(norm, 1e-12))
+    eye = damping**2 * np.eye(jac.shape[1])
+    mask = np.ones_like(q)
+    for _ in range(2):
+        jw = jac * mask[:, None, :]
+        y = np.linalg.solve(jw @ np.swapaxes(jw, 1, 2) + eye, err[:, :, None])[:, :, 0]
+        dq = np.einsum("nji,nj->ni", jw, y)
+        blocked = ((q <= lower + 1e-9) & (dq < 0)) | ((q >= upper - 1e-9) & (dq > 0))
+        if not (blocked & (mask > 0)).any():
+            break
+        mask = np.where(blocked, 0.0, mask)
+    return dq
+
+
+def _descend(forward, targets, orientations, q, lower, upper, settings):
+    """Run damped least squares from ``q`` (n, 7); return q, position error, angle error, steps."""
+    n = len(q)
+    q = np.clip(q, lower, upper)
+    pos_err, ang_err = np.full(n, np.inf), np.zeros(n)
+    best, stall, steps = np.full(n, np.inf), np.zeros(n, int), np.zeros(n, np.int64)
+    active = np.arange(n)
+    for _ in range(settings["max_iter"] + 1):
+        pose, jac = forward(q[active], True)
+        dp, err, dr = _task_error(
+            pose, targets[active], _take(orientations, active), settings["angle_weight"]
+        )
+        pos_err[active] = np.linalg.norm(dp, axis=1)
+        if dr is not None:
+            ang_err[active] = np.linalg.norm(dr, axis=1)
+        score = pos_err[active] + settings["angle_weight"] * ang_err[active]
+        stall[active] = np.where(score < best[active] - 1e-7, 0, stall[active] + 1)
+        best[active] = np.minimum(best[active], score)
+        done = (pos_err[active] <= settings["precision"]) & (
+            ang_err[active] <= settings["angle_precision"]
+        )
+        keep = ~done & (stall[active] < 10)
+        active, jac, err = active[keep], jac[keep], err[keep]
+        if active.size == 0 or steps.max(initial=0) >= settings["max_iter"]:
+            break
+        if orientations is None:
+            jac = jac[:, :3]
+        dq = _dls_step(jac, err, q[active], lower, upper, settings["damping"], settings["max_step"])
+        q[active] = np.clip(q[active] + dq, lower, upper)
+        steps[active] += 1
+    return q, pos_err, ang_err, steps
+
+
+def _take(x, index):
+    return None if x is None else x[index]
+
+
+def solve(
+    forward: Forward,
+    targets: ArrayLike,
+    q_seed: ArrayLike,
+    lower: FloatArray,
+    upper: FloatArray,
+    *,
+    tol: float = 0.01,
+    orientations: ArrayLike | None = None,
+    angle_tol: float = 0.05,
+    angle_weight: float = 0.2,
+    max_iter: int = 50,
+    restarts: int = 6,
+    damping: float = 0.02,
+    max_step: float = 0.1,
+) -> IKResult:
+    """Solve inverse kinematics for n targets at once.
+
+    Parameters
+    ----------
+    forward : callable
+        ``forward(q (m, 7), jacobian) -> (pose (m, 4, 4), J (m, 6, 7) or None)``.
+    targets : array_like, shape (n, 3) or (3,)
+        Target positions (m).
+    q_seed : array_like, shape (7,) or (n, 7)
+        First starting configuration(s) (rad), clipped to the limits.
+    lower, upper : ndarray, shape (7,)
+        Joint limits (rad).
+    tol : float
+        Success threshold on the position error (m); iterations go on to
+        ``tol / 100`` when they can.
+    orientations : array_like, shape (n, 3, 3) or (3, 3), optional
+        Target rotation matrices (base frame); position only if omitted.
+    angle_tol : float
+        Success threshold on the orientation error (rad).
+    angle_weight : float
+        Metres of task error per radian of orientation error.
+    max_iter : int
+        Steps per attempt.
+    restarts : int
+        Further attempts, from fixed configurations, for targets that failed.
+    damping : float
+        Damping ``lambda`` (m) of the least-squares step.
+    max_step : float
+        Largest task-space error corrected in one step (m).
+
+    Returns
+    -------
+    IKResult
+    """
+    settings = {
+        "max_iter": int(check_positive(max_iter, "max_iter")),
+        "damping": check_positive(damping, "damping"),
+        "max_step": check_positive(max_step, "max_step"),
+        "angle_weight": check_positive(angle_weight, "angle_weight"),
+        "precision": 0.01 * check_positive(tol, "tol"),
+        "angle_precision": 0.01 * check_positive(angle_tol, "angle_tol"),
+    }
+    if int(restarts) != restarts or restarts < 0:
+        raise ValueError(f"restarts: expected an integer >= 0, got {restarts!r}")
+    targets, seed, orientations = _check_inputs(targets, q_seed, orientations, lower)
+    n = len(targets)
+    q_best = np.clip(seed, lower, upper)
+    err_best, ang_best = np.full(n, np.inf), np.full(n, np.inf)
+    steps = np.zeros(n, np.int64)
+    starts = [q_best] + [
+        np.broadcast_to(s, seed.shape) for s in _restart_seeds(lower, upper, int(restarts))
+    ]
+    for start in starts:
+        ok = (err_best <= tol) & (ang_best <= (angle_tol if orientations is not None else np.inf))
+        todo = np.flatnonzero(~ok)
+        if todo.size == 0:
+            break
+        q, e, a, k = _descend(
+            forward,
+            targets[todo],
+            _take(orientations, todo),
+            start[todo].copy(),
+            lower,
+            upper,
+            settings,
+        )
+        better = e + angle_weight * a < err_best[todo] + angle_weight * ang_best[todo]
+        q_best[todo[better]], err_best[todo[better]], ang_best[todo[better]] = (
+            q[better],
+            e[better],
+            a[better],
+        )
+        steps[todo] += k
+    if orientations is None:
+        ang_best = np.zeros(n)
+    success = (err_best <= tol) & (ang_best <= angle_tol)
+    return IKResult(q_best, err_best, success, ang_best, steps)
