@@ -1,8 +1,8 @@
-"""Synthetic paired human/robot handover demonstrations (seeded).
+"""The minimal two-task generator used by the core's tests and the demo.
 
-This module holds the built-in data used when nothing else is given. It starts
-with :func:`two_task_demos`, a minimal generator of smooth reach-to-handover
-motions with two clearly different endings, used by the tests and the demo.
+:func:`two_task_demos` makes smooth reach-to-handover motions with two clearly
+different endings and a robot side that is a fixed smooth function of the hand's
+end point (no inverse kinematics), so it is fast and dependency-free.
 """
 
 from __future__ import annotations
@@ -10,20 +10,13 @@ from __future__ import annotations
 import numpy as np
 
 from sandbox.data.demonstration import Demonstration
-
-HUMAN_NAMES = ("human_left_hand_x", "human_left_hand_y", "human_left_hand_z")
-ROBOT_NAMES = ("left_s0", "left_s1", "left_e0", "left_e1", "left_w0", "left_w1", "left_w2")
-
-#: Baxter's left-arm home configuration in the recordings (rad).
-Q_HOME = np.array([0.07, -0.89, -0.95, 1.45, 0.52, 1.29, -0.12])
-#: Mean start of the human left hand in Baxter's base frame in the recordings (m).
-HAND_START = np.array([1.10, -0.12, 0.25])
-
-
-def minimum_jerk(s: np.ndarray) -> np.ndarray:
-    """Minimum-jerk time scaling 10s^3 - 15s^4 + 6s^5 of a phase ``s`` in [0, 1]."""
-    s = np.clip(s, 0.0, 1.0)
-    return s**3 * (10.0 - 15.0 * s + 6.0 * s**2)
+from sandbox.data.synthetic.base import (
+    HAND_START,
+    HUMAN_NAMES,
+    Q_HOME,
+    ROBOT_NAMES,
+    minimum_jerk,
+)
 
 
 def two_task_demos(
@@ -98,32 +91,3 @@ def two_task_demos(
             )
     return demos
 
-
-#: Names accepted by :func:`make_dataset`.
-DATASETS = ("two_task",)
-
-
-def make_dataset(
-    name: str, n_per_task: int, rng: np.random.Generator, **options
-) -> list[Demonstration]:
-    """Generate a named synthetic dataset of paired human/robot demonstrations.
-
-    Parameters
-    ----------
-    name : str
-        One of :data:`DATASETS`.
-    n_per_task : int
-        Demonstrations per task.
-    rng : numpy.random.Generator
-        Source of randomness; the same seed gives the same demonstrations.
-    **options
-        Keyword options of the dataset's generator (e.g. :func:`two_task_demos`).
-
-    Returns
-    -------
-    list of Demonstration
-        The demonstrations, grouped by task.
-    """
-    if name not in DATASETS:
-        raise ValueError(f"name: expected one of {list(DATASETS)}, got {name!r}")
-    return two_task_demos(n_per_task, rng, **options)

@@ -1,0 +1,75 @@
+"""Constants and small helpers shared by the synthetic generators.
+
+The numbers marked *measured* come from the recorded BIRL handovers
+(``birl-handover-20180329``, 174 trials, pooled over its four tasks).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from sandbox.core.validation import FloatArray
+
+HUMAN_NAMES = ("human_left_hand_x", "human_left_hand_y", "human_left_hand_z")
+ROBOT_NAMES = ("left_s0", "left_s1", "left_e0", "left_e1", "left_w0", "left_w1", "left_w2")
+
+#: Baxter's left-arm home configuration in the recordings (rad).
+Q_HOME = np.array([0.07, -0.89, -0.95, 1.45, 0.52, 1.29, -0.12])
+#: Mean start of the human left hand in Baxter's base frame in the recordings (m).
+HAND_START = np.array([1.10, -0.12, 0.25])
+
+
+def minimum_jerk(s: np.ndarray) -> np.ndarray:
+    """Minimum-jerk time scaling 10s^3 - 15s^4 + 6s^5 of a phase ``s`` in [0, 1]."""
+    s = np.clip(s, 0.0, 1.0)
+    return s**3 * (10.0 - 15.0 * s + 6.0 * s**2)
+
+
+def skewed_minimum_jerk(s: np.ndarray, skew: float = 1.0) -> np.ndarray:
+    """Minimum-jerk scaling of the warped phase ``s**skew``.
+
+    ``skew < 1`` moves the speed peak earlier (a human reach accelerates faster
+    than it decelerates: the recorded peak is at ~40 % of the reach), ``skew = 1``
+    is the symmetric profile. Stays monotonic from 0 to 1 for ``skew > 1/3``.
+
+    Parameters
+    ----------
+    s : array_like, shape (T,)
+        Phase of the motion; clipped to [0, 1].
+    skew : float
+        Warp exponent (> 1/3).
+
+    Returns
+    -------
+    ndarray, shape (T,)
+        Progress in [0, 1].
+    """
+    s = np.clip(np.asarray(s, dtype=float), 0.0, 1.0)
+    return minimum_jerk(s**skew)
+
+
+def check_rng(rng: object) -> np.random.Generator:
+    """Return ``rng`` after checking it is a ``numpy.random.Generator``."""
+    if not isinstance(rng, np.random.Generator):
+        raise ValueError(f"rng: expected a numpy.random.Generator, got {type(rng).__name__}")
+    return rng
+
+
+def check_count(value: object, name: str, minimum: int) -> int:
+    """Return ``value`` as an int after checking it is an integer >= ``minimum``."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
+        raise ValueError(f"{name}: expected an integer >= {minimum}, got {value!r}")
+    return int(value)
+
+
+def sample_times(duration: float, rate_hz: float) -> FloatArray:
+    """Row times (s) from 0 to ``duration`` at ``rate_hz``, last row exactly at ``duration``.
+
+    Returns
+    -------
+    ndarray, shape (T,)
+        Strictly increasing times.
+    """
+    t = np.arange(0.0, duration + 0.5 / rate_hz, 1.0 / rate_hz)
+    t[-1] = duration  # arange stops within half a row of it, so order is kept
+    return t

@@ -1,0 +1,44 @@
+"""The registry of synthetic datasets: :func:`make_dataset` by name."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from sandbox.data.demonstration import Demonstration
+from sandbox.data.synthetic.two_task import two_task_demos
+
+_GENERATORS: dict[str, Callable[..., list[Demonstration]]] = {
+    "two_task": two_task_demos,
+}
+
+#: Names accepted by :func:`make_dataset`.
+DATASETS = tuple(_GENERATORS)
+
+
+def make_dataset(
+    name: str, n_per_task: int, rng: np.random.Generator, **options: Any
+) -> list[Demonstration]:
+    """Generate a named synthetic dataset of paired human/robot demonstrations.
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`DATASETS`.
+    n_per_task : int
+        Demonstrations per task.
+    rng : numpy.random.Generator
+        Source of randomness; the same seed gives the same demonstrations.
+    **options
+        Keyword options of the dataset's generator.
+
+    Returns
+    -------
+    list of Demonstration
+        The demonstrations, grouped by task.
+    """
+    if name not in _GENERATORS:
+        raise ValueError(f"name: expected one of {list(DATASETS)}, got {name!r}")
+    return _GENERATORS[name](n_per_task, rng, **options)
