@@ -79,21 +79,22 @@ def _rotation_error(target: FloatArray, current: FloatArray) -> FloatArray:
     return out
 
 
-def _restart_seeds(lower: FloatArray, upper: FloatArray, count: int) -> FloatArray:
-    """Deterministic configurations (count, 7) spread over the limits (Halton, no scrambling)."""
-    primes = np.array([2, 3, 5, 7, 11, 13, 17])
-    out = np.zeros((count, len(lower)))
+def _halton(count: int, dims: int) -> FloatArray:
+    """First ``count`` points (count, dims) of the Halton sequence in [0, 1) (index 0 skipped)."""
+    primes = (2, 3, 5, 7, 11, 13, 17, 19, 23, 29)[:dims]
+    out = np.zeros((count, dims))
     for k in range(count):
-        index = k + 1
-        for d, base in enumerate(primes[: len(lower)]):
-            f, r, i = 1.0, 0.0, index
+        for d, base in enumerate(primes):
+            f, i = 1.0, k + 1
             while i > 0:
                 f /= base
-                r += f * (i % base)
+                out[k, d] += f * (i % base)
                 i //= base
-            out[k, d] = r
-    # Stay in the inner 80 % of each range: configurations far from the limits.
-    return lower + (0.1 + 0.8 * out) * (upper - lower)
+    return out
+
+
+#: Restart configurations, as fractions of the joint ranges (deterministic).
+_HALTON = _halton(32, 7)
 
 
 def _check_inputs(targets, q_seed, orientations, lower):
@@ -237,36 +238,30 @@ def solve(
         "precision": 0.01 * check_positive(tol, "tol"),
         "angle_precision": 0.01 * check_positive(angle_tol, "angle_tol"),
     }
-    if int(restarts) != restarts or restarts < 0:
-        raise ValueError(f"restarts: expected an integer >= 0, got {restarts!r}")
+    if int(restarts) != restarts or not 0 <= restarts <= len(_HALTON):
+        raise ValueError(f"restarts: expected an integer in [0, {len(_HALTON)}], got {restarts!r}")
+    restart = lower + (0.1 + 0.8 * _HALTON) * (upper - lower)  # inner 80 % of the ranges
     targets, seed, orientations = _check_inputs(targets, q_seed, orientations, lower)
     n = len(targets)
     q_best = np.clip(seed, lower, upper)
     err_best, ang_best = np.full(n, np.inf), np.full(n, np.inf)
     steps = np.zeros(n, np.int64)
-    starts = [q_best] + [
-        np.broadcast_to(s, seed.shape) for s in _restart_seeds(lower, upper, int(restarts))
-    ]
-    for start in starts:
-        ok = (err_best <= tol) & (ang_best <= (angle_tol if orientations is not None else np.inf))
-        todo = np.flatnonzero(~ok)
+    angle_ok = angle_tol if orientations is not None else np.inf
+    for attempt in range(int(restarts) + 1):
+        todo = np.flatnonzero((err_best > tol) | (ang_best > angle_ok))
         if todo.size == 0:
             break
+        start = (
+            q_best[todo]
+            if attempt == 0
+            else np.repeat(restart[attempt - 1 : attempt], todo.size, 0)
+        )
         q, e, a, k = _descend(
-            forward,
-            targets[todo],
-            _take(orientations, todo),
-            start[todo].copy(),
-            lower,
-            upper,
-            settings,
+            forward, targets[todo], _take(orientations, todo), start, lower, upper, settings
         )
         better = e + angle_weight * a < err_best[todo] + angle_weight * ang_best[todo]
-        q_best[todo[better]], err_best[todo[better]], ang_best[todo[better]] = (
-            q[better],
-            e[better],
-            a[better],
-        )
+        q_best[todo[better]] = q[better]
+        err_best[todo[better]], ang_best[todo[better]] = e[better], a[better]
         steps[todo] += k
     if orientations is None:
         ang_best = np.zeros(n)
