@@ -109,7 +109,7 @@ def _check_inputs(targets, q_seed, orientations, lower):
     seed = check_array(seed, "q_seed", 2, shape=(n, dof))
     if orientations is not None:
         orientations = np.asarray(orientations)
-        if orientations.ndim == 2:
+        if orientations.shape == (3, 3):
             orientations = np.broadcast_to(orientations, (n, 3, 3))
         orientations = check_array(orientations, "orientations", 3, shape=(n, 3, 3))
         if not np.allclose(orientations @ np.swapaxes(orientations, 1, 2), np.eye(3), atol=1e-6):
