@@ -1,0 +1,106 @@
+"""Gaussian basis functions over the phase z in [0, 1] (paper eq. 1-3).
+
+Notation: N basis functions with centres :math:`c_n` and common width
+:math:`h`,
+
+.. math::  \\psi_n(z) = \\exp\\left(-\\frac{(z - c_n)^2}{2h}\\right),
+
+optionally normalised so that :math:`\\sum_n \\psi_n(z) = 1`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from sandbox.core.validation import FloatArray, check_array
+
+
+@dataclass(frozen=True)
+class GaussianBasis:
+    """N Gaussian bumps over phase.
+
+    Parameters
+    ----------
+    n_basis : int
+        Number of basis functions N (>= 2). The paper uses 31.
+    width : float or None
+        Variance h of each bump (phase units squared). ``None``: the squared
+        spacing between centres, so neighbours cross at exp(-1/8) of their peak.
+    margin : float
+        Centres are spread evenly over ``[-margin, 1 + margin]``.
+    normalized : bool
+        Divide by the sum over bumps (a partition of unity).
+    """
+
+    n_basis: int = 31
+    width: float | None = None
+    margin: float = 0.0
+    normalized: bool = False
+
+    def __post_init__(self) -> None:
+        if int(self.n_basis) != self.n_basis or self.n_basis < 2:
+            raise ValueError(f"n_basis: expected an integer >= 2, got {self.n_basis!r}")
+        if self.width is not None and not (np.isfinite(self.width) and self.width > 0):
+            raise ValueError(f"width: expected a finite number > 0 or None, got {self.width!r}")
+        if not (np.isfinite(self.margin) and 0 <= self.margin < 1):
+            raise ValueError(f"margin: expected a number in [0, 1), got {self.margin!r}")
+
+    @property
+    def centers(self) -> FloatArray:
+        """Centres :math:`c_n`, shape (N,)."""
+        return np.linspace(-self.margin, 1.0 + self.margin, int(self.n_basis))
+
+    @property
+    def h(self) -> float:
+        """The variance h actually used."""
+        if self.width is not None:
+            return float(self.width)
+        spacing = (1.0 + 2.0 * self.margin) / (self.n_basis - 1)
+        return spacing**2
+
+    def __call__(self, z: ArrayLike) -> FloatArray:
+        """Evaluate the basis.
+
+        Parameters
+        ----------
+        z : array_like, shape (...)
+            Phases (usually in [0, 1]).
+
+        Returns
+        -------
+        Psi : ndarray, shape (..., N)
+            :math:`\\psi_n(z)` for every phase (eq. 3 rows).
+        """
+        z = np.asarray(z, dtype=np.float64)
+        return self.evaluate(z)
+
+    def evaluate(self, z: FloatArray) -> FloatArray:
+        """Like ``__call__`` without conversion (hot path; ``z`` is a float array)."""
+        d = z[..., None] - self.centers
+        psi = np.exp(d * d * (-0.5 / self.h))
+        if self.normalized:
+            psi /= psi.sum(axis=-1, keepdims=True)
+        return psi
+
+    def to_dict(self) -> dict:
+        """JSON-serialisable parameters."""
+        return {
+            "n_basis": int(self.n_basis),
+            "width": None if self.width is None else float(self.width),
+            "margin": float(self.margin),
+            "normalized": bool(self.normalized),
+        }
+
+    @classmethod
+    def from_dict(cls, d: dict) -> GaussianBasis:
+        """Inverse of :meth:`to_dict`."""
+        return cls(**d)
+
+
+def design_matrix(basis: GaussianBasis, z: ArrayLike) -> FloatArray:
+    """Checked version of ``basis(z)`` for 1-D phases: returns Psi of shape (T, N)."""
+    z = check_array(z, "z", 1)
+    return basis.evaluate(z)

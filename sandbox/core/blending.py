@@ -1,0 +1,95 @@
+"""Blending of trajectory distributions: product of Gaussians with activations (eq. 17-19).
+
+Per time step t, distributions :math:`\\mathcal{N}(\\mu_i, \\Sigma_i)` with
+activations :math:`a_i \\in [0, 1]` combine into
+
+.. math::  \\Sigma^* = \\Big(\\sum_i (\\Sigma_i / a_i)^{-1}\\Big)^{-1}, \\qquad
+           \\mu^* = \\Sigma^* \\sum_i (\\Sigma_i / a_i)^{-1} \\mu_i .
+
+The product is folded pairwise with the symmetric form
+:math:`\\Sigma^* = \\Sigma_2 M^{-1} \\Sigma_1`,
+:math:`\\mu^* = a_1\\Sigma_2 M^{-1}\\mu_1 + a_2\\Sigma_1 M^{-1}\\mu_2`,
+:math:`M = a_2\\Sigma_1 + a_1\\Sigma_2`, which needs no inverse of any
+:math:`\\Sigma_i`, handles :math:`a_i = 0` exactly (that distribution drops
+out) and returns :math:`(\\mu_1, \\Sigma_1)` for activations (1, 0).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from sandbox.core.validation import FloatArray, check_array
+
+
+def sigmoid_activations(times: FloatArray, center: float, rate: float
+                        ) -> tuple[FloatArray, FloatArray]:
+    """Falling and rising sigmoids (eq. 19) centred at ``center`` (s) with gradient ``rate`` (1/s).
+
+    Returns
+    -------
+    fall, rise : ndarray, shape (T,)
+        ``fall + rise == 1``.
+    """
+    x = np.clip(rate * (np.asarray(times, dtype=np.float64) - center), -700.0, 700.0)
+    rise = 1.0 / (1.0 + np.exp(-x))
+    return 1.0 - rise, rise
+
+
+def blend(means: FloatArray, covs: FloatArray, activations: FloatArray
+          ) -> tuple[FloatArray, FloatArray]:
+    """Product of k Gaussian trajectory distributions with per-step activations.
+
+    Parameters
+    ----------
+    means : array_like, shape (k, T, Q)
+    covs : array_like, shape (k, T, Q, Q)
+        Symmetric positive definite.
+    activations : array_like, shape (k, T)
+        In [0, 1]; at every step at least one is positive.
+
+    Returns
+    -------
+    mean : ndarray, shape (T, Q)
+    cov : ndarray, shape (T, Q, Q)
+    """
+    means = check_array(means, "means", 3)
+    k, T, Q = means.shape
+    covs = check_array(covs, "covs", 4, shape=(k, T, Q, Q))
+    act = check_array(activations, "activations", 2, shape=(k, T))
+    if np.any(act < 0) or np.any(act > 1):
+        raise ValueError("activations: expected values in [0, 1]")
+    if np.any(act.sum(axis=0) <= 0):
+        raise ValueError("activations: expected at least one positive activation per time step")
+    return blend_unchecked(means, covs, act)
+
+
+def blend_unchecked(means, covs, act):
+    """:func:`blend` without validation (for the predictor's hot path)."""
+    mean, cov, a_acc = means[0].copy(), covs[0].copy(), act[0].copy()
+    for i in range(1, means.shape[0]):
+        mean, cov, a_acc = _pair(mean, cov, a_acc, means[i], covs[i], act[i])
+    if np.any(a_acc != 1.0):  # a lone active distribution: N(mu, Sigma)^a ~ N(mu, Sigma / a)
+        cov = cov / a_acc[:, None, None]
+    return mean, cov
+
+
+def _pair(m1, S1, a1, m2, S2, a2):
+    """Product of (m1, S1)^a1 and (m2, S2)^a2 per step; result has activation 1 (or a1/a2)."""
+    both = (a1 > 0) & (a2 > 0)
+    only2 = (a1 <= 0) & (a2 > 0)
+    mean, cov = m1.copy(), S1.copy()
+    act = np.where(a1 > 0, a1, a2)
+    if only2.any():
+        mean[only2], cov[only2] = m2[only2], S2[only2]
+    if both.any():
+        b1, b2 = a1[both][:, None, None], a2[both][:, None, None]
+        s1, s2 = S1[both], S2[both]
+        M = b2 * s1 + b1 * s2
+        rhs = np.concatenate([s1, m1[both][..., None], m2[both][..., None]], axis=2)
+        sol = np.linalg.solve(M, rhs)
+        new_cov = s2 @ sol[..., :-2]
+        new_mean = (b1 * (s2 @ sol[..., -2:-1]) + b2 * (s1 @ sol[..., -1:]))[..., 0]
+        cov[both] = 0.5 * (new_cov + new_cov.transpose(0, 2, 1))
+        mean[both] = new_mean
+        act[both] = 1.0
+    return mean, cov, act

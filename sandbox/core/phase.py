@@ -1,0 +1,188 @@
+"""Phase (speed) estimation from partial observations (paper eq. 11-14).
+
+For task k the speed factor is :math:`\\alpha = T / T_{nom,k}` with prior
+:math:`\\mathcal{N}(\\mu_\\alpha, \\sigma_\\alpha^2)`. Given observations up to
+:math:`t_{last}`, the MAP estimate (eq. 14)
+
+.. math::  \\alpha^* = \\arg\\max_\\alpha \\; \\log p(y | \\alpha, \\theta_k) + \\log p(\\alpha)
+
+is found on a grid of at least ``n_candidates`` values over
+:math:`\\mu_\\alpha \\pm w\\sigma_\\alpha` per task, refined by safeguarded
+parabolic steps inside the bracket around the best grid point (a bounded 1-D
+search). Candidates share one duration lattice across tasks, so each
+candidate's factorisation serves all tasks (:mod:`sandbox.core.likelihood`).
+
+A candidate whose motion would end before the last observation is impossible
+and is excluded; if no candidate of a task is long enough, the motion is
+ending now and :math:`T = t_{last}` is that task's only candidate.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from sandbox.core.interaction import LOG_2PI
+from sandbox.core.likelihood import Scorer
+from sandbox.core.validation import FloatArray
+
+
+@dataclass(frozen=True, eq=False)
+class PhaseEstimate:
+    """MAP speed of every task.
+
+    Attributes
+    ----------
+    durations : ndarray, shape (K,)
+        :math:`T^*_k = \\alpha^*_k T_{nom,k}` (s).
+    alphas : ndarray, shape (K,)
+    log_likelihood : ndarray, shape (K,)
+        :math:`\\log p(y | \\alpha^*_k, \\theta_k)`.
+    log_prior : ndarray, shape (K,)
+        :math:`\\log p(\\alpha^*_k)`.
+    factors : ndarray or None, shape (K, R+1, R+1)
+        Augmented Cholesky factors at the MAP (joint mode), for conditioning.
+    n_candidates : ndarray of int, shape (K,)
+        Grid candidates each task evaluated (before refinement).
+    """
+
+    durations: FloatArray
+    alphas: FloatArray
+    log_likelihood: FloatArray
+    log_prior: FloatArray
+    factors: FloatArray | None
+    n_candidates: np.ndarray
+
+
+def candidate_grid(nominal: FloatArray, alpha_mean: FloatArray, alpha_std: FloatArray,
+                   t_last: float, n_candidates: int = 50, width: float = 3.0):
+    """Shared duration lattice and each task's span in it.
+
+    Parameters
+    ----------
+    nominal, alpha_mean, alpha_std : ndarray, shape (K,)
+        Per-task :math:`T_{nom}`, :math:`\\mu_\\alpha`, :math:`\\sigma_\\alpha`.
+    t_last : float
+        Time of the last observation (s).
+    n_candidates : int
+        Minimum candidates per task over its full interval.
+    width : float
+        Half-width of the interval in prior standard deviations.
+
+    Returns
+    -------
+    durations : ndarray, shape (C,)
+        Sorted unique candidate durations (s).
+    spans : ndarray of int, shape (K, 2)
+        Task k's candidates are ``durations[spans[k,0]:spans[k,1]]``.
+    step : float
+        Lattice spacing (s).
+    """
+    lo = nominal * np.maximum(alpha_mean - width * alpha_std, 0.05)
+    hi = nominal * (alpha_mean + width * alpha_std)
+    step = float(np.min(hi - lo) / n_candidates)
+    j_lo = np.ceil(np.maximum(lo, t_last) / step - 1e-9).astype(np.int64)
+    j_hi = np.floor(hi / step + 1e-9).astype(np.int64)
+    lattice = [np.arange(a, b + 1) * step for a, b in zip(j_lo, j_hi)]
+    lattice = [g if g.size else np.array([t_last]) for g in lattice]
+    durations = np.unique(np.concatenate(lattice))
+    spans = np.array([[np.searchsorted(durations, g[0]), np.searchsorted(durations, g[-1]) + 1]
+                      for g in lattice])
+    return durations, spans, step
+
+
+def log_alpha_prior(alpha: FloatArray, mean: float, std: float) -> FloatArray:
+    """:math:`\\log\\mathcal{N}(\\alpha; \\mu_\\alpha, \\sigma_\\alpha^2)`."""
+    u = (alpha - mean) / std
+    return -0.5 * (u * u + LOG_2PI) - np.log(std)
+
+
+def estimate_phase(scorer: Scorer, tasks, times: FloatArray, values: FloatArray, *,
+                   n_candidates: int = 50, width: float = 3.0, refine_steps: int = 1,
+                   mode: str = "joint") -> PhaseEstimate:
+    """MAP speed factor of every task given observations (eq. 14).
+
+    Parameters
+    ----------
+    scorer : Scorer
+    tasks : sequence of TaskModel
+    times : ndarray, shape (s,)
+        Observation times since the motion started (s), s >= 1.
+    values : ndarray, shape (s, P)
+        Observations without NaN.
+    n_candidates, width : see :func:`candidate_grid`.
+    refine_steps : int
+        Parabolic refinement steps after the grid (0: grid only).
+    mode : {"joint", "marginal"}
+        Joint likelihood of all observations, or product of per-step marginals.
+    """
+    nominal = np.array([t.nominal_duration for t in tasks])
+    a_mean = np.array([t.alpha_mean for t in tasks])
+    a_std = np.array([t.alpha_std for t in tasks])
+    durations, spans, step = candidate_grid(nominal, a_mean, a_std, float(times[-1]),
+                                            n_candidates, width)
+    score = scorer.joint if mode == "joint" else scorer.marginal
+    scores = score(times, values, durations, spans)
+    K = len(tasks)
+    best_T, best_ll, best_lp = np.empty(K), np.empty(K), np.empty(K)
+    factors = np.empty((K, scorer.R + 1, scorer.R + 1)) if mode == "joint" else None
+    brackets = []
+    for k in range(K):
+        T = durations[spans[k, 0]:spans[k, 1]]
+        lp = log_alpha_prior(T / nominal[k], a_mean[k], a_std[k])
+        f = scores.loglik[k] + lp
+        i = int(np.argmax(f))
+        best_T[k], best_ll[k], best_lp[k] = T[i], scores.loglik[k][i], lp[i]
+        if factors is not None:
+            factors[k] = scores.factors[k][i]
+        brackets.append(_bracket(T, f, i))
+    for _ in range(refine_steps):
+        brackets = _refine(score, times, values, tasks, brackets, nominal, a_mean, a_std,
+                           best_T, best_ll, best_lp, factors)
+    return PhaseEstimate(best_T, best_T / nominal, best_ll, best_lp, factors,
+                         spans[:, 1] - spans[:, 0])
+
+
+def _bracket(T: FloatArray, f: FloatArray, i: int):
+    """(T_left, T_mid, T_right, f_left, f_mid, f_right) around the best point, or None."""
+    if i == 0 or i == T.size - 1:
+        return None
+    return (T[i - 1], T[i], T[i + 1], f[i - 1], f[i], f[i + 1])
+
+
+def _vertex(br) -> float | None:
+    """Vertex of the parabola through a bracket, if it is a maximum inside it."""
+    x0, x1, x2, f0, f1, f2 = br
+    num = (x1 - x0) ** 2 * (f1 - f2) - (x1 - x2) ** 2 * (f1 - f0)
+    den = (x1 - x0) * (f1 - f2) - (x1 - x2) * (f1 - f0)
+    if den == 0 or not np.isfinite(num / den):
+        return None
+    x = x1 - 0.5 * num / den
+    return float(x) if x0 < x < x2 and x != x1 else None
+
+
+def _refine(score, times, values, tasks, brackets, nominal, a_mean, a_std,
+            best_T, best_ll, best_lp, factors):
+    trial = [(k, _vertex(br)) for k, br in enumerate(brackets) if br is not None]
+    trial = [(k, x) for k, x in trial if x is not None]
+    if not trial:
+        return [None] * len(brackets)
+    durations = np.array([x for _, x in trial])
+    spans = np.zeros((len(tasks), 2), dtype=int)
+    for j, (k, _) in enumerate(trial):
+        spans[k] = (j, j + 1)
+    scores = score(times, values, durations, spans)
+    new = [None] * len(brackets)
+    for k, x in trial:
+        ll = float(scores.loglik[k][0])
+        lp = float(log_alpha_prior(np.array([x / nominal[k]]), a_mean[k], a_std[k])[0])
+        x0, x1, x2, f0, f1, f2 = brackets[k]
+        if ll + lp > f1:
+            best_T[k], best_ll[k], best_lp[k] = x, ll, lp
+            if factors is not None:
+                factors[k] = scores.factors[k][0]
+            new[k] = (x0, x, x1, f0, ll + lp, f1) if x < x1 else (x1, x, x2, f1, ll + lp, f2)
+        else:
+            new[k] = (x, x1, x2, ll + lp, f1, f2) if x < x1 else (x0, x1, x, f0, f1, ll + lp)
+    return new

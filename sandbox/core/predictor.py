@@ -1,0 +1,409 @@
+"""Online predictors: the static baseline and Dynamic Interaction ProMPs (paper sec. 2-3).
+
+Both are fed human observations as they arrive (:meth:`observe`) and can be
+asked at any time for the robot command (:meth:`command`): the mean joint
+targets and their covariance at time t. The command is a piecewise-linear plan
+over time. Before the first update the plan is the moment-matched mixture of the
+task priors (each at its mean duration, weighted by p(k)).
+
+* :class:`DynamicPredictor` updates every ``dow_t`` seconds (a dynamic
+  observation window): it re-estimates the speed of every task, the task
+  posterior and the conditioned robot distribution of the most probable task,
+  then blends the new distribution into the plan from the update time on
+  (eq. 17-19): the current plan with a falling sigmoid, the new one with a
+  rising sigmoid centred ``blend_delay`` after the update.
+* :class:`StaticPredictor` (Maeda et al. 2017) updates once, after observing a
+  fraction ``ratio`` of the expected duration.
+
+The plan before an update's time is never rewritten, so what was executed
+stays executed; each update records the jump it caused in the command.
+Observations are subsampled (1 kept out of ``subsample`` valid ones, as in the
+paper) and rows with NaN (tracker dropouts) are skipped.
+"""
+
+from __future__ import annotations
+
+import time as _time
+from dataclasses import dataclass
+
+import numpy as np
+
+from sandbox.core.blending import blend_unchecked, sigmoid_activations
+from sandbox.core.likelihood import Scorer, condition_robot
+from sandbox.core.phase import estimate_phase
+from sandbox.core.promp import WeightDistribution, trajectory_distribution
+from sandbox.core.recognition import task_posterior
+from sandbox.core.validation import (
+    FloatArray,
+    check_array,
+    check_choice,
+    check_fraction,
+    check_positive,
+)
+
+LIKELIHOODS = ("joint", "marginal")
+WINDOW_MODES = ("all", "latest")
+
+
+@dataclass(frozen=True, eq=False)
+class Update:
+    """What one update decided.
+
+    Attributes
+    ----------
+    time : float
+        When it happened (s).
+    n_observations : int
+        Observations it used.
+    task : str
+        Most probable task.
+    task_posterior : ndarray, shape (K,)
+    alphas, durations, log_likelihood : ndarray, shape (K,)
+        MAP speed factor, duration (s) and log-likelihood of every task.
+    alpha, duration : float
+        Those of the chosen task.
+    jump : float
+        Euclidean change (rad) of the planned command at the first step after
+        the update.
+    seconds : float
+        Wall time the update took.
+    """
+
+    time: float
+    n_observations: int
+    task: str
+    task_posterior: FloatArray
+    alphas: FloatArray
+    durations: FloatArray
+    log_likelihood: FloatArray
+    alpha: float
+    duration: float
+    jump: float
+    seconds: float
+
+
+class _Predictor:
+    """Shared machinery of the two predictors (see the module docstring)."""
+
+    def __init__(self, model, *, subsample: int = 5, likelihood: str = "joint",
+                 n_candidates: int = 50, width: float = 3.0, refine_steps: int = 1,
+                 dt: float = 0.01, blend_rate: float = 50.0, blend_delay: float = 0.1,
+                 blend: bool = True) -> None:
+        if not getattr(model, "is_fitted", False):
+            raise RuntimeError("the model is not fitted: fit it (or load it) before predicting")
+        if int(subsample) != subsample or subsample < 1:
+            raise ValueError(f"subsample: expected an integer >= 1, got {subsample!r}")
+        if int(n_candidates) != n_candidates or n_candidates < 3:
+            raise ValueError(f"n_candidates: expected an integer >= 3, got {n_candidates!r}")
+        self.model = model
+        self.scorer = Scorer(model)
+        self.subsample = int(subsample)
+        self.likelihood = check_choice(likelihood, "likelihood", LIKELIHOODS)
+        self.n_candidates = int(n_candidates)
+        self.width = check_positive(width, "width")
+        self.refine_steps = int(refine_steps)
+        self.dt = check_positive(dt, "dt")
+        self.blend_rate = check_positive(blend_rate, "blend_rate")
+        self.blend_delay = check_positive(blend_delay, "blend_delay", allow_zero=True)
+        self.blend = bool(blend)
+        self.reset()
+
+    # -------------------------------------------------------------- public
+    def reset(self) -> None:
+        """Forget all observations and updates; the plan is the prior mixture again."""
+        self._t: list[float] = []
+        self._y: list[FloatArray] = []
+        self._n_valid = 0
+        self.n_skipped = 0
+        self._last_time = -np.inf
+        self.updates: list[Update] = []
+        self._prediction: tuple[WeightDistribution, float] | None = None
+        self._plan_t, self._plan_mean, self._plan_cov = self._prior_plan()
+
+    def observe(self, t: float, y) -> Update | None:
+        """Receive one human observation; update if a window boundary was reached.
+
+        Parameters
+        ----------
+        t : float
+            Time since the motion started (s); non-decreasing across calls.
+        y : array_like, shape (P,)
+            Human dims (m); a row with NaN is skipped (counted in ``n_skipped``).
+
+        Returns
+        -------
+        Update or None
+            The update this observation triggered, if any.
+        """
+        t = float(t)
+        if not np.isfinite(t) or t < self._last_time:
+            raise ValueError(f"t: expected a finite time >= the previous one "
+                             f"({self._last_time:g}), got {t!r}")
+        y = check_array(y, "y", 1, shape=(self.model.n_human,), allow_nan=True)
+        self._last_time = t
+        if np.isnan(y).any():
+            self.n_skipped += 1
+        else:
+            if self._n_valid % self.subsample == 0:
+                self._t.append(t)
+                self._y.append(y)
+            self._n_valid += 1
+        return self._maybe_update(t)
+
+    def command(self, t: float) -> tuple[FloatArray, FloatArray]:
+        """Planned robot command at time ``t`` (s).
+
+        Returns
+        -------
+        mean : ndarray, shape (Q,)
+            Joint targets (rad).
+        cov : ndarray, shape (Q, Q)
+        """
+        t = float(t)
+        if not np.isfinite(t):
+            raise ValueError(f"t: expected a finite time, got {t!r}")
+        pt = self._plan_t
+        i = int(np.clip(np.searchsorted(pt, t, side="right"), 1, pt.size - 1))
+        w = float(np.clip((t - pt[i - 1]) / (pt[i] - pt[i - 1]), 0.0, 1.0))
+        mean = (1 - w) * self._plan_mean[i - 1] + w * self._plan_mean[i]
+        cov = (1 - w) * self._plan_cov[i - 1] + w * self._plan_cov[i]
+        return mean, cov
+
+    def plan(self) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """The whole current plan: knot times (n,), means (n, Q), covariances (n, Q, Q)."""
+        return self._plan_t.copy(), self._plan_mean.copy(), self._plan_cov.copy()
+
+    def prediction(self, times) -> tuple[FloatArray, FloatArray]:
+        """The latest update's robot distribution at ``times`` (unblended; holds after its end).
+
+        Raises ``RuntimeError`` before the first update.
+        """
+        if self._prediction is None:
+            raise RuntimeError("no update yet: observe more of the motion first")
+        dist, duration = self._prediction
+        times = check_array(times, "times", 1)
+        return trajectory_distribution(dist, self.model.basis, np.clip(times / duration, 0, 1))
+
+    def observations(self) -> tuple[FloatArray, FloatArray]:
+        """Kept (subsampled, valid) observations: times (s,), values (s, P)."""
+        return np.array(self._t), np.array(self._y).reshape(-1, self.model.n_human)
+
+    @property
+    def task_posterior(self) -> dict[str, float]:
+        """Current p(k | observations) by task name (the priors before any update)."""
+        p = self.updates[-1].task_posterior if self.updates else self.model.priors
+        return {name: float(v) for name, v in zip(self.model.tasks, p)}
+
+    @property
+    def task(self) -> str:
+        """Most probable task now."""
+        post = self.task_posterior
+        return max(post, key=post.get)
+
+    @property
+    def alpha(self) -> float:
+        """Speed factor of the chosen task (its prior mean before any update)."""
+        if self.updates:
+            return self.updates[-1].alpha
+        return float(self.model.task_models[self.model.task_index(self.task)].alpha_mean)
+
+    @property
+    def duration(self) -> float:
+        """Estimated duration of the motion (s); before any update, the prior mean."""
+        if self.updates:
+            return self.updates[-1].duration
+        return float(np.dot(self.model.priors, [t.mean_duration for t in self.model.task_models]))
+
+    def update(self, t: float | None = None) -> Update | None:
+        """Update now (at ``t``, default: the last observation time) with the observations kept."""
+        t = self._last_time if t is None else float(t)
+        if not np.isfinite(t):
+            raise ValueError("update: no observation yet and no time given")
+        times, values = self._window(t)
+        if times.size == 0:
+            return None
+        start = _time.perf_counter()
+        est = estimate_phase(self.scorer, self.model.task_models, times, values,
+                             n_candidates=self.n_candidates, width=self.width,
+                             refine_steps=self.refine_steps, mode=self.likelihood)
+        post = task_posterior(est.log_likelihood, self.model.priors)
+        k = int(np.argmax(post))
+        robot = self._condition(k, est, times, values)
+        jump = self._blend_in(t, robot, float(est.durations[k]))
+        self._prediction = (robot, float(est.durations[k]))
+        upd = Update(t, int(times.size), self.model.tasks[k], post, est.alphas, est.durations,
+                     est.log_likelihood, float(est.alphas[k]), float(est.durations[k]), jump,
+                     _time.perf_counter() - start)
+        self.updates.append(upd)
+        return upd
+
+    # ------------------------------------------------------------ internals
+    def _maybe_update(self, t: float) -> Update | None:
+        raise NotImplementedError
+
+    def _window(self, t: float) -> tuple[FloatArray, FloatArray]:
+        times, values = self.observations()
+        keep = times <= t
+        return times[keep], values[keep]
+
+    def _condition(self, k, est, times, values) -> WeightDistribution:
+        task = self.model.task_models[k]
+        factor = None if est.factors is None else est.factors[k]
+        if factor is None:  # marginal mode: condition with the joint model at the MAP speed
+            spans = np.zeros((len(self.model.task_models), 2), dtype=int)
+            spans[k] = (0, 1)
+            factor = self.scorer.joint(times, values, est.durations[k:k + 1], spans).factors[k][0]
+        return condition_robot(task.weights, factor, self.model.n_human, self.scorer.rank[k])
+
+    def _prior_plan(self):
+        tasks, P, p = self.model.task_models, self.model.n_human, self.model.priors
+        end = max(t.mean_duration for t in tasks)
+        knots = np.arange(0.0, end + self.dt, self.dt)
+        means, covs = [], []
+        for task in tasks:
+            robot = task.weights.dims(slice(P, None))
+            z = np.clip(knots / task.mean_duration, 0.0, 1.0)
+            m, c = trajectory_distribution(robot, self.model.basis, z)
+            means.append(m)
+            covs.append(c)
+        means, covs = np.array(means), np.array(covs)
+        mean = np.tensordot(p, means, axes=1)
+        dev = means - mean
+        cov = np.tensordot(p, covs + dev[..., :, None] * dev[..., None, :], axes=1)
+        return knots, mean, cov
+
+    def _blend_in(self, t: float, robot: WeightDistribution, duration: float) -> float:
+        keep = self._plan_t <= t
+        end = max(duration, self._plan_t[-1])
+        first = np.floor(t / self.dt) * self.dt + self.dt
+        new_t = np.arange(first, end + self.dt, self.dt)
+        old_now = self._interp(np.array([t]))
+        old_new = self._interp(new_t)
+        mean, cov = trajectory_distribution(robot, self.model.basis,
+                                            np.clip(new_t / duration, 0.0, 1.0))
+        if self.blend:
+            fall, rise = sigmoid_activations(new_t, t + self.blend_delay, self.blend_rate)
+            mean, cov = blend_unchecked(np.stack([old_new[0], mean]),
+                                        np.stack([old_new[1], cov]), np.stack([fall, rise]))
+        jump = float(np.linalg.norm(mean[0] - old_new[0][0])) if new_t.size else 0.0
+        self._plan_t = np.concatenate([self._plan_t[keep], [t], new_t])
+        self._plan_mean = np.concatenate([self._plan_mean[keep], old_now[0], mean])
+        self._plan_cov = np.concatenate([self._plan_cov[keep], old_now[1], cov])
+        return jump
+
+    def _interp(self, times: FloatArray) -> tuple[FloatArray, FloatArray]:
+        pt = self._plan_t
+        i = np.clip(np.searchsorted(pt, times, side="right"), 1, pt.size - 1)
+        w = np.clip((times - pt[i - 1]) / (pt[i] - pt[i - 1]), 0.0, 1.0)
+        mean = (1 - w)[:, None] * self._plan_mean[i - 1] + w[:, None] * self._plan_mean[i]
+        cov = ((1 - w)[:, None, None] * self._plan_cov[i - 1]
+               + w[:, None, None] * self._plan_cov[i])
+        return mean, cov
+
+
+class DynamicPredictor(_Predictor):
+    """Dynamic Interaction ProMP: re-predict every ``dow_t`` seconds and blend.
+
+    Parameters
+    ----------
+    model : IProMP
+        A fitted model.
+    dow_t : float
+        Dynamic observation window (s): an update every ``dow_t`` seconds of
+        observation (the paper tests 1, 0.5, 0.2, 0.1).
+    subsample : int
+        Keep 1 of every ``subsample`` valid observations.
+    window : {"all", "latest"}
+        Each update uses all observations so far, or only its own window's.
+    likelihood : {"joint", "marginal"}
+        Joint likelihood of all observations, or product of per-step marginals.
+    n_candidates : int
+        Speed candidates per task (grid over +/- ``width`` prior std).
+    width : float
+    refine_steps : int
+        Parabolic refinement steps of the speed after the grid.
+    dt : float
+        Plan resolution (s).
+    blend_rate : float
+        Gradient l of the activation sigmoids (1/s).
+    blend_delay : float
+        Delay (s) from an update to the centre of its sigmoids.
+    blend : bool
+        Blend each new prediction into the plan (False: replace it).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sandbox.core import IProMP
+    >>> from sandbox.data.synthetic import two_task_demos
+    >>> demos = two_task_demos(10, np.random.default_rng(1))
+    >>> model = IProMP(n_basis=21).fit(demos[1:])
+    >>> pred = DynamicPredictor(model, dow_t=0.5)
+    >>> for t, y in zip(demos[0].times, demos[0].human):
+    ...     _ = pred.observe(t, y)
+    >>> pred.task
+    'left'
+    """
+
+    def __init__(self, model, dow_t: float = 0.2, *, window: str = "all", **options) -> None:
+        self.dow_t = check_positive(dow_t, "dow_t")
+        self.window = check_choice(window, "window", WINDOW_MODES)
+        super().__init__(model, **options)
+
+    def reset(self) -> None:
+        super().reset()
+        self._next_update = self.dow_t
+
+    def _maybe_update(self, t: float) -> Update | None:
+        if t < self._next_update - 1e-9:   # tolerate accumulated float error in t
+            return None
+        upd = self.update(t)
+        self._next_update = (np.floor(t / self.dow_t + 1e-9) + 1) * self.dow_t
+        return upd
+
+    def _window(self, t: float):
+        times, values = super()._window(t)
+        if self.window == "latest" and self.updates:
+            keep = times > self.updates[-1].time
+            if keep.any():
+                return times[keep], values[keep]
+        return times, values
+
+
+class StaticPredictor(_Predictor):
+    """Static IProMP baseline: one prediction after observing a fraction of the motion.
+
+    Parameters
+    ----------
+    model : IProMP
+        A fitted model.
+    ratio : float
+        Observed fraction f in (0, 1].
+    expected_duration : float or None
+        Duration (s) the fraction refers to. Offline evaluation passes the true
+        duration, as the paper does; online (``None``) the prior mean duration
+        :math:`\\sum_k p(k)\\mu_{\\alpha,k} T_{nom,k}` is used.
+    **options
+        As for :class:`DynamicPredictor` (``subsample``, ``likelihood``, ...).
+    """
+
+    def __init__(self, model, ratio: float = 0.5, *, expected_duration: float | None = None,
+                 **options) -> None:
+        self.ratio = check_fraction(ratio, "ratio")
+        self.expected_duration = (None if expected_duration is None
+                                  else check_positive(expected_duration, "expected_duration"))
+        super().__init__(model, **options)
+
+    @property
+    def decision_time(self) -> float:
+        """When the one prediction is made (s)."""
+        base = self.expected_duration
+        if base is None:
+            base = float(np.dot(self.model.priors,
+                                [t.mean_duration for t in self.model.task_models]))
+        return self.ratio * base
+
+    def _maybe_update(self, t: float) -> Update | None:
+        if self.updates or t < self.decision_time - 1e-9:
+            return None
+        return self.update(t)

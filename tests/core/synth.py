@@ -1,0 +1,48 @@
+"""Synthetic demonstrations with known answers, made inside the tests (no generator import)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Demo:
+    times: np.ndarray
+    human: np.ndarray
+    robot: np.ndarray
+    task: str
+
+
+def shape(task: int, z: np.ndarray, gain: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """Human (T, 3) and robot (T, 7) paths of a task at phases z; tasks end far apart."""
+    s = z**3 * (10 - 15 * z + 6 * z**2)
+    end = np.array([[0.3, 0.4, 0.0], [0.3, -0.4, 0.0], [0.3, 0.0, 0.4]])[task] * gain
+    human = np.array([1.0, 0.0, 0.2]) + s[:, None] * end + 0.05 * np.sin(np.pi * z)[:, None]
+    mix = np.linspace(-1, 1, 21).reshape(7, 3)
+    robot = 0.5 + s[:, None] * (end @ mix.T) + 0.1 * np.sin(2 * np.pi * z)[:, None]
+    return human, robot
+
+
+def demos(rng: np.random.Generator, n_per_task: int = 10, n_tasks: int = 2,
+          duration: float = 2.0, duration_std: float = 0.2, noise: float = 0.002,
+          rate: float = 100.0) -> list[Demo]:
+    out = []
+    for k in range(n_tasks):
+        for _ in range(n_per_task):
+            T = duration * (1 + duration_std * rng.standard_normal())
+            t = np.arange(0, T + 1e-9, 1 / rate)
+            h, r = shape(k, t / t[-1], 1 + 0.05 * rng.standard_normal())
+            out.append(Demo(t, h + noise * rng.standard_normal(h.shape), r, f"task{k}"))
+    return out
+
+
+def replay(task: int, duration: float, rate: float = 100.0, noise: float = 0.0,
+           rng: np.random.Generator | None = None) -> Demo:
+    """The task's mean motion replayed at a chosen duration."""
+    t = np.arange(0, duration + 1e-9, 1 / rate)
+    h, r = shape(task, t / t[-1])
+    if noise:
+        h = h + noise * rng.standard_normal(h.shape)
+    return Demo(t, h, r, f"task{task}")

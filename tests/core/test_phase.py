@@ -1,0 +1,59 @@
+import numpy as np
+import pytest
+
+from sandbox.core.likelihood import Scorer
+from sandbox.core.model import IProMP
+from sandbox.core.phase import candidate_grid, estimate_phase
+
+from . import synth
+
+
+@pytest.fixture(scope="module")
+def model():
+    rng = np.random.default_rng(0)
+    return IProMP(n_basis=21).fit(synth.demos(rng, n_per_task=12, duration_std=0.15))
+
+
+@pytest.mark.parametrize("factor", [0.8, 1.0, 1.25])
+@pytest.mark.parametrize("mode", ["joint", "marginal"])
+def test_known_speed_is_recovered(model, factor, mode):
+    task = model.task_models[0]
+    true_T = factor * task.nominal_duration
+    demo = synth.replay(0, true_T, noise=0.002, rng=np.random.default_rng(1))
+    keep = demo.times <= 0.6 * true_T
+    est = estimate_phase(Scorer(model), model.task_models, demo.times[keep][::5],
+                         demo.human[keep][::5], mode=mode)
+    assert est.alphas[0] == pytest.approx(true_T / task.nominal_duration, rel=0.02)
+
+
+def test_grid_is_shared_and_wide_enough():
+    nominal = np.array([2.0, 2.2, 3.0])
+    durations, spans, step = candidate_grid(nominal, np.ones(3), np.array([0.1, 0.15, 0.1]),
+                                            t_last=0.5, n_candidates=50)
+    assert np.all(np.diff(durations) > 0)
+    for k in range(3):
+        T = durations[spans[k, 0]:spans[k, 1]]
+        assert T.size >= 50
+        assert T[0] >= nominal[k] * (1 - 0.3 * (1 + (k == 1) * 0.5)) - step
+        np.testing.assert_allclose(np.diff(T), step)
+
+
+def test_candidates_shorter_than_the_observation_are_excluded():
+    nominal = np.array([2.0, 2.0])
+    durations, spans, _ = candidate_grid(nominal, np.ones(2), np.array([0.1, 0.1]),
+                                         t_last=2.1, n_candidates=50)
+    assert durations.min() >= 2.1
+    durations, spans, _ = candidate_grid(nominal, np.ones(2), np.array([0.1, 0.1]),
+                                         t_last=5.0, n_candidates=50)
+    np.testing.assert_array_equal(durations, [5.0])   # the motion is ending now
+    np.testing.assert_array_equal(spans, [[0, 1], [0, 1]])
+
+
+def test_refinement_never_lowers_the_objective(model):
+    demo = synth.replay(1, 2.07, noise=0.002, rng=np.random.default_rng(2))
+    t, y = demo.times[:120:5], demo.human[:120:5]
+    scorer = Scorer(model)
+    grid = estimate_phase(scorer, model.task_models, t, y, refine_steps=0)
+    fine = estimate_phase(scorer, model.task_models, t, y, refine_steps=3)
+    objective = fine.log_likelihood + fine.log_prior
+    assert np.all(objective >= grid.log_likelihood + grid.log_prior - 1e-9)

@@ -1,0 +1,152 @@
+import numpy as np
+import pytest
+
+from sandbox.core.model import IProMP
+from sandbox.core.predictor import DynamicPredictor, StaticPredictor
+
+from . import synth
+
+
+@pytest.fixture(scope="module")
+def model():
+    rng = np.random.default_rng(0)
+    return IProMP(n_basis=15).fit(synth.demos(rng, n_per_task=10, n_tasks=3, noise=0.003))
+
+
+def _stream(pred, demo):
+    for t, y in zip(demo.times, demo.human):
+        pred.observe(t, y)
+    return pred
+
+
+@pytest.mark.parametrize("task", [0, 1, 2])
+def test_separated_tasks_are_recognised(model, task):
+    demo = synth.replay(task, 2.1, noise=0.003, rng=np.random.default_rng(task))
+    pred = _stream(DynamicPredictor(model, dow_t=0.2), demo)
+    assert pred.task == f"task{task}"
+    assert pred.task_posterior[f"task{task}"] > 0.99
+    assert pred.duration == pytest.approx(2.1, rel=0.05)
+    mean, _ = pred.command(demo.times[-1])
+    np.testing.assert_allclose(mean, demo.robot[-1], atol=0.05)
+
+
+def test_updates_happen_at_window_boundaries(model):
+    demo = synth.replay(0, 2.0)
+    pred = _stream(DynamicPredictor(model, dow_t=0.5), demo)
+    np.testing.assert_allclose([u.time for u in pred.updates], [0.5, 1.0, 1.5, 2.0], atol=1e-9)
+    assert all(np.isfinite(u.jump) and u.jump >= 0 for u in pred.updates)
+
+
+def test_before_first_update_follows_prior_mixture(model):
+    pred = DynamicPredictor(model, dow_t=0.2)
+    P = model.n_human
+    from sandbox.core.promp import trajectory_distribution
+
+    t = np.array([0.7])
+    means, covs = [], []
+    for task in model.task_models:
+        m, c = trajectory_distribution(task.weights.dims(slice(P, None)), model.basis,
+                                       np.clip(t / task.mean_duration, 0, 1))
+        means.append(m[0])
+        covs.append(c[0])
+    mix = np.mean(means, axis=0)
+    cov = np.mean([c + np.outer(m - mix, m - mix) for m, c in zip(means, covs)], axis=0)
+    mean_cmd, cov_cmd = pred.command(0.7)
+    np.testing.assert_allclose(mean_cmd, mix, atol=1e-6)   # knots every dt: linear interp
+    np.testing.assert_allclose(cov_cmd, cov, atol=1e-6)
+
+
+def test_executed_commands_are_never_rewritten(model):
+    demo = synth.replay(1, 2.2)
+    pred = DynamicPredictor(model, dow_t=0.1)
+    executed = []
+    for t, y in zip(demo.times, demo.human):
+        executed.append(pred.command(t)[0])
+        pred.observe(t, y)
+    after = np.array([pred.command(t)[0] for t in demo.times])
+    np.testing.assert_allclose(after, np.array(executed), atol=1e-12)
+
+
+def test_covariances_stay_spd_after_any_updates(model):
+    rng = np.random.default_rng(5)
+    pred = DynamicPredictor(model, dow_t=0.1)
+    t = 0.0
+    for _ in range(300):   # random walk of the hand, not like any task
+        t += 0.01
+        pred.observe(t, np.array([1.0, 0.0, 0.2]) + rng.normal(0, 0.2, 3))
+    _, _, covs = pred.plan()
+    assert len(pred.updates) == 30
+    np.testing.assert_allclose(covs, covs.transpose(0, 2, 1), atol=1e-15)
+    assert np.linalg.eigvalsh(covs).min() > 0
+
+
+def test_conditioning_never_widens_the_robot_distribution(model):
+    demo = synth.replay(2, 2.0)
+    pred = _stream(DynamicPredictor(model, dow_t=1.0), demo)
+    k = model.task_index(pred.task)
+    P = model.n_human
+    prior = model.task_models[k].weights.dims(slice(P, None)).cov()
+    post = pred._prediction[0].cov()
+    assert np.linalg.eigvalsh(prior - post).min() > -1e-10
+
+
+def test_nan_rows_are_skipped_not_propagated(model):
+    demo = synth.replay(0, 2.0)
+    clean = _stream(DynamicPredictor(model, dow_t=0.2), demo)
+    pred = DynamicPredictor(model, dow_t=0.2)
+    rows = []
+    for i, (t, y) in enumerate(zip(demo.times, demo.human)):
+        rows.append((t, y))
+        if i % 7 == 3:
+            rows.append((t, np.array([np.nan, 0.0, 0.0])))
+    for t, y in rows:
+        pred.observe(t, y)
+    assert pred.n_skipped == sum(1 for i in range(demo.times.size) if i % 7 == 3)
+    np.testing.assert_allclose(pred.observations()[0], clean.observations()[0])
+    np.testing.assert_allclose(pred.command(2.0)[0], clean.command(2.0)[0])
+
+
+def test_subsample_keeps_one_in_five(model):
+    demo = synth.replay(0, 1.0)
+    pred = _stream(DynamicPredictor(model, dow_t=10.0), demo)
+    np.testing.assert_allclose(pred.observations()[0], demo.times[::5])
+
+
+def test_latest_window_mode_uses_only_its_window(model):
+    demo = synth.replay(0, 2.0)
+    pred = _stream(DynamicPredictor(model, dow_t=0.5, window="latest"), demo)
+    counts = [u.n_observations for u in pred.updates]
+    assert counts[0] == 11 and all(c == 10 for c in counts[1:])
+
+
+def test_static_predicts_once_at_the_ratio(model):
+    demo = synth.replay(1, 2.0)
+    pred = _stream(StaticPredictor(model, ratio=0.4, expected_duration=2.0), demo)
+    assert len(pred.updates) == 1
+    assert pred.updates[0].time == pytest.approx(0.8)
+    online = StaticPredictor(model, ratio=0.5)
+    prior_T = np.dot(model.priors, [t.mean_duration for t in model.task_models])
+    assert online.decision_time == pytest.approx(0.5 * prior_T)
+    mean, _ = pred.prediction(np.array([2.0]))
+    assert mean.shape == (1, 7)
+
+
+def test_errors(model):
+    pred = DynamicPredictor(model)
+    with pytest.raises(ValueError, match="shape"):
+        pred.observe(0.0, [1.0, 2.0])
+    pred.observe(0.5, [1.0, 0.0, 0.2])
+    with pytest.raises(ValueError, match="previous"):
+        pred.observe(0.4, [1.0, 0.0, 0.2])
+    with pytest.raises(ValueError, match="infinity"):
+        pred.observe(0.6, [np.inf, 0.0, 0.2])
+    with pytest.raises(RuntimeError, match="no update"):
+        StaticPredictor(model).prediction([0.1])
+    with pytest.raises(RuntimeError, match="not fitted"):
+        DynamicPredictor(IProMP())
+    with pytest.raises(ValueError, match="dow_t"):
+        DynamicPredictor(model, dow_t=0)
+    with pytest.raises(ValueError, match="ratio"):
+        StaticPredictor(model, ratio=1.5)
+    with pytest.raises(ValueError, match="likelihood"):
+        DynamicPredictor(model, likelihood="nope")
