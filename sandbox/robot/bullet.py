@@ -85,6 +85,11 @@ def _quiet() -> Iterator[None]:
         os.close(saved)
 
 
+def connect() -> BulletClient:
+    """A new headless (DIRECT) PyBullet client, independent of any other in the process."""
+    return BulletClient(connection_mode=pybullet.DIRECT)
+
+
 def load_baxter(client: BulletClient, *, quiet: bool = True) -> BulletBaxter:
     """Load Baxter with a fixed base at the origin of ``client``'s world.
 
@@ -143,7 +148,11 @@ def arm_positions(baxter: BulletBaxter) -> FloatArray:
 
 
 def reset_gripper(baxter: BulletBaxter, opening: float) -> None:
-    """Teleport the left fingers to ``opening`` in [0, 1] (0 closed, 1 open), mirrored."""
+    """Teleport the left fingers to ``opening`` in [0, 1], mirrored.
+
+    0 puts both fingers at their inner limit (closed), 1 at their outer limit:
+    the fingertips are then 2 x 20.8 mm further apart.
+    """
     if not np.isfinite(opening) or not 0.0 <= opening <= 1.0:
         raise ValueError(f"opening: expected a number in [0, 1], got {opening!r}")
     travel = baxter.limits[FINGER_JOINTS[0]][1] * float(opening)
@@ -219,12 +228,12 @@ def bullet_ik(
     saved = arm_positions(baxter)
     best_q, best_err = q, np.inf
     try:
-        for _ in range(int(max_rounds)):
+        for calls in range(int(max_rounds) + 1):
             reset_arm(baxter, q)
             err = float(np.linalg.norm(link_pose(baxter, link)[:3, 3] - target))
             if err < best_err:
                 best_q, best_err = q, err
-            if err <= tol:
+            if err <= tol or calls == max_rounds:
                 break
             rest = [s[0] for s in baxter.client.getJointStates(baxter.body, movable)]
             solution = baxter.client.calculateInverseKinematics(
