@@ -18,6 +18,8 @@ import os
 import tempfile
 from pathlib import Path
 
+from sandbox.robot.urdf import UrdfVisual, read_visuals
+
 DISTRIBUTION = "example-robot-data"
 #: Location of Baxter's files inside the distribution.
 BAXTER_SUBDIR = "cmeel.prefix/share/example-robot-data/robots/baxter_description"
@@ -140,3 +142,12 @@ def _write_atomic(path: Path, text: str) -> None:
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
+
+
+def visuals() -> list[UrdfVisual]:
+    """Baxter's visual geometries, mesh file names absolute (from :func:`urdf_path`).
+
+    A viewer poses ``visual.origin`` in the frame of ``visual.link``, e.g. with
+    :meth:`sandbox.robot.BaxterKinematics.link_poses` for the left arm.
+    """
+    return read_visuals(urdf_path())

@@ -89,6 +89,19 @@ def _joint(element: ET.Element) -> UrdfJoint:
     )
 
 
+def _robot(path: str | Path) -> ET.Element:
+    """The ``<robot>`` root element of a URDF file."""
+    try:
+        root = ET.parse(path).getroot()
+    except ET.ParseError as error:
+        raise ValueError(
+            f"{path}: expected a URDF (XML) file, got a parse error: {error}"
+        ) from error
+    if root.tag != "robot":
+        raise ValueError(f"{path}: expected a <robot> root element, got <{root.tag}>")
+    return root
+
+
 def read_joints(path: str | Path) -> dict[str, UrdfJoint]:
     """Read every joint of a URDF file.
 
@@ -107,14 +120,7 @@ def read_joints(path: str | Path) -> dict[str, UrdfJoint]:
     ValueError
         If the file is not a URDF (no ``<robot>`` root or a malformed joint).
     """
-    try:
-        root = ET.parse(path).getroot()
-    except ET.ParseError as error:
-        raise ValueError(
-            f"{path}: expected a URDF (XML) file, got a parse error: {error}"
-        ) from error
-    if root.tag != "robot":
-        raise ValueError(f"{path}: expected a <robot> root element, got <{root.tag}>")
+    root = _robot(path)
     joints = {}
     for element in root.iter("joint"):
         if element.find("parent") is None or element.find("child") is None:
@@ -141,3 +147,75 @@ def chain_to(joints: dict[str, UrdfJoint], link: str) -> list[UrdfJoint]:
         if len(chain) > len(joints):
             raise ValueError("the URDF's joints form a loop")
     return chain[::-1]
+
+
+@dataclass(frozen=True)
+class UrdfVisual:
+    """One ``<visual>`` element of a link (what a viewer draws).
+
+    Attributes
+    ----------
+    link : str
+        Link the geometry is attached to.
+    kind : str
+        ``"mesh"``, ``"box"``, ``"cylinder"`` or ``"sphere"``.
+    filename : str
+        Mesh file as written in the URDF (``""`` for primitives).
+    size : ndarray
+        Mesh scale (3,); box sizes (3,) m; cylinder (radius, length) m; sphere (radius,) m.
+    origin : ndarray, shape (4, 4)
+        Pose of the geometry in the link frame (m).
+    rgba : ndarray, shape (4,), or None
+        Inline material colour, if any.
+    """
+
+    link: str
+    kind: str
+    filename: str
+    size: FloatArray
+    origin: FloatArray
+    rgba: FloatArray | None
+
+
+def _visual(link: str, element: ET.Element) -> UrdfVisual | None:
+    geometry = element.find("geometry")
+    shape = geometry[0] if geometry is not None and len(geometry) else None
+    if shape is None:
+        return None
+    sizes = {
+        "mesh": lambda: _floats(shape.get("scale"), (1.0, 1.0, 1.0)),
+        "box": lambda: _floats(shape.get("size"), (0.0, 0.0, 0.0)),
+        "cylinder": lambda: np.array(
+            [float(shape.get("radius", 0)), float(shape.get("length", 0))]
+        ),
+        "sphere": lambda: np.array([float(shape.get("radius", 0))]),
+    }
+    if shape.tag not in sizes:
+        return None
+    color = element.find("material/color")
+    return UrdfVisual(
+        link=link,
+        kind=shape.tag,
+        filename=shape.get("filename", ""),
+        size=sizes[shape.tag](),
+        origin=_origin(element.find("origin")),
+        rgba=_floats(color.get("rgba"), (0.5, 0.5, 0.5, 1.0)) if color is not None else None,
+    )
+
+
+def read_visuals(path: str | Path) -> list[UrdfVisual]:
+    """Every visual geometry of a URDF file, in file order.
+
+    Raises
+    ------
+    ValueError
+        If the file is not a URDF.
+    """
+    root = _robot(path)
+    visuals = []
+    for link in root.iter("link"):
+        for element in link.findall("visual"):
+            visual = _visual(link.get("name", ""), element)
+            if visual is not None:
+                visuals.append(visual)
+    return visuals

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -50,3 +52,17 @@ def test_unknown_link_and_non_urdf_files_are_refused(tmp_path):
     bad.write_text("<robot")
     with pytest.raises(ValueError, match="parse error"):
         read_joints(bad)
+
+
+def test_visuals_of_the_left_arm():
+    from sandbox.robot import visuals
+
+    found = {v.link: v for v in visuals()}
+    wrist = found["left_wrist"]
+    assert wrist.kind == "mesh" and wrist.filename.endswith("meshes/wrist/W2.DAE")
+    assert Path(wrist.filename).is_file()
+    np.testing.assert_allclose(wrist.size, [1.0, 1.0, 1.0])
+    assert wrist.origin.shape == (4, 4)
+    screen = [v for v in visuals() if v.kind == "box"]
+    assert screen and all(v.size.shape == (3,) for v in screen)
+    assert all(v.filename == "" for v in visuals() if v.kind != "mesh")
