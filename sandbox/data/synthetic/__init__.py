@@ -1,7 +1,10 @@
 """Synthetic paired human/robot handover demonstrations (seeded), the default data.
 
-Submodules: :mod:`~sandbox.data.synthetic.base` (constants), ``two_task`` (the
-minimal generator), ``human`` (clean reaches), ``tracker`` (sensor artefacts),
+Datasets by name: :func:`make_dataset` (``"two_task"``, ``"diverging"``,
+``"objects"``). Submodules: ``base`` (constants), ``two_task`` (the minimal
+generator), ``human`` (clean reaches), ``tracker`` (sensor artefacts),
+``tasks`` (task geometry and random draws), ``robot`` (the paired Baxter arm
+motion), ``generator`` (assembly), ``families`` (objects and diverging tasks),
 ``realism`` (synthetic vs recorded statistics).
 """
 
@@ -12,8 +15,10 @@ from sandbox.data.synthetic.base import (
     ROBOT_NAMES,
     minimum_jerk,
 )
+from sandbox.data.synthetic.families import OBJECTS, diverging_demos, objects_demos
 from sandbox.data.synthetic.realism import compare_realism, realism_stats
 from sandbox.data.synthetic.registry import DATASETS, make_dataset
+from sandbox.data.synthetic.tasks import TaskSpec, Variability
 from sandbox.data.synthetic.tracker import TrackerModel
 from sandbox.data.synthetic.two_task import two_task_demos
 
@@ -21,12 +26,17 @@ __all__ = [
     "DATASETS",
     "HAND_START",
     "HUMAN_NAMES",
+    "OBJECTS",
     "Q_HOME",
     "ROBOT_NAMES",
+    "TaskSpec",
     "TrackerModel",
+    "Variability",
     "compare_realism",
+    "diverging_demos",
     "make_dataset",
     "minimum_jerk",
+    "objects_demos",
     "realism_stats",
     "two_task_demos",
 ]

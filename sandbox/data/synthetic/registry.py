@@ -8,10 +8,13 @@ from typing import Any
 import numpy as np
 
 from sandbox.data.demonstration import Demonstration
+from sandbox.data.synthetic.families import diverging_demos, objects_demos
 from sandbox.data.synthetic.two_task import two_task_demos
 
 _GENERATORS: dict[str, Callable[..., list[Demonstration]]] = {
     "two_task": two_task_demos,
+    "diverging": diverging_demos,
+    "objects": objects_demos,
 }
 
 #: Names accepted by :func:`make_dataset`.
@@ -26,7 +29,9 @@ def make_dataset(
     Parameters
     ----------
     name : str
-        One of :data:`DATASETS`.
+        One of :data:`DATASETS`: ``"two_task"`` (:func:`two_task_demos`, no
+        inverse kinematics, fastest), ``"diverging"`` (:func:`diverging_demos`,
+        Experiment 2) or ``"objects"`` (:func:`objects_demos`, Experiment 1).
     n_per_task : int
         Demonstrations per task.
     rng : numpy.random.Generator

@@ -1,0 +1,200 @@
+"""Paired human/robot demonstrations from task specs: human reach, tracker, robot arm.
+
+:func:`generate` draws every demonstration's random numbers, solves the
+robot's inverse kinematics for all handover points in one batch, redraws the
+end point of any demonstration whose handover point the arm cannot reach (so a
+pairing is never wrong: it meets the hand within ``ik_tol``), and assembles the
+:class:`~sandbox.data.demonstration.Demonstration` objects.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from sandbox.core.validation import FloatArray, check_positive
+from sandbox.data.demonstration import Demonstration
+from sandbox.data.synthetic.base import (
+    HUMAN_NAMES,
+    ROBOT_NAMES,
+    check_count,
+    check_rng,
+    sample_times,
+)
+from sandbox.data.synthetic.human import reach_positions
+from sandbox.data.synthetic.robot import (
+    GRASP_OFFSET,
+    joint_trajectory,
+    kinematics,
+    solve_handover,
+)
+from sandbox.data.synthetic.tasks import (
+    DemoDraw,
+    TaskSpec,
+    Variability,
+    draw_demo,
+    make_reach,
+    redraw_end,
+)
+from sandbox.data.synthetic.tracker import TrackerModel, apply_tracker
+
+
+def handover_target(spec: TaskSpec, draw: DemoDraw) -> FloatArray:
+    """Where the gripper tip meets the hand (m), shape (3,)."""
+    return make_reach(spec, draw, Variability()).end + GRASP_OFFSET + draw.grasp_shift
+
+
+def pair_with_robot(
+    specs: Sequence[TaskSpec],
+    draws: list[DemoDraw],
+    var: Variability,
+    rng: np.random.Generator,
+    *,
+    ik_tol: float = 0.01,
+    max_redraws: int = 5,
+) -> tuple[list[DemoDraw], FloatArray, FloatArray]:
+    """Solve the handover configurations of all demonstrations in batches.
+
+    Parameters
+    ----------
+    specs : sequence of TaskSpec
+        The task of each demonstration (same length as ``draws``).
+    draws : list of DemoDraw
+        Their random numbers.
+    var : Variability
+        Used to redraw an unreachable end point.
+    rng : numpy.random.Generator
+        Source of the redraws.
+    ik_tol : float
+        Required gripper position error (m).
+    max_redraws : int
+        Redraw rounds before giving up.
+
+    Returns
+    -------
+    draws : list of DemoDraw
+        The draws, some with a redrawn end point.
+    q_goal : ndarray, shape (n, 7)
+        Handover configurations (rad).
+    error : ndarray, shape (n,)
+        Gripper position error (m) at the handover point, all <= ``ik_tol``.
+
+    Raises
+    ------
+    ValueError
+        If some task's handover point stays out of reach after ``max_redraws``.
+    """
+    draws = list(draws)
+    q_goal, error = np.zeros((len(draws), 7)), np.full(len(draws), np.inf)
+    todo = np.arange(len(draws))
+    for round_ in range(max_redraws + 1):
+        if round_:
+            for i in todo:
+                draws[i] = redraw_end(draws[i], var, rng)
+        targets = np.array([handover_target(specs[i], draws[i]) for i in todo])
+        res = solve_handover(targets, ik_tol)
+        q_goal[todo], error[todo] = res.q, res.error
+        todo = todo[~res.success]
+        if todo.size == 0:
+            return draws, q_goal, error
+    names = sorted({specs[i].name for i in todo})
+    raise ValueError(
+        f"tasks {names}: expected handover points Baxter's left arm can reach (IK within "
+        f"{ik_tol} m), got {todo.size} still unreachable after {max_redraws} redraws "
+        f"(smallest error {error[todo].min():.3f} m); move the task's end point"
+    )
+
+
+def build_demo(
+    spec: TaskSpec,
+    draw: DemoDraw,
+    q_goal: FloatArray,
+    *,
+    var: Variability,
+    tracker: TrackerModel,
+    rate_hz: float,
+    source: str,
+) -> Demonstration:
+    """Assemble one demonstration: clean reach, tracker artefacts, robot trajectory."""
+    times = sample_times(draw.duration, rate_hz)
+    reach = make_reach(spec, draw, var)
+    clean = reach_positions(reach, times)
+    human = apply_tracker(times, clean, tracker, np.random.default_rng(draw.tracker_seed))
+    kin = kinematics()
+    robot = joint_trajectory(
+        times, q_goal, draw.robot_on, draw.robot_off, draw.wobble, (kin.lower, kin.upper)
+    )
+    meta = {
+        "hand_end": reach.end,
+        "handover_target": handover_target(spec, draw),
+        "reach_time": (draw.t_on, draw.t_off),
+        "robot_time": (draw.robot_on, draw.robot_off),
+        "divergence_time": draw.t_div if np.any(spec.branch) else None,
+        "clean_human": clean,
+    }
+    return Demonstration(
+        times=times, human=human, robot=robot, task=spec.name, human_names=HUMAN_NAMES,
+        robot_names=ROBOT_NAMES, source=source, meta=meta,
+    )
+
+
+def generate(
+    specs: Sequence[TaskSpec],
+    n_per_task: int,
+    rng: np.random.Generator,
+    *,
+    family: str,
+    variability: Variability,
+    tracker: TrackerModel | None = None,
+    rate_hz: float = 100.0,
+    ik_tol: float = 0.01,
+    max_redraws: int = 5,
+) -> list[Demonstration]:
+    """``n_per_task`` paired demonstrations of every task in ``specs``, grouped by task.
+
+    Parameters
+    ----------
+    specs : sequence of TaskSpec
+        The tasks, in output order.
+    n_per_task : int
+        Demonstrations per task (>= 1).
+    rng : numpy.random.Generator
+        Source of randomness; the same seed gives the same demonstrations.
+    family : str
+        Name recorded in each demonstration's ``source``.
+    variability : Variability
+        Spreads and timing.
+    tracker : TrackerModel, optional
+        Tracker artefacts (default: like the recordings, ``TrackerModel()``).
+    rate_hz : float
+        Row rate (Hz).
+    ik_tol : float
+        Required gripper position error (m) at the handover point.
+    max_redraws : int
+        Rounds of end-point redraws for unreachable handover points.
+
+    Returns
+    -------
+    list of Demonstration
+    """
+    n = check_count(n_per_task, "n_per_task", 1)
+    check_rng(rng)
+    rate_hz = check_positive(rate_hz, "rate_hz")
+    ik_tol = check_positive(ik_tol, "ik_tol")
+    max_redraws = check_count(max_redraws, "max_redraws", 0)
+    tracker = TrackerModel() if tracker is None else tracker
+    if not isinstance(tracker, TrackerModel) or not isinstance(variability, Variability):
+        raise ValueError("tracker, variability: expected a TrackerModel and a Variability")
+    task_of = [spec for spec in specs for _ in range(n)]
+    draws = [draw_demo(spec, variability, rng) for spec in task_of]
+    draws, q_goal, _ = pair_with_robot(
+        task_of, draws, variability, rng, ik_tol=ik_tol, max_redraws=max_redraws
+    )
+    return [
+        build_demo(
+            spec, draw, q, var=variability, tracker=tracker, rate_hz=rate_hz,
+            source=f"synthetic:{family}[{spec.name}#{i % n}]",
+        )
+        for i, (spec, draw, q) in enumerate(zip(task_of, draws, q_goal, strict=True))
+    ]

@@ -1,0 +1,93 @@
+"""The robot side of a synthetic demonstration: Baxter's left arm meeting the hand.
+
+Like a kinesthetic demonstration, the arm moves from :data:`Q_HOME` to a
+configuration that puts the gripper at the handover point, along a joint-space
+minimum-jerk trajectory timed with the human (it may lead or lag a little).
+
+Measured on the recordings (174 trials, forward kinematics of the final
+recorded joints vs the hand's resting point): the gripper tip
+(``left_gripper``, pointing down) ends at the hand, :data:`GRASP_OFFSET` away
+(median; per-trial spread ~6 cm in x and z, 2.5 cm in y, mostly tracker error).
+The inverse kinematics (:class:`sandbox.robot.BaxterKinematics`, position only,
+batched) starts from :data:`Q_HANDOVER`, the median final configuration of the
+recordings, so the solutions look like the demonstrated ones (median joint
+difference 0.07 rad on the recorded handover points).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from sandbox.core.validation import FloatArray
+from sandbox.data.synthetic.base import Q_HOME, minimum_jerk
+
+#: Median position (m) of the gripper tip relative to the hand's resting point.
+GRASP_OFFSET = np.array([0.005, -0.010, -0.020])
+#: Median final left-arm configuration of the recordings (rad): the IK seed.
+Q_HANDOVER = np.array([-0.431, -0.781, -0.777, 1.142, 0.492, 1.296, -0.142])
+#: The link placed at the handover point.
+IK_LINK = "left_gripper"
+
+
+def kinematics():
+    """Baxter's kinematics (:class:`sandbox.robot.BaxterKinematics`, cached per process)."""
+    from sandbox.robot import BaxterKinematics  # late: the robot package reads URDF files
+
+    return BaxterKinematics()
+
+
+def solve_handover(targets: FloatArray, tol: float):
+    """Batched inverse kinematics of the gripper at the handover points.
+
+    Parameters
+    ----------
+    targets : ndarray, shape (n, 3)
+        Gripper tip targets (m), Baxter's base frame.
+    tol : float
+        Success threshold (m) on the position error.
+
+    Returns
+    -------
+    sandbox.robot.IKResult
+        ``q`` (n, 7) rad, ``error`` (n,) m, ``success`` (n,) bool.
+    """
+    return kinematics().ik(targets, q_seed=Q_HANDOVER, link=IK_LINK, tol=tol)
+
+
+def bump(s: FloatArray) -> FloatArray:
+    """Smooth bump ``16 s^2 (1 - s)^2``: 0 with zero slope at s = 0 and 1, peak 1 at 0.5."""
+    s = np.clip(s, 0.0, 1.0)
+    return 16.0 * s**2 * (1.0 - s) ** 2
+
+
+def joint_trajectory(
+    times: FloatArray,
+    q_goal: FloatArray,
+    t_on: float,
+    t_off: float,
+    wobble: FloatArray,
+    limits: tuple[FloatArray, FloatArray],
+) -> FloatArray:
+    """Minimum-jerk joint trajectory from :data:`Q_HOME` to ``q_goal``.
+
+    Parameters
+    ----------
+    times : ndarray, shape (T,)
+        Sample times (s).
+    q_goal : ndarray, shape (7,)
+        Final configuration (rad).
+    t_on, t_off : float
+        Start and end of the motion (s).
+    wobble : ndarray, shape (7,)
+        Amplitude (rad) of a smooth deviation that vanishes at both ends.
+    limits : tuple of ndarray, shapes (7,), (7,)
+        Lower and upper joint limits (rad); the result is clipped to them.
+
+    Returns
+    -------
+    ndarray, shape (T, 7)
+        Joint angles (rad); ``Q_HOME`` before ``t_on``, ``q_goal`` after ``t_off``.
+    """
+    s = (times - t_on) / (t_off - t_on)
+    q = Q_HOME + np.outer(minimum_jerk(s), q_goal - Q_HOME) + np.outer(bump(s), wobble)
+    return np.clip(q, limits[0], limits[1])
