@@ -117,6 +117,13 @@ def _check_inputs(targets, q_seed, orientations, lower):
     return targets, seed, orientations
 
 
+def _check_rest(q_rest, n, dof):
+    rest = np.asarray(q_rest)
+    if rest.ndim == 1:
+        rest = np.broadcast_to(rest, (n, rest.shape[0]))
+    return check_array(rest, "q_rest", 2, shape=(n, dof))
+
+
 def _task_error(pose, targets, orientations, angle_weight):
     """Position error (n, 3) m, and the stacked task error (n, 3 or 6)."""
     dp = targets - pose[:, :3, 3]
@@ -126,16 +133,25 @@ def _task_error(pose, targets, orientations, angle_weight):
     return dp, np.concatenate([dp, angle_weight * dr], axis=1), dr
 
 
-def _dls_step(jac, err, q, lower, upper, damping, max_step):
-    """Damped least-squares joint step (n, 7), dropping joints pushed past a limit."""
+def _dls_step(jac, err, q, lower, upper, damping, max_step, pull=None):
+    """Damped least-squares joint step (n, 7), dropping joints pushed past a limit.
+
+    ``pull`` (n, 7) rad is a secondary joint motion (toward a rest posture),
+    projected onto the (damped) null space of the task Jacobian.
+    """
     norm = np.linalg.norm(err, axis=1, keepdims=True)
     err = err * np.minimum(1.0, max_step / np.maximum(norm, 1e-12))
     eye = damping**2 * np.eye(jac.shape[1])
     mask = np.ones_like(q)
     for _ in range(2):
         jw = jac * mask[:, None, :]
-        y = np.linalg.solve(jw @ np.swapaxes(jw, 1, 2) + eye, err[:, :, None])[:, :, 0]
-        dq = np.einsum("nji,nj->ni", jw, y)
+        if pull is not None:  # (I - J+ J) pull, with J+ = J^T (J J^T + lambda^2 I)^-1
+            masked = pull * mask
+            task = err - np.einsum("nji,ni->nj", jw, masked)
+        else:
+            masked, task = 0.0, err
+        y = np.linalg.solve(jw @ np.swapaxes(jw, 1, 2) + eye, task[:, :, None])[:, :, 0]
+        dq = np.einsum("nji,nj->ni", jw, y) + masked
         blocked = ((q <= lower + 1e-9) & (dq < 0)) | ((q >= upper - 1e-9) & (dq > 0))
         if not (blocked & (mask > 0)).any():
             break
@@ -143,7 +159,7 @@ def _dls_step(jac, err, q, lower, upper, damping, max_step):
     return dq
 
 
-def _descend(forward, targets, orientations, q, lower, upper, settings):
+def _descend(forward, targets, orientations, q, q_rest, lower, upper, settings):
     """Run damped least squares from ``q`` (n, 7); return q, position error, angle error, steps."""
     n = len(q)
     q = np.clip(q, lower, upper)
@@ -170,7 +186,11 @@ def _descend(forward, targets, orientations, q, lower, upper, settings):
             break
         if orientations is None:
             jac = jac[:, :3]
-        dq = _dls_step(jac, err, q[active], lower, upper, settings["damping"], settings["max_step"])
+        gain = settings["rest_gain"]
+        pull = gain * (q_rest[active] - q[active]) if gain > 0 else None
+        dq = _dls_step(
+            jac, err, q[active], lower, upper, settings["damping"], settings["max_step"], pull
+        )
         q[active] = np.clip(q[active] + dq, lower, upper)
         steps[active] += 1
     return q, pos_err, ang_err, steps
@@ -195,6 +215,8 @@ def solve(
     restarts: int = 6,
     damping: float = 0.02,
     max_step: float = 0.1,
+    q_rest: ArrayLike | None = None,
+    rest_gain: float = 0.0,
 ) -> IKResult:
     """Solve inverse kinematics for n targets at once.
 
@@ -225,6 +247,16 @@ def solve(
         Damping ``lambda`` (m) of the least-squares step.
     max_step : float
         Largest task-space error corrected in one step (m).
+    q_rest : array_like, shape (7,) or (n, 7), optional
+        Preferred posture (rad), default ``q_seed``: each step also moves
+        toward it in the null space of the task, so among the many solutions
+        of a redundant arm the iterations drift toward this one.
+    rest_gain : float
+        Fraction of the distance to ``q_rest`` taken per step; default 0
+        (off). Measured on 2000 front targets: 0.1 costs 2.5x the iterations
+        and leaves errors up to 2 mm instead of 0.1 mm, and moved solutions
+        of the recorded handover end points only 1 % closer to the recorded
+        joints, so it is off unless a posture bias is wanted.
 
     Returns
     -------
@@ -237,12 +269,14 @@ def solve(
         "angle_weight": check_positive(angle_weight, "angle_weight"),
         "precision": 0.01 * check_positive(tol, "tol"),
         "angle_precision": 0.01 * check_positive(angle_tol, "angle_tol"),
+        "rest_gain": check_positive(rest_gain, "rest_gain", allow_zero=True),
     }
     if int(restarts) != restarts or not 0 <= restarts <= len(_HALTON):
         raise ValueError(f"restarts: expected an integer in [0, {len(_HALTON)}], got {restarts!r}")
     restart = lower + (0.1 + 0.8 * _HALTON) * (upper - lower)  # inner 80 % of the ranges
     targets, seed, orientations = _check_inputs(targets, q_seed, orientations, lower)
     n = len(targets)
+    rest = np.clip(seed, lower, upper) if q_rest is None else _check_rest(q_rest, n, len(lower))
     q_best = np.clip(seed, lower, upper)
     err_best, ang_best = np.full(n, np.inf), np.full(n, np.inf)
     steps = np.zeros(n, np.int64)
@@ -257,7 +291,14 @@ def solve(
             else np.repeat(restart[attempt - 1 : attempt], todo.size, 0)
         )
         q, e, a, k = _descend(
-            forward, targets[todo], _take(orientations, todo), start, lower, upper, settings
+            forward,
+            targets[todo],
+            _take(orientations, todo),
+            start,
+            rest[todo],
+            lower,
+            upper,
+            settings,
         )
         better = e + angle_weight * a < err_best[todo] + angle_weight * ang_best[todo]
         q_best[todo[better]] = q[better]

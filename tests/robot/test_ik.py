@@ -139,3 +139,17 @@ def test_inputs_are_not_mutated_and_results_are_deterministic(kin):
 def test_bad_arguments_are_refused(kin, kwargs, match):
     with pytest.raises(ValueError, match=match):
         kin.ik(**kwargs)
+
+
+def test_rest_posture_pull_moves_solutions_toward_it(kin):
+    targets, _ = _front_workspace(kin, "left_gripper", 40, seed=5)
+    rest = np.clip(q_home() + 0.6, kin.lower, kin.upper)
+    plain = kin.ik(targets)
+    pulled = kin.ik(targets, q_rest=rest, rest_gain=0.3, tol=0.01)
+    assert pulled.success.mean() >= 0.95
+    both = pulled.success & plain.success
+    dist_pulled = np.linalg.norm(pulled.q - rest, axis=1)[both]
+    dist_plain = np.linalg.norm(plain.q - rest, axis=1)[both]
+    assert np.median(dist_pulled) < np.median(dist_plain)
+    with pytest.raises(ValueError, match="q_rest"):
+        kin.ik(targets, q_rest=np.zeros(5))
