@@ -10,12 +10,13 @@ yet converged, the damped least-squares step (Wampler 1986; Buss 2004)
 where ``e`` is the task error (position, and optionally orientation as an
 axis-angle vector scaled by ``angle_weight``), clamped in length, and ``J_W``
 is the Jacobian with the columns of joints that sit on a limit and are pushed
-beyond it removed; the new ``q`` is clipped to the limits. A target that has
-not converged after ``max_iter`` steps, or that stalls, is restarted from the
-next configuration of a fixed list (the home configuration, then a
-deterministic low-discrepancy set over the joint ranges), up to ``restarts``
-times; the best solution found is kept. Unreachable targets end as failures
-with their smallest error; nothing raises.
+beyond it removed; the new ``q`` is clipped to the limits. Iterations start
+at the seed and go on to 1/100 of the tolerance. A target that has not
+converged after ``max_iter`` steps, or that stalls, is restarted from the next
+configuration of a fixed list (a Halton set over the inner 80 % of the joint
+ranges, deterministic), up to ``restarts`` times; the best solution found is
+kept. Unreachable targets end as failures with their smallest error; nothing
+raises. No collision checking: targets inside Baxter's body count as reachable.
 """
 
 from __future__ import annotations
