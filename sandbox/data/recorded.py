@@ -14,7 +14,7 @@ What the loader does with a trial (everything it does is counted in
    recorded rows) are collapsed to the last row of each time stamp, so times
    are strictly increasing. The first and last time stamps are kept: the
    ground-truth duration is the recorded span.
-3. Human samples are classified (:func:`sandbox.data.filtering.find_glitches`): (0, 0, 0) rows
+3. Human samples are classified (:func:`sandbox.data.glitches.find_glitches`): (0, 0, 0) rows
    (tracker lost the person), stale rows (a frame received before, sent again:
    the tracker runs at about 30 Hz, rows at about 100 Hz), frozen stretches (no
    new frame for longer than ``freeze_s``), jumps between consecutive frames.
@@ -49,7 +49,8 @@ import numpy as np
 
 from sandbox.core.validation import FloatArray, check_choice, check_positive
 from sandbox.data.demonstration import Demonstration
-from sandbox.data.filtering import FilterConfig, filter_track, find_glitches, smooth_track
+from sandbox.data.filtering import FilterConfig, filter_track, smooth_track
+from sandbox.data.glitches import find_glitches
 
 HUMAN_COLUMNS = ("human_left_hand_x", "human_left_hand_y", "human_left_hand_z")
 ROBOT_COLUMNS = ("left_s0", "left_s1", "left_e0", "left_e1", "left_w0", "left_w1", "left_w2")
@@ -208,6 +209,78 @@ def _human_track(
     return np.where(fill[:, None], smoothed, np.nan), used, stats
 
 
+def preprocess_rows(
+    times: FloatArray,
+    human: FloatArray,
+    preprocess: str,
+    *,
+    config: FilterConfig | None = None,
+    freeze_s: float = 0.25,
+    max_fill_s: float = 0.25,
+    jump_m: float = 0.05,
+) -> tuple[FloatArray, np.ndarray, dict[str, int | float]]:
+    """Classify and preprocess human rows, then keep one row per time stamp.
+
+    Parameters
+    ----------
+    times : ndarray, shape (T,)
+        Row times (s), non-decreasing; rows sharing a time stamp are collapsed
+        to the last of them.
+    human : ndarray, shape (T, P)
+        Human values (m), NaN where missing.
+    preprocess, config, freeze_s, max_fill_s, jump_m
+        As in :func:`load_trial`.
+
+    Returns
+    -------
+    human : ndarray, shape (T', P)
+        One row per distinct time stamp (see the module docstring for each mode).
+    measured : ndarray of bool, shape (T',)
+        Time stamps at which a new tracker frame was received (and, when
+        filtering, accepted by the gate).
+    counts : dict
+        Glitch and filter counts (JSON-ready).
+    """
+    _check_options(preprocess, config=config, freeze_s=freeze_s, max_fill_s=max_fill_s,
+                   jump_m=jump_m)
+    glitches = find_glitches(times, human, freeze_s=freeze_s, jump_m=jump_m)
+    stats = {"gate_rejected": 0, "filter_resets": 0}
+    if preprocess == "none":
+        out_rows, used = human, glitches.fresh
+    else:
+        measurement = np.where(glitches.fresh[:, None], human, np.nan)
+        out_rows, used, stats = _human_track(times, measurement, preprocess, config, max_fill_s)
+    last = np.flatnonzero(np.r_[np.diff(times) > 0, True])
+    group = np.cumsum(np.r_[True, np.diff(times) > 0]) - 1
+    measured = np.bincount(group, weights=used.astype(float), minlength=last.size) > 0
+    out = out_rows[last]
+    if preprocess == "causal":
+        out = np.where(measured[:, None], out, np.nan)
+    unfilled = int(np.isnan(out).any(axis=1).sum())
+    return out, measured, {**glitches.counts(), **stats, "unfilled_samples": unfilled}
+
+
+def preprocess_demonstration(
+    demo: Demonstration, preprocess: str = "smooth", **options: Any
+) -> Demonstration:
+    """Apply the loader's human preprocessing to any demonstration (e.g. synthetic).
+
+    ``options`` are those of :func:`load_trial` (``config``, ``freeze_s``,
+    ``max_fill_s``, ``jump_m``). The robot and the times are unchanged;
+    ``meta["report"]`` gets the glitch and filter counts and
+    ``meta["human_measured"]`` the rows with an accepted new sample.
+    ``preprocess="none"`` returns ``demo`` itself.
+    """
+    check_choice(preprocess, "preprocess", PREPROCESS)
+    if preprocess == "none":
+        return demo
+    human, measured, counts = preprocess_rows(demo.times, demo.human, preprocess, **options)
+    measured.setflags(write=False)
+    report = {**dict(demo.meta.get("report", {})), "preprocess": preprocess, **counts}
+    meta = {**demo.meta, "report": report, "human_measured": measured}
+    return demo.replace(human=human, meta=meta)
+
+
 def load_trial(
     path: str | Path,
     *,
@@ -252,18 +325,30 @@ def load_trial(
     ValueError
         (:class:`TrialError`) the file cannot be used; the message says why.
     """
-    check_choice(preprocess, "preprocess", PREPROCESS)
-    max_fill_s = check_positive(max_fill_s, "max_fill_s", allow_zero=True)
+    options = {"config": config, "freeze_s": freeze_s, "max_fill_s": max_fill_s,
+               "jump_m": jump_m}
+    _check_options(preprocess, **options)
     path = Path(path)
     try:
-        return _load_trial(path, task or path.parent.name, columns, preprocess, config,
-                           check_positive(freeze_s, "freeze_s"), max_fill_s,
-                           check_positive(jump_m, "jump_m"))
+        return _load_trial(path, task or path.parent.name, columns, preprocess, options)
     except TrialError as error:
         raise TrialError(f"{path}: {error}") from None
 
 
-def _load_trial(path, task, columns, preprocess, config, freeze_s, max_fill_s, jump_m):
+def _check_options(
+    preprocess: str, *, config: Any, freeze_s: float, max_fill_s: float, jump_m: float
+) -> None:
+    check_choice(preprocess, "preprocess", PREPROCESS)
+    check_positive(freeze_s, "freeze_s")
+    check_positive(max_fill_s, "max_fill_s", allow_zero=True)
+    check_positive(jump_m, "jump_m")
+    if config is not None and not isinstance(config, FilterConfig):
+        raise ValueError(f"config: expected a FilterConfig, got {type(config).__name__}")
+
+
+def _load_trial(
+    path: Path, task: str, columns: Columns, preprocess: str, options: dict[str, Any]
+) -> Demonstration:
     table, notes = read_trial_table(path, columns)
     n_rows = table.shape[0]
     p = len(columns.human)
@@ -279,24 +364,11 @@ def _load_trial(path, task, columns, preprocess, config, freeze_s, max_fill_s, j
             f"only {last.size} usable time stamp(s) out of {n_rows} rows, need at least 2"
             + (f" ({why})" if why else "")
         )
-    glitches = find_glitches(times, human, freeze_s=freeze_s, jump_m=jump_m)
-    measurement = np.where(glitches.fresh[:, None], human, np.nan)
-    stats = {"gate_rejected": 0, "filter_resets": 0}
-    if preprocess == "none":
-        out_rows, used = human, glitches.fresh
-    else:
-        out_rows, used, stats = _human_track(times, measurement, preprocess, config, max_fill_s)
-    group = np.cumsum(np.r_[True, np.diff(times) > 0]) - 1
-    measured = np.bincount(group, weights=used.astype(float), minlength=last.size) > 0
-    out = out_rows[last]
-    if preprocess == "causal":
-        out = np.where(measured[:, None], out, np.nan)
+    out, measured, counts = preprocess_rows(times, human, preprocess, **options)
     report = {
         "file": str(path), "task": task, "preprocess": preprocess, "rows": n_rows,
         "rows_dropped": dropped, "repeated_timestamps": int(times.size - last.size),
-        "samples": int(last.size), "duration_s": float(times[-1] - times[0]),
-        **glitches.counts(), **stats,
-        "unfilled_samples": int(np.isnan(out).any(axis=1).sum()),
+        "samples": int(last.size), "duration_s": float(times[-1] - times[0]), **counts,
     }
     measured.setflags(write=False)
     return Demonstration(

@@ -1,4 +1,4 @@
-"""Tests of sandbox.data.filtering: the gated hand filter, the RTS smoother, glitch flags."""
+"""Tests of sandbox.data.filtering (gated hand filter, RTS smoother) and sandbox.data.glitches."""
 
 from __future__ import annotations
 
@@ -14,9 +14,9 @@ from sandbox.data.filtering import (
     FilterConfig,
     HandFilter,
     filter_track,
-    find_glitches,
     smooth_track,
 )
+from sandbox.data.glitches import find_glitches
 
 #: A filter matched to a constant-velocity signal (little process noise).
 CV_CONFIG = FilterConfig(accel_std=0.2, noise_std=0.003)
