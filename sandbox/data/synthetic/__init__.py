@@ -5,7 +5,8 @@ Datasets by name: :func:`make_dataset` (``"two_task"``, ``"diverging"``,
 generator), ``human`` (clean reaches), ``tracker`` (sensor artefacts),
 ``tasks`` (task geometry and random draws), ``robot`` (the paired Baxter arm
 motion), ``generator`` (assembly), ``families`` (objects and diverging tasks),
-``realism`` (synthetic vs recorded statistics).
+``intent`` (a change of task mid-motion, with its ground truth), ``realism``
+(synthetic vs recorded statistics).
 """
 
 from sandbox.data.synthetic.base import (
@@ -16,6 +17,7 @@ from sandbox.data.synthetic.base import (
     minimum_jerk,
 )
 from sandbox.data.synthetic.families import OBJECTS, diverging_demos, objects_demos
+from sandbox.data.synthetic.intent import IntentSwitch, intent_switch_demo
 from sandbox.data.synthetic.realism import compare_realism, realism_stats
 from sandbox.data.synthetic.registry import DATASETS, make_dataset
 from sandbox.data.synthetic.tasks import TaskSpec, Variability
@@ -26,6 +28,7 @@ __all__ = [
     "DATASETS",
     "HAND_START",
     "HUMAN_NAMES",
+    "IntentSwitch",
     "OBJECTS",
     "Q_HOME",
     "ROBOT_NAMES",
@@ -35,6 +38,7 @@ __all__ = [
     "compare_realism",
     "diverging_demos",
     "make_dataset",
+    "intent_switch_demo",
     "minimum_jerk",
     "objects_demos",
     "realism_stats",

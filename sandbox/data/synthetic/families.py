@@ -10,8 +10,8 @@
     the demonstration), then turn left (+y), right (-y), up (+z), down (-z) or
     go straight on; their end points are ``branch_m`` (default 0.18 m) from the
     straight one, hence >= 15 cm apart from each other. The reach fills ~85 %
-    of the demonstration, so half of the reach is still to come at the
-    divergence.
+    of the demonstration and its primary submovement ~75 %, so the hand is
+    still moving fast at the divergence.
 """
 
 from __future__ import annotations
@@ -43,9 +43,11 @@ DIRECTIONS = {
 }
 #: Mean end (m) of the shared (straight) path of the diverging tasks.
 DIVERGING_END = np.array([0.80, 0.18, 0.22])
-#: Variability of the diverging tasks: tight end points, a long reach.
+#: Variability of the diverging tasks: tight end points and via-points, a long
+#: reach whose primary submovement is still under way at the divergence.
 DIVERGING_VARIABILITY = Variability(
-    end_std=(0.02, 0.02, 0.02), reach_on=(-0.03, 0.03), reach_off=(0.85, 0.03)
+    end_std=(0.02, 0.02, 0.02), via_std=0.02, reach_on=(-0.03, 0.03), reach_off=(0.85, 0.03),
+    primary=0.9, correction=(0.0, 0.1),
 )
 
 

@@ -121,8 +121,9 @@ def switch_paths(
 
     Parameters
     ----------
-    path_a, path_b : ndarray, shape (T, 3)
-        Positions (m) of the two tasks' motions on the same ``times``.
+    path_a, path_b : ndarray, shape (T, k)
+        The two tasks' motions on the same ``times`` (hand positions in m, or
+        joint angles in rad).
     times : ndarray, shape (T,)
         Sample times (s).
     t_switch : float
@@ -132,8 +133,8 @@ def switch_paths(
 
     Returns
     -------
-    ndarray, shape (T, 3)
-        Positions (m).
+    ndarray, shape (T, k)
+        The blended motion.
     """
     w = minimum_jerk((times - t_switch) / blend_s)[:, None]
     return (1.0 - w) * path_a + w * path_b

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from sandbox.core.validation import FloatArray
-from sandbox.data.synthetic.base import Q_HOME, minimum_jerk
+from sandbox.data.synthetic.base import Q_HOME, skewed_minimum_jerk
 
 #: Median position (m) of the gripper tip relative to the hand's resting point.
 GRASP_OFFSET = np.array([0.005, -0.010, -0.020])
@@ -67,8 +67,13 @@ def joint_trajectory(
     t_off: float,
     wobble: FloatArray,
     limits: tuple[FloatArray, FloatArray],
+    skew: float = 0.8,
 ) -> FloatArray:
     """Minimum-jerk joint trajectory from :data:`Q_HOME` to ``q_goal``.
+
+    The phase is warped like the human's primary submovement (``skew``, peak
+    speed at ~40 % of the motion), as in the recorded arm motions (peak joint
+    speed at ~33 % of the demonstration, motion over at ~65 %).
 
     Parameters
     ----------
@@ -82,6 +87,8 @@ def joint_trajectory(
         Amplitude (rad) of a smooth deviation that vanishes at both ends.
     limits : tuple of ndarray, shapes (7,), (7,)
         Lower and upper joint limits (rad); the result is clipped to them.
+    skew : float
+        Warp of the minimum-jerk phase (1: symmetric).
 
     Returns
     -------
@@ -89,5 +96,6 @@ def joint_trajectory(
         Joint angles (rad); ``Q_HOME`` before ``t_on``, ``q_goal`` after ``t_off``.
     """
     s = (times - t_on) / (t_off - t_on)
-    q = Q_HOME + np.outer(minimum_jerk(s), q_goal - Q_HOME) + np.outer(bump(s), wobble)
+    q = Q_HOME + np.outer(skewed_minimum_jerk(s, skew), q_goal - Q_HOME)
+    q = q + np.outer(bump(s), wobble)
     return np.clip(q, limits[0], limits[1])

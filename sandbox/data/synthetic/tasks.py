@@ -22,6 +22,9 @@ from sandbox.core.validation import FloatArray, check_positive
 from sandbox.data.synthetic.base import HAND_START
 from sandbox.data.synthetic.human import Reach
 
+#: Median detour (rad) of the recorded arm motions from the straight joint-space
+#: line at mid-motion (kinesthetic demonstrations are not straight in joint space).
+WOBBLE_MEAN = np.array([0.0, -0.02, -0.05, 0.01, -0.08, -0.055, 0.0])
 #: Mean deviation (m) of the recorded reaches from the straight line at half
 #: the distance (they bow toward the robot, to its right and down): the via-point.
 VIA_OFFSET = np.array([-0.03, -0.03, -0.025])
@@ -107,8 +110,9 @@ class Variability:
         Per-axis standard deviation (m) of the slow drift while the hand holds.
     grasp_std : float
         Per-axis standard deviation (m) of where the gripper meets the hand.
-    wobble_rad : float
-        Standard deviation (rad) of a smooth joint-space deviation of the robot.
+    wobble_std : tuple of float
+        Per-joint standard deviations (rad) of the robot's joint-space detour
+        at mid-motion (around :data:`WOBBLE_MEAN`).
     duration_range : tuple of float
         Clip of the duration (s).
     """
@@ -119,23 +123,23 @@ class Variability:
     reach_on: tuple[float, float] = (-0.06, 0.03)
     reach_off: tuple[float, float] = (0.70, 0.06)
     divergence: tuple[float, float] = (0.5, 0.05)
-    robot_lag: tuple[float, float] = (0.08, 0.04)
+    robot_lag: tuple[float, float] = (0.0, 0.04)
     skew: float = 0.8
     primary: float = 0.6
     correction: tuple[float, float] = (0.08, 0.2)
     aim_std: float = 0.03
     drift_m: float = 0.01
     grasp_std: float = 0.01
-    wobble_rad: float = 0.03
+    wobble_std: tuple[float, ...] = (0.04, 0.03, 0.03, 0.06, 0.08, 0.09, 0.02)
     duration_range: tuple[float, float] = (1.7, 4.0)
 
     def __post_init__(self) -> None:
-        for key in ("start_std", "end_std"):
-            if len(getattr(self, key)) != 3:
-                raise ValueError(f"{key}: expected 3 numbers (m), got {getattr(self, key)!r}")
+        for key, size in (("start_std", 3), ("end_std", 3), ("wobble_std", 7)):
+            if len(getattr(self, key)) != size:
+                raise ValueError(f"{key}: expected {size} numbers, got {getattr(self, key)!r}")
             for value in getattr(self, key):
                 check_positive(value, key, allow_zero=True)
-        for key in ("via_std", "grasp_std", "wobble_rad", "drift_m", "aim_std"):
+        for key in ("via_std", "grasp_std", "drift_m", "aim_std"):
             check_positive(getattr(self, key), key, allow_zero=True)
         if self.skew <= 1.0 / 3.0:
             raise ValueError(f"skew: expected a number > 1/3, got {self.skew!r}")
@@ -193,7 +197,7 @@ def draw_demo(spec: TaskSpec, var: Variability, rng: np.random.Generator) -> Dem
         robot_on=robot_on * T,
         robot_off=robot_off * T,
         grasp_shift=rng.normal(0.0, var.grasp_std, 3),
-        wobble=rng.normal(0.0, var.wobble_rad, 7),
+        wobble=WOBBLE_MEAN + rng.normal(0.0, var.wobble_std),
         correction=rng.uniform(*var.correction),
         aim=rng.normal(0.0, var.aim_std, 3),
         drift=rng.normal(0.0, var.drift_m, 3),
