@@ -1,0 +1,183 @@
+"""One entry point for demonstrations: a recorded folder or a named synthetic set.
+
+``spec`` is either a folder in the per-trial CSV layout ``<root>/<task>/<trial>.csv``
+(:mod:`sandbox.data.recorded`) or ``synthetic:NAME`` with NAME one of
+:data:`sandbox.data.synthetic.DATASETS` (generated, seeded, needs nothing on disk).
+
+Preprocessing defaults: ``"smooth"`` (RTS-smoothed human track, short gaps
+filled) because datasets are mostly used to *train*. Streams a predictor is
+tested on should be preprocessed causally: pass ``preprocess="causal"`` (only
+samples received so far shape each value) or ``"none"`` and filter online with
+:class:`sandbox.data.filtering.HandFilter`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from sandbox.core.validation import check_array, check_choice, check_positive
+from sandbox.data.demonstration import Demonstration, stack_tasks
+
+SYNTHETIC_PREFIX = "synthetic:"
+#: Demonstrations per task of a synthetic set when ``n_per_task`` is not given.
+DEFAULT_SYNTHETIC_PER_TASK = 20
+PREPROCESS = ("none", "causal", "smooth")
+
+
+def synthetic_names() -> tuple[str, ...]:
+    """Names accepted after ``synthetic:`` (empty if the generator is unavailable)."""
+    try:
+        from sandbox.data.synthetic import DATASETS
+    except ImportError:  # pragma: no cover - the synthetic package ships with sandbox
+        return ()
+    return tuple(DATASETS)
+
+
+def _spec_options() -> str:
+    names = ", ".join(f"synthetic:{n}" for n in synthetic_names())
+    return f"a folder <root>/<task>/<trial>.csv or one of [{names}]"
+
+
+def load_dataset(
+    spec: str | Path,
+    *,
+    seed: int = 0,
+    tasks: Sequence[str] | None = None,
+    n_per_task: int | None = None,
+    preprocess: str = "smooth",
+    rate_hz: float | None = None,
+    **options: Any,
+) -> list[Demonstration]:
+    """Load or generate demonstrations.
+
+    Parameters
+    ----------
+    spec : str or Path
+        A dataset folder, or ``"synthetic:NAME"``.
+    seed : int
+        Seed of the synthetic generator (``np.random.default_rng(seed)``);
+        unused for folders.
+    tasks : sequence of str, optional
+        Keep only these tasks (default all); an unknown task is a ``ValueError``
+        listing the available ones.
+    n_per_task : int, optional
+        Demonstrations per task: for a folder the first ``n_per_task`` trials of
+        each task in file order (all if None); for a synthetic set the number
+        generated (default :data:`DEFAULT_SYNTHETIC_PER_TASK`).
+    preprocess : {"none", "causal", "smooth"}
+        Human-track preprocessing (see :mod:`sandbox.data.recorded`); applied to
+        synthetic sets too, whose tracker artefacts mimic the recordings.
+    rate_hz : float, optional
+        Resample every demonstration on a uniform grid at this rate
+        (:func:`resample_uniform`); default: keep the sample times.
+    **options
+        Passed to the loader / preprocessing: ``columns`` (folders only),
+        ``config``, ``freeze_s``, ``max_fill_s``, ``jump_m``.
+
+    Returns
+    -------
+    list of Demonstration
+        Grouped by task. Trials that cannot be used are skipped with a
+        :class:`sandbox.data.recorded.SkippedTrialWarning`.
+    """
+    check_choice(preprocess, "preprocess", PREPROCESS)
+    if n_per_task is not None and (int(n_per_task) != n_per_task or n_per_task < 1):
+        raise ValueError(f"n_per_task: expected an integer >= 1, got {n_per_task!r}")
+    if isinstance(spec, str) and spec.startswith(SYNTHETIC_PREFIX):
+        demos = _synthetic(spec[len(SYNTHETIC_PREFIX):], seed, tasks, n_per_task, preprocess,
+                           options)
+    elif isinstance(spec, (str, Path)) and Path(spec).is_dir():
+        demos = _recorded(Path(spec), tasks, n_per_task, preprocess, options)
+    else:
+        raise ValueError(f"data: expected {_spec_options()}, got {str(spec)!r}")
+    if rate_hz is not None:
+        demos = [resample_uniform(d, rate_hz) for d in demos]
+    return demos
+
+
+def _recorded(root, tasks, n_per_task, preprocess, options) -> list[Demonstration]:
+    from sandbox.data.recorded import load_recorded
+
+    demos, _ = load_recorded(root, tasks=tasks, preprocess=preprocess, **options)
+    if n_per_task is None:
+        return demos
+    return [d for group in stack_tasks(demos).values() for d in group[: int(n_per_task)]]
+
+
+def _synthetic(name, seed, tasks, n_per_task, preprocess, options) -> list[Demonstration]:
+    from sandbox.data.synthetic import make_dataset
+
+    if name not in synthetic_names():
+        raise ValueError(f"data: expected {_spec_options()}, got 'synthetic:{name}'")
+    if "columns" in options:
+        raise ValueError("columns: only used for recorded folders, not synthetic:NAME")
+    n = DEFAULT_SYNTHETIC_PER_TASK if n_per_task is None else int(n_per_task)
+    demos = make_dataset(name, n, np.random.default_rng(seed))
+    if tasks is not None:
+        available = list(stack_tasks(demos))
+        unknown = [t for t in tasks if t not in available]
+        if unknown:
+            raise ValueError(f"tasks: expected some of {available}, got unknown {unknown}")
+        demos = [d for d in demos if d.task in set(tasks)]
+    if preprocess == "none":
+        return demos
+    from sandbox.data.recorded import preprocess_demonstration
+
+    return [preprocess_demonstration(d, preprocess, **options) for d in demos]
+
+
+def resample_uniform(
+    demo: Demonstration, rate_hz: float, *, max_gap_s: float = 0.25
+) -> Demonstration:
+    """Resample a demonstration on a uniform time grid spanning its recorded span.
+
+    The grid runs from ``times[0]`` to ``times[-1]`` (both kept, so the duration
+    is unchanged) with ``round(duration * rate_hz) + 1`` points. The robot is
+    linearly interpolated. The human is linearly interpolated between valid
+    samples, but a grid time inside a gap of more than ``max_gap_s`` seconds
+    between valid samples stays NaN (nothing is invented across long dropouts).
+
+    Parameters
+    ----------
+    demo : Demonstration
+        The demonstration.
+    rate_hz : float
+        Grid rate (Hz).
+    max_gap_s : float
+        Longest gap (s) between valid human samples that is interpolated.
+
+    Returns
+    -------
+    Demonstration
+        With ``meta["resampled_hz"] = rate_hz``; ``meta["human_measured"]`` is
+        dropped (the grid carries no raw samples).
+    """
+    rate_hz = check_positive(rate_hz, "rate_hz")
+    max_gap_s = check_positive(max_gap_s, "max_gap_s", allow_zero=True)
+    n = int(round(demo.duration * rate_hz)) + 1
+    t = np.linspace(demo.times[0], demo.times[-1], max(n, 2))
+    robot = np.column_stack([np.interp(t, demo.times, q) for q in demo.robot.T])
+    human = np.column_stack([_interp_gaps(t, demo.times, y, max_gap_s) for y in demo.human.T])
+    meta = {k: v for k, v in demo.meta.items() if k != "human_measured"}
+    meta["resampled_hz"] = rate_hz
+    return demo.replace(times=t, human=human, robot=robot, meta=meta)
+
+
+def _interp_gaps(t_new, t, y, max_gap_s) -> np.ndarray:
+    ok = np.isfinite(y)
+    out = np.full(t_new.size, np.nan)
+    if not ok.any():
+        return out
+    tv, yv = t[ok], y[ok]
+    out[:] = np.interp(t_new, tv, yv)
+    k = np.searchsorted(tv, t_new, side="right")
+    inside = (k > 0) & (k < tv.size)
+    gap = np.where(inside, tv[np.minimum(k, tv.size - 1)] - tv[np.maximum(k - 1, 0)], 0.0)
+    exact = np.isin(t_new, tv)
+    bad = (t_new < tv[0]) | (t_new > tv[-1]) | (inside & (gap > max_gap_s) & ~exact)
+    out[bad] = np.nan
+    return check_array(out, "human", 1, allow_nan=True)
