@@ -136,7 +136,8 @@ def resample_uniform(
     """Resample a demonstration on a uniform time grid spanning its recorded span.
 
     The grid runs from ``times[0]`` to ``times[-1]`` (both kept, so the duration
-    is unchanged) with ``round(duration * rate_hz) + 1`` points. The robot is
+    is unchanged) with ``round(duration * rate_hz) + 1`` equally spaced points
+    (the step is the one nearest to ``1 / rate_hz`` that fits the span). The robot is
     linearly interpolated. The human is linearly interpolated between valid
     samples, but a grid time inside a gap of more than ``max_gap_s`` seconds
     between valid samples stays NaN (nothing is invented across long dropouts).
