@@ -134,3 +134,13 @@ def test_recorded_dataset_subset(recorded_dir):
                          preprocess="causal")
     assert [d.task for d in demos] == ["screw_driver"] * 3 + ["pencil_box"] * 3
     assert all(d.meta["report"]["preprocess"] == "causal" for d in demos)
+
+
+def test_importing_sandbox_data_stays_light():
+    import subprocess
+    import sys
+
+    code = ("import sys, sandbox.data as d; heavy = [m for m in ('filterpy', 'pybullet', "
+            "'matplotlib', 'meshcat') if m in sys.modules]; assert not heavy, heavy; "
+            "assert d.HandFilter.__name__ == 'HandFilter' and 'filterpy' in sys.modules")
+    subprocess.run([sys.executable, "-c", code], check=True)
