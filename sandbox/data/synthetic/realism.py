@@ -61,7 +61,7 @@ def valid_rows(times: FloatArray, human: FloatArray) -> tuple[FloatArray, FloatA
     """
     ok = np.isfinite(human).all(axis=1) & ~np.all(human == 0.0, axis=1)
     t, x = times[ok], human[ok]
-    last = np.r_[np.diff(t) > 0, True]
+    last = np.r_[np.diff(t) > 0, True] if t.size else np.zeros(0, dtype=bool)
     return t[last], x[last]
 
 
