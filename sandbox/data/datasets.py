@@ -182,3 +182,71 @@ def _interp_gaps(t_new, t, y, max_gap_s) -> np.ndarray:
     bad = (t_new < tv[0]) | (t_new > tv[-1]) | (inside & (gap > max_gap_s) & ~exact)
     out[bad] = np.nan
     return check_array(out, "human", 1, allow_nan=True)
+
+
+def summarize(
+    demos: Sequence[Demonstration], skipped: Sequence[tuple[str, str]] = ()
+) -> dict[str, Any]:
+    """Statistics of loaded recorded trials, from their ``meta["report"]`` (JSON-ready).
+
+    Parameters
+    ----------
+    demos : sequence of Demonstration
+        Trials loaded by :func:`sandbox.data.recorded.load_recorded` (any preprocessing;
+        "causal" or "smooth" also give the filter's gate rejections).
+    skipped : sequence of (str, str)
+        ``(file, reason)`` of the trials that were skipped.
+
+    Returns
+    -------
+    dict
+        ``tasks``: per task the number of trials, duration mean/min/max (s),
+        rows per second and distinct tracker frames per second; ``all``: the
+        same over all trials; ``glitches``: totals of each glitch with the
+        number of trials showing it; ``skipped``: the reasons.
+    """
+    reports = [d.meta.get("report") for d in demos]
+    if not demos or any(r is None or "rows" not in r for r in reports):
+        raise ValueError("demos: expected trials loaded from files (with meta['report'])")
+    groups: dict[str, list[dict]] = {}
+    for demo, report in zip(demos, reports, strict=True):
+        groups.setdefault(demo.task, []).append(report)
+    return {
+        "tasks": {task: _rates(rs) for task, rs in groups.items()},
+        "all": _rates(reports),
+        "glitches": _glitch_totals(reports),
+        "skipped": [{"file": f, "reason": r} for f, r in skipped],
+    }
+
+
+def _rates(reports: list[dict]) -> dict[str, float]:
+    durations = np.array([r["duration_s"] for r in reports])
+    total = float(durations.sum())
+    return {
+        "trials": len(reports),
+        "duration_mean_s": float(durations.mean()),
+        "duration_min_s": float(durations.min()),
+        "duration_max_s": float(durations.max()),
+        "rows_per_s": sum(r["rows"] for r in reports) / total,
+        "frames_per_s": sum(r["new_frames"] for r in reports) / total,
+    }
+
+
+_GLITCHES = ("repeated_timestamps", "stale_rows", "jumps", "zero_rows", "missing_rows",
+             "frozen_segments", "frozen_s", "gate_rejected", "filter_resets")
+
+
+def _glitch_totals(reports: list[dict]) -> dict[str, Any]:
+    rows = sum(r["rows"] for r in reports)
+    out: dict[str, Any] = {"rows": rows}
+    for key in _GLITCHES:
+        values = [r.get(key, 0) for r in reports]
+        out[key] = {"total": round(float(sum(values)), 4), "fraction_of_rows": sum(values) / rows,
+                    "trials": int(sum(v > 0 for v in values))}
+    dropped: dict[str, int] = {}
+    for r in reports:
+        for reason, n in r.get("rows_dropped", {}).items():
+            dropped[reason] = dropped.get(reason, 0) + int(n)
+    out["rows_dropped"] = dropped
+    out["preprocess"] = sorted({r.get("preprocess", "none") for r in reports})
+    return out

@@ -1,0 +1,219 @@
+"""``python -m sandbox data summary|check-filter --data DIR``: what a recorded set contains.
+
+``summary`` prints the tasks, trial counts, durations, sample rates (rows/s
+and distinct tracker frames/s, counted on the chosen human columns), the
+tracker glitches found (repeated time stamps, re-sent frames, jumps, zero
+rows, missing values, frozen skeletons, gate rejections of the causal
+filter), the rows dropped and the trials skipped with their reasons, and,
+when the synthetic generator is available, how a synthetic set compares with
+the recordings. ``--json`` prints the same as JSON.
+
+``check-filter`` measures the hand filter's settings on the set: every third
+tracker frame of the first 60 % of each trial is hidden and predicted by the
+RTS smoother and by the causal filter from the others.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from typing import Any
+
+NAME = "data"
+HELP = "Inspect a recorded dataset: summary of trials and tracker glitches, filter check."
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    sub = parser.add_subparsers(dest="data_command", metavar="ACTION", required=True)
+    summary = sub.add_parser("summary", help="tasks, durations, rates, glitches, skipped trials")
+    _common(summary)
+    summary.add_argument("--json", action="store_true", help="print JSON instead of text")
+    summary.add_argument(
+        "--synthetic", default="objects", metavar="NAME",
+        help="synthetic set to compare with the recordings (default objects; 'none' to skip)",
+    )
+    check = sub.add_parser("check-filter", help="held-out error of the hand filter settings")
+    _common(check)
+    check.add_argument("--accel-std", type=float, default=None, help="m s^-1.5 (default 6)")
+    check.add_argument("--noise-std", type=float, default=None, help="m (default 0.003)")
+    check.add_argument("--jitter-std", type=float, default=None, help="s (default 0.01)")
+    check.add_argument("--gate-prob", type=float, default=None, help="(default 0.999)")
+    check.add_argument("--json", action="store_true", help="print JSON instead of text")
+
+
+def _common(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--data", required=True, metavar="DIR",
+                        help="dataset folder <DIR>/<task>/<trial>.csv")
+    parser.add_argument("--tasks", default=None, help="comma-separated subset of tasks")
+    parser.add_argument("--human-columns", default=None, metavar="A,B,C",
+                        help="human columns (default human_left_hand_x,y,z)")
+    parser.add_argument("--robot-columns", default=None, metavar="A,B,...",
+                        help="robot columns (default left_s0 ... left_w2)")
+
+
+def _split(text: str | None) -> list[str] | None:
+    return None if text is None else [s.strip() for s in text.split(",") if s.strip()]
+
+
+def _columns(args: argparse.Namespace) -> Any:
+    from sandbox.data.recorded import Columns
+
+    kwargs = {}
+    if args.human_columns is not None:
+        kwargs["human"] = tuple(_split(args.human_columns))
+    if args.robot_columns is not None:
+        kwargs["robot"] = tuple(_split(args.robot_columns))
+    return Columns(**kwargs)
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.data_command == "summary":
+        return _summary(args)
+    return _check_filter(args)
+
+
+def _summary(args: argparse.Namespace) -> int:
+    import warnings
+
+    from sandbox.data.datasets import summarize
+    from sandbox.data.recorded import SkippedTrialWarning, load_recorded
+
+    columns = _columns(args)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SkippedTrialWarning)  # listed in the summary instead
+        demos, skipped = load_recorded(args.data, tasks=_split(args.tasks), columns=columns,
+                                       preprocess="causal")
+    if not demos:
+        raise ValueError(f"data: no usable trial in {args.data} ({len(skipped)} skipped)")
+    result = {"data": str(args.data), **summarize(demos, skipped)}
+    result["realism"] = _realism(args, columns)
+    if args.json:
+        print(json.dumps(result, indent=2))
+    else:
+        print(format_summary(result))
+    return 0
+
+
+def _realism(args: argparse.Namespace, columns: Any) -> dict | None:
+    """Synthetic vs recorded statistics, if the synthetic package offers them."""
+    if args.synthetic == "none" or len(columns.human) != 3:
+        return None
+    try:
+        import numpy as np
+
+        from sandbox.data.synthetic import DATASETS, compare_realism, make_dataset
+    except ImportError:
+        return None
+    if args.synthetic not in DATASETS:
+        raise ValueError(f"--synthetic: expected one of {[*DATASETS, 'none']}, "
+                         f"got {args.synthetic!r}")
+    import warnings
+
+    from sandbox.data.recorded import load_recorded
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        raw, _ = load_recorded(args.data, tasks=_split(args.tasks), columns=columns,
+                               preprocess="none")
+    synthetic = make_dataset(args.synthetic, 20, np.random.default_rng(0))
+    return {"synthetic": f"synthetic:{args.synthetic}", "seed": 0, "n_per_task": 20,
+            "table": compare_realism(synthetic, raw)}
+
+
+def format_summary(result: dict[str, Any]) -> str:
+    """The summary dict as readable text."""
+    lines = [f"Dataset {result['data']}: {result['all']['trials']} trials in "
+             f"{len(result['tasks'])} tasks ({len(result['skipped'])} skipped)", ""]
+    lines.append(f"{'task':<20}{'trials':>7}  {'duration mean [min, max] (s)':<30}"
+                 f"{'rows/s':>8}{'frames/s':>10}")
+    for task, r in [*result["tasks"].items(), ("all", result["all"])]:
+        span = f"{r['duration_mean_s']:.2f} [{r['duration_min_s']:.2f}, {r['duration_max_s']:.2f}]"
+        lines.append(f"{task:<20}{r['trials']:>7}  {span:<30}"
+                     f"{r['rows_per_s']:>8.1f}{r['frames_per_s']:>10.1f}")
+    g = result["glitches"]
+    lines += ["", f"Tracker glitches over {g['rows']} rows (trials showing it):"]
+    labels = [
+        ("repeated_timestamps", "rows repeating the previous time stamp"),
+        ("stale_rows", "rows re-sending a frame already received"),
+        ("jumps", "jumps >= 5 cm between consecutive frames"),
+        ("zero_rows", "(0, 0, 0) rows (person lost)"),
+        ("missing_rows", "rows with a missing human value"),
+        ("gate_rejected", "frames rejected by the causal filter's gate"),
+        ("filter_resets", "filter re-initialisations"),
+    ]
+    for key, label in labels:
+        v = g[key]
+        lines.append(f"  {label:<46}{int(v['total']):>7} ({100 * v['fraction_of_rows']:5.2f} %)"
+                     f"  in {v['trials']} trials")
+    fs = g["frozen_segments"]
+    lines.append(f"  {'frozen skeletons (> 0.25 s without a new frame)':<46}"
+                 f"{int(fs['total']):>7} stretches, {g['frozen_s']['total']:.2f} s"
+                 f"  in {fs['trials']} trials")
+    dropped = ", ".join(f"{n} ({why})" for why, n in g["rows_dropped"].items()) or "none"
+    lines += [f"  rows dropped: {dropped}", ""]
+    lines.append("Skipped trials: " + ("none" if not result["skipped"] else ""))
+    lines += [f"  {s['file']}: {s['reason']}" for s in result["skipped"]]
+    if result.get("realism"):
+        from sandbox.data.synthetic.realism import format_realism
+
+        r = result["realism"]
+        lines += ["", f"Realism: {r['synthetic']} ({r['n_per_task']} per task, seed "
+                      f"{r['seed']}) vs these recordings (medians)", format_realism(r["table"])]
+    return "\n".join(lines)
+
+
+def _check_filter(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from sandbox.data.filtering import FilterConfig, holdout_errors
+    from sandbox.data.glitches import find_glitches
+    from sandbox.data.recorded import TrialError, find_trials, read_trial_table
+
+    settings = {"accel_std": args.accel_std, "noise_std": args.noise_std,
+                "time_jitter_std": args.jitter_std, "gate_prob": args.gate_prob}
+    config = FilterConfig(**{k: v for k, v in settings.items() if v is not None})
+    columns = _columns(args)
+    p = len(columns.human)
+    smooth, causal, frames, rejected, trials = [], [], 0, 0, 0
+    for _, path in find_trials(args.data, _split(args.tasks)):
+        try:
+            table, _ = read_trial_table(path, columns)
+        except TrialError:
+            continue
+        t, human = table[:, 0], table[:, 1 : 1 + p]
+        ok = np.isfinite(t) & np.r_[True, np.diff(t) >= 0]
+        if ok.sum() < 3 or not ok.all():
+            continue
+        fresh = find_glitches(t, human).fresh
+        s, c, counts = holdout_errors(t, np.where(fresh[:, None], human, np.nan), config)
+        smooth.append(s)
+        causal.append(c)
+        frames += int(fresh.sum())
+        rejected += counts["rejected"] + counts["reset"]
+        trials += 1
+    if not trials:
+        raise ValueError(f"data: no usable trial in {args.data}")
+    s, c = np.concatenate(smooth), np.concatenate(causal)
+    result = {
+        "data": str(args.data), "trials": trials, "config": config.__dict__,
+        "hidden_frames": int(s.size),
+        "smooth_error_mm": {"median": 1e3 * float(np.median(s)),
+                            "rms": 1e3 * float(np.sqrt(np.mean(s**2)))},
+        "causal_prediction_error_mm": {"median": 1e3 * float(np.median(c)),
+                                       "rms": 1e3 * float(np.sqrt(np.mean(c**2)))},
+        "frames": frames, "gate_rejected_fraction": rejected / frames,
+    }
+    if args.json:
+        print(json.dumps(result, indent=2))
+        return 0
+    cfg = ", ".join(f"{k}={v:g}" for k, v in result["config"].items())
+    print(f"Filter {cfg}\n{trials} trials, {s.size} hidden frames (every 3rd, first 60 %)")
+    for key, label in (("smooth_error_mm", "RTS smoother"),
+                       ("causal_prediction_error_mm", "causal prediction")):
+        e = result[key]
+        print(f"  {label:<18} error median {e['median']:.2f} mm, rms {e['rms']:.2f} mm")
+    print(f"  gate rejections: {rejected} of {frames} frames "
+          f"({100 * result['gate_rejected_fraction']:.2f} %)")
+    sys.stdout.flush()
+    return 0
