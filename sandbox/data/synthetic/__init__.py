@@ -7,6 +7,18 @@ generator), ``human`` (clean reaches), ``tracker`` (sensor artefacts),
 motion), ``generator`` (assembly), ``families`` (objects and diverging tasks),
 ``intent`` (a change of task mid-motion, with its ground truth), ``realism``
 (synthetic vs recorded statistics).
+
+Examples
+--------
+>>> import numpy as np
+>>> from sandbox.data.synthetic import make_dataset, intent_switch_demo, TrackerModel
+>>> demos = make_dataset("objects", 2, np.random.default_rng(0))
+>>> [d.task for d in demos]
+['box', 'box', 'glasses_case', 'glasses_case', 'tape', 'tape']
+>>> clean = make_dataset("diverging", 1, np.random.default_rng(0), tracker=TrackerModel.clean())
+>>> demo, truth = intent_switch_demo("left", "right", 0.6, np.random.default_rng(0))
+>>> demo.task, truth.task_at([0.0, demo.duration]).tolist()
+('right', ['left', 'right'])
 """
 
 from sandbox.data.synthetic.base import (
