@@ -80,9 +80,12 @@ class GaussianBasis:
     def evaluate(self, z: FloatArray) -> FloatArray:
         """Like ``__call__`` without conversion (hot path; ``z`` is a float array)."""
         d = z[..., None] - self.centers
-        psi = np.exp(d * d * (-0.5 / self.h))
-        if self.normalized:
-            psi /= psi.sum(axis=-1, keepdims=True)
+        e = d * d * (-0.5 / self.h)
+        if not self.normalized:
+            return np.exp(e)
+        e -= e.max(axis=-1, keepdims=True)   # stable far outside [0, 1]
+        psi = np.exp(e)
+        psi /= psi.sum(axis=-1, keepdims=True)
         return psi
 
     def to_dict(self) -> dict:

@@ -91,6 +91,11 @@ class Scorer:
             self.cols.append(slice(start, start + P * ut.shape[2]))
             start += P * ut.shape[2]
         self.V = [b.reshape(N * P, -1) for b in blocks]          # (N*P, r+1) per task
+        pad = np.zeros((N, self.K, P, self.R + 1))
+        for k, b in enumerate(blocks):                             # U in [:r], mu at R
+            pad[:, k, :, : self.rank[k]] = b[..., :-1]
+            pad[:, k, :, self.R] = b[..., -1]
+        self.V_pad = pad.reshape(N, -1)                           # (N, K*P*(R+1))
         self.V_all = np.hstack([b.reshape(N, -1) for b in blocks])  # (N, sum P(r+1))
         self.U_raw = np.hstack(raw)
 

@@ -55,41 +55,63 @@ class PhaseEstimate:
     n_candidates: np.ndarray
 
 
-def candidate_grid(nominal: FloatArray, alpha_mean: FloatArray, alpha_std: FloatArray,
-                   t_last: float, n_candidates: int = 50, width: float = 3.0):
-    """Shared duration lattice and each task's span in it.
+@dataclass(frozen=True)
+class Lattice:
+    """The duration lattice shared by all tasks: candidates are ``step * j`` (s).
 
-    Parameters
-    ----------
-    nominal, alpha_mean, alpha_std : ndarray, shape (K,)
-        Per-task :math:`T_{nom}`, :math:`\\mu_\\alpha`, :math:`\\sigma_\\alpha`.
-    t_last : float
-        Time of the last observation (s).
-    n_candidates : int
-        Minimum candidates per task over its full interval.
-    width : float
-        Half-width of the interval in prior standard deviations.
-
-    Returns
-    -------
-    durations : ndarray, shape (C,)
-        Sorted unique candidate durations (s).
-    spans : ndarray of int, shape (K, 2)
-        Task k's candidates are ``durations[spans[k,0]:spans[k,1]]``.
-    step : float
-        Lattice spacing (s).
+    Task k's interval :math:`T_{nom,k}(\\mu_\\alpha \\pm w\\sigma_\\alpha)` holds the
+    integers ``j_lo[k] .. j_hi[k]``; the step is the narrowest interval divided by
+    ``n_candidates``, so every task gets at least ``n_candidates`` of them.
     """
-    lo = nominal * np.maximum(alpha_mean - width * alpha_std, 0.05)
-    hi = nominal * (alpha_mean + width * alpha_std)
-    step = float(np.min(hi - lo) / n_candidates)
-    j_lo = np.ceil(np.maximum(lo, t_last) / step - 1e-9).astype(np.int64)
-    j_hi = np.floor(hi / step + 1e-9).astype(np.int64)
-    lattice = [np.arange(a, b + 1) * step for a, b in zip(j_lo, j_hi)]
-    lattice = [g if g.size else np.array([t_last]) for g in lattice]
-    durations = np.unique(np.concatenate(lattice))
-    spans = np.array([[np.searchsorted(durations, g[0]), np.searchsorted(durations, g[-1]) + 1]
-                      for g in lattice])
-    return durations, spans, step
+
+    step: float
+    j_lo: np.ndarray
+    j_hi: np.ndarray
+
+    @classmethod
+    def for_tasks(cls, tasks, n_candidates: int = 50, width: float = 3.0) -> Lattice:
+        """Lattice for a sequence of :class:`~sandbox.core.model.TaskModel`."""
+        nominal = np.array([t.nominal_duration for t in tasks])
+        mean = np.array([t.alpha_mean for t in tasks])
+        std = np.array([t.alpha_std for t in tasks])
+        lo = nominal * np.maximum(mean - width * std, 0.05)
+        hi = nominal * (mean + width * std)
+        step = float(np.min(hi - lo) / n_candidates)
+        j_lo = np.ceil(lo / step - 1e-9).astype(np.int64)
+        j_hi = np.floor(hi / step + 1e-9).astype(np.int64)
+        return cls(step, j_lo, j_hi)
+
+    @property
+    def durations(self) -> FloatArray:
+        """Every lattice duration any task uses, shape (C,)."""
+        return np.arange(self.j_lo.min(), self.j_hi.max() + 1) * self.step
+
+    def spans(self, t_last: float) -> np.ndarray | None:
+        """Each task's candidates in :attr:`durations` that last at least ``t_last``.
+
+        Returns ``None`` if some task has none left (the motion is ending now).
+        """
+        base = self.j_lo.min()
+        first = np.maximum(self.j_lo, np.ceil(t_last / self.step - 1e-9).astype(np.int64))
+        if np.any(first > self.j_hi):
+            return None
+        return np.stack([first - base, self.j_hi - base + 1], axis=1)
+
+    def grid(self, t_last: float) -> tuple[FloatArray, np.ndarray]:
+        """Sorted unique candidates lasting at least ``t_last`` and each task's span.
+
+        A task with no such candidate gets the single candidate ``t_last``.
+        """
+        spans = self.spans(t_last)
+        if spans is not None:
+            return self.durations, spans
+        first = np.maximum(self.j_lo, np.ceil(t_last / self.step - 1e-9).astype(np.int64))
+        lattice = [np.arange(a, b + 1) * self.step if a <= b else np.array([t_last])
+                   for a, b in zip(first, self.j_hi)]
+        durations = np.unique(np.concatenate(lattice))
+        spans = np.array([[np.searchsorted(durations, g[0]),
+                           np.searchsorted(durations, g[-1]) + 1] for g in lattice])
+        return durations, spans
 
 
 def log_alpha_prior(alpha: FloatArray, mean: float, std: float) -> FloatArray:
@@ -100,7 +122,7 @@ def log_alpha_prior(alpha: FloatArray, mean: float, std: float) -> FloatArray:
 
 def estimate_phase(scorer: Scorer, tasks, times: FloatArray, values: FloatArray, *,
                    n_candidates: int = 50, width: float = 3.0, refine_steps: int = 1,
-                   mode: str = "joint") -> PhaseEstimate:
+                   mode: str = "joint", stats=None) -> PhaseEstimate:
     """MAP speed factor of every task given observations (eq. 14).
 
     Parameters
@@ -111,19 +133,27 @@ def estimate_phase(scorer: Scorer, tasks, times: FloatArray, values: FloatArray,
         Observation times since the motion started (s), s >= 1.
     values : ndarray, shape (s, P)
         Observations without NaN.
-    n_candidates, width : see :func:`candidate_grid`.
+    n_candidates, width : see :func:`Lattice`.
     refine_steps : int
         Parabolic refinement steps after the grid (0: grid only).
     mode : {"joint", "marginal"}
         Joint likelihood of all observations, or product of per-step marginals.
+    stats : StreamStatistics, optional
+        Sufficient statistics of exactly these observations on the lattice
+        (:mod:`sandbox.core.statistics`); used for the grid when given (joint mode).
     """
     nominal = np.array([t.nominal_duration for t in tasks])
     a_mean = np.array([t.alpha_mean for t in tasks])
     a_std = np.array([t.alpha_std for t in tasks])
-    durations, spans, step = candidate_grid(nominal, a_mean, a_std, float(times[-1]),
-                                            n_candidates, width)
     score = scorer.joint if mode == "joint" else scorer.marginal
-    scores = score(times, values, durations, spans)
+    if stats is not None and mode == "joint" and stats.lattice.spans(float(times[-1])) is not None:
+        durations = stats.lattice.durations
+        spans = stats.lattice.spans(float(times[-1]))
+        scores = stats.scores(spans)
+    else:
+        lattice = Lattice.for_tasks(tasks, n_candidates, width)
+        durations, spans = lattice.grid(float(times[-1]))
+        scores = score(times, values, durations, spans)
     K = len(tasks)
     best_T, best_ll, best_lp = np.empty(K), np.empty(K), np.empty(K)
     factors = np.empty((K, scorer.R + 1, scorer.R + 1)) if mode == "joint" else None

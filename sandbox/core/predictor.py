@@ -30,9 +30,10 @@ import numpy as np
 
 from sandbox.core.blending import blend_unchecked, sigmoid_activations
 from sandbox.core.likelihood import Scorer, condition_robot
-from sandbox.core.phase import estimate_phase
+from sandbox.core.phase import Lattice, estimate_phase
 from sandbox.core.promp import WeightDistribution, trajectory_distribution
 from sandbox.core.recognition import task_posterior
+from sandbox.core.statistics import StreamStatistics
 from sandbox.core.validation import (
     FloatArray,
     check_array,
@@ -88,7 +89,7 @@ class _Predictor:
     def __init__(self, model, *, subsample: int = 5, likelihood: str = "joint",
                  n_candidates: int = 50, width: float = 3.0, refine_steps: int = 1,
                  dt: float = 0.01, blend_rate: float = 50.0, blend_delay: float = 0.1,
-                 blend: bool = True) -> None:
+                 blend: bool = True, horizon: float = 0.0, incremental: bool = True) -> None:
         if not getattr(model, "is_fitted", False):
             raise RuntimeError("the model is not fitted: fit it (or load it) before predicting")
         if int(subsample) != subsample or subsample < 1:
@@ -106,6 +107,10 @@ class _Predictor:
         self.blend_rate = check_positive(blend_rate, "blend_rate")
         self.blend_delay = check_positive(blend_delay, "blend_delay", allow_zero=True)
         self.blend = bool(blend)
+        self.horizon = check_positive(horizon, "horizon", allow_zero=True)
+        self._lattice = Lattice.for_tasks(model.task_models, self.n_candidates, self.width)
+        self._incremental = (bool(incremental) and self.likelihood == "joint"
+                             and len(self.scorer.kappas) == 1)
         self.reset()
 
     # -------------------------------------------------------------- public
@@ -118,6 +123,7 @@ class _Predictor:
         self._last_time = -np.inf
         self.updates: list[Update] = []
         self._prediction: tuple[WeightDistribution, float] | None = None
+        self._stats = StreamStatistics(self.scorer, self._lattice) if self._incremental else None
         self._plan_t, self._plan_mean, self._plan_cov = self._prior_plan()
 
     def observe(self, t: float, y) -> Update | None:
@@ -147,6 +153,8 @@ class _Predictor:
             if self._n_valid % self.subsample == 0:
                 self._t.append(t)
                 self._y.append(y)
+                if self._stats is not None:
+                    self._stats.add(t, y)
             self._n_valid += 1
         return self._maybe_update(t)
 
@@ -223,9 +231,10 @@ class _Predictor:
         if times.size == 0:
             return None
         start = _time.perf_counter()
+        stats = self._stats if self._stats is not None and self._stats.count == times.size else None
         est = estimate_phase(self.scorer, self.model.task_models, times, values,
                              n_candidates=self.n_candidates, width=self.width,
-                             refine_steps=self.refine_steps, mode=self.likelihood)
+                             refine_steps=self.refine_steps, mode=self.likelihood, stats=stats)
         post = task_posterior(est.log_likelihood, self.model.priors)
         k = int(np.argmax(post))
         robot = self._condition(k, est, times, values)
@@ -235,7 +244,11 @@ class _Predictor:
                      est.log_likelihood, float(est.alphas[k]), float(est.durations[k]), jump,
                      _time.perf_counter() - start)
         self.updates.append(upd)
+        self._after_update()
         return upd
+
+    def _after_update(self) -> None:
+        """Hook: what to forget after an update (nothing by default)."""
 
     # ------------------------------------------------------------ internals
     def _maybe_update(self, t: float) -> Update | None:
@@ -274,7 +287,7 @@ class _Predictor:
 
     def _blend_in(self, t: float, robot: WeightDistribution, duration: float) -> float:
         keep = self._plan_t <= t
-        end = max(duration, self._plan_t[-1])
+        end = max(duration, self._plan_t[-1], t + self.horizon)
         first = np.floor(t / self.dt) * self.dt + self.dt
         new_t = np.arange(first, end + self.dt, self.dt)
         old_now = self._interp(np.array([t]))
@@ -330,6 +343,13 @@ class DynamicPredictor(_Predictor):
         Delay (s) from an update to the centre of its sigmoids.
     blend : bool
         Blend each new prediction into the plan (False: replace it).
+    horizon : float
+        The plan reaches at least this far (s) past each update (holding the
+        predicted end), e.g. for a controller that looks ahead.
+    incremental : bool
+        Grow the likelihood's sufficient statistics with each observation
+        (:mod:`sandbox.core.statistics`) so an update only factors small
+        matrices; ``False`` computes everything at the update (same results).
 
     Examples
     --------
@@ -360,6 +380,10 @@ class DynamicPredictor(_Predictor):
         upd = self.update(t)
         self._next_update = (np.floor(t / self.dow_t + 1e-9) + 1) * self.dow_t
         return upd
+
+    def _after_update(self) -> None:
+        if self.window == "latest" and self._stats is not None:
+            self._stats.reset()   # the next window's statistics start empty
 
     def _window(self, t: float):
         times, values = super()._window(t)

@@ -76,3 +76,24 @@ def test_distinct_kappas_fall_back_to_groups(fitted):
         wk, H, obs, noise = _dense(odd, k, t, y, 2.0)
         ll = log_marginal_likelihood(wk.mean, wk.cov(), H, obs, noise)
         assert scores.loglik[k][0] == pytest.approx(ll, rel=1e-9)
+
+
+def test_stream_statistics_equal_the_batch_computation(fitted):
+    from sandbox.core.phase import Lattice
+    from sandbox.core.statistics import StreamStatistics
+
+    model, t, y = fitted
+    scorer = Scorer(model)
+    lattice = Lattice.for_tasks(model.task_models, n_candidates=12)
+    stats = StreamStatistics(scorer, lattice, flush_every=4)
+    for ti, yi in zip(t, y):
+        stats.add(ti, yi)
+    spans = lattice.spans(t[-1])
+    streamed = stats.scores(spans)
+    batch = scorer.joint(t, y, lattice.durations, spans)
+    for k in range(2):
+        np.testing.assert_allclose(streamed.loglik[k], batch.loglik[k], rtol=1e-10)
+        np.testing.assert_allclose(streamed.factors[k][:, -1, -1], batch.factors[k][:, -1, -1],
+                                   rtol=1e-6)
+    stats.reset()
+    assert stats.count == 0 and not stats.Kt.any()

@@ -150,3 +150,24 @@ def test_errors(model):
         StaticPredictor(model, ratio=1.5)
     with pytest.raises(ValueError, match="likelihood"):
         DynamicPredictor(model, likelihood="nope")
+
+
+def test_incremental_statistics_give_the_same_predictions(model):
+    demo = synth.replay(2, 2.3, noise=0.003, rng=np.random.default_rng(9))
+    fast = _stream(DynamicPredictor(model, dow_t=0.3), demo)
+    cold = _stream(DynamicPredictor(model, dow_t=0.3, incremental=False), demo)
+    for a, b in zip(fast.updates, cold.updates):
+        np.testing.assert_allclose(a.log_likelihood, b.log_likelihood, rtol=1e-9)
+        np.testing.assert_allclose(a.durations, b.durations, rtol=1e-9)
+    np.testing.assert_allclose(fast.plan()[1], cold.plan()[1], atol=1e-9)
+
+
+def test_horizon_extends_the_plan_past_the_update(model):
+    demo = synth.replay(0, 2.0)
+    pred = DynamicPredictor(model, dow_t=0.5, horizon=2.0)
+    for t, y in zip(demo.times, demo.human):
+        if t > 0.6:
+            break
+        pred.observe(t, y)
+    times, _, _ = pred.plan()
+    assert times[-1] >= 0.5 + 2.0 - 1e-9
