@@ -44,8 +44,7 @@ def test_diverging_tasks_share_their_path_until_about_half_way(diverging):
     for path in early.values():
         assert np.linalg.norm(path - pooled, axis=1).max() < 0.03
     for d in diverging:
-        if d.task != "straight":
-            assert 0.45 <= d.meta["divergence_time"] / d.duration <= 0.55
+        assert 0.45 <= d.meta["divergence_time"] / d.duration <= 0.55
 
 
 def test_diverging_end_points_are_at_least_15cm_apart(diverging):
@@ -106,6 +105,7 @@ def test_objects_are_handed_over_at_distinct_places_and_heights(objects):
 
 
 def test_objects_start_near_the_recorded_start_and_end_near_the_recorded_end(objects):
+    assert all(d.meta["divergence_time"] is None for d in objects)
     starts = np.array([d.meta["clean_human"][0] for d in objects])
     ends = np.array([d.meta["hand_end"] for d in objects])
     assert np.linalg.norm(np.median(starts, axis=0) - [1.10, -0.12, 0.25]) < 0.03

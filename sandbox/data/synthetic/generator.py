@@ -41,8 +41,8 @@ from sandbox.data.synthetic.tracker import TrackerModel, apply_tracker
 
 
 def handover_target(spec: TaskSpec, draw: DemoDraw) -> FloatArray:
-    """Where the gripper tip meets the hand (m), shape (3,)."""
-    return make_reach(spec, draw, Variability()).end + GRASP_OFFSET + draw.grasp_shift
+    """Where the gripper tip meets the hand (m), shape (3,): reach end + grasp offset."""
+    return spec.end + draw.end_shift + spec.branch + GRASP_OFFSET + draw.grasp_shift
 
 
 def pair_with_robot(
@@ -115,8 +115,14 @@ def build_demo(
     tracker: TrackerModel,
     rate_hz: float,
     source: str,
+    branching: bool = False,
 ) -> Demonstration:
-    """Assemble one demonstration: clean reach, tracker artefacts, robot trajectory."""
+    """Assemble one demonstration: clean reach, tracker artefacts, robot trajectory.
+
+    ``meta`` holds ``hand_end`` and ``handover_target`` (m), ``reach_time`` and
+    ``robot_time`` (start, end; s), ``divergence_time`` (s; ``None`` unless
+    ``branching``) and ``clean_human`` (T, 3) m, the motion before the tracker.
+    """
     times = sample_times(draw.duration, rate_hz)
     reach = make_reach(spec, draw, var)
     clean = reach_positions(reach, times)
@@ -130,7 +136,7 @@ def build_demo(
         "handover_target": handover_target(spec, draw),
         "reach_time": (draw.t_on, draw.t_off),
         "robot_time": (draw.robot_on, draw.robot_off),
-        "divergence_time": draw.t_div if np.any(spec.branch) else None,
+        "divergence_time": draw.t_div if branching else None,
         "clean_human": clean,
     }
     return Demonstration(
@@ -195,6 +201,7 @@ def generate(
         build_demo(
             spec, draw, q, var=variability, tracker=tracker, rate_hz=rate_hz,
             source=f"synthetic:{family}[{spec.name}#{i % n}]",
+            branching=any(np.any(s.branch) for s in specs),
         )
         for i, (spec, draw, q) in enumerate(zip(task_of, draws, q_goal, strict=True))
     ]
