@@ -105,3 +105,55 @@ def test_summary_of_the_recorded_set(recorded_dir, capsys):
     assert result["skipped"] == []
     assert 0.35 < result["glitches"]["repeated_timestamps"]["fraction_of_rows"] < 0.45
     assert 90 < result["all"]["rows_per_s"] < 110
+
+
+# --- fit ----------------------------------------------------------------------------------
+
+
+def test_fit_folder_saves_a_loadable_model(folder, tmp_path, capsys):
+    from sandbox.core import IProMP
+
+    out = tmp_path / "model.npz"
+    argv = ["fit", "--data", str(folder), "--out", str(out), "--n-basis", "9", "--json"]
+    assert main(argv) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["demos"] == 8 and set(summary["tasks"]) == {"low", "high"}
+    assert any("broken.csv" in w for w in summary["skipped"])
+    model = IProMP.load(out)
+    assert set(model.tasks) == {"low", "high"} and model.basis.n_basis == 9
+    assert model.human_names == HUMAN_COLUMNS and model.robot_names == ROBOT_COLUMNS
+
+
+def test_fit_synthetic_with_task_subset(tmp_path, capsys):
+    from sandbox.core import IProMP
+
+    out = tmp_path / "syn.npz"
+    argv = ["fit", "--data", "synthetic:two_task", "--out", str(out), "--tasks", "left,right",
+            "--n-per-task", "4", "--n-basis", "7", "--seed", "2"]
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    assert "Fitted 2 task models (N=7) on 8 demos" in text and f"Saved {out}" in text
+    assert IProMP.load(out).tasks == ("left", "right")
+
+
+def test_fit_refuses_to_overwrite_without_force(folder, tmp_path, capsys):
+    out = tmp_path / "model.npz"
+    out.write_text("keep me")
+    assert main(["fit", "--data", str(folder), "--out", str(out), "--n-basis", "7"]) == 2
+    assert "--force" in capsys.readouterr().err and out.read_text() == "keep me"
+    assert main(["fit", "--data", str(folder), "--out", str(out), "--n-basis", "7",
+                 "--force"]) == 0
+
+
+@pytest.mark.parametrize(
+    "argv, match",
+    [
+        (["fit", "--data", "synthetic:nope", "--out", "{tmp}/m.npz"], "synthetic:two_task"),
+        (["fit", "--data", "{folder}", "--out", "{tmp}/no/dir/m.npz"], "existing folder"),
+        (["fit", "--data", "{folder}", "--out", "{tmp}/m.npz", "--tasks", "x"], "unknown ['x']"),
+    ],
+)
+def test_fit_bad_input_exits_2(folder, tmp_path, capsys, argv, match):
+    argv = [a.replace("{folder}", str(folder)).replace("{tmp}", str(tmp_path)) for a in argv]
+    assert main(argv) == 2
+    assert match in capsys.readouterr().err
