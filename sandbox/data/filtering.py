@@ -356,7 +356,7 @@ def smooth_track(run: FilterRun, config: FilterConfig | None = None) -> FloatArr
     kf = KalmanFilter(dim_x=2 * n, dim_z=n)
     out = np.full(run.filtered.shape, np.nan)
     starts = np.flatnonzero(np.isin(run.status, (INIT, RESET)))
-    ends = np.r_[starts[1:], run.status.size]
+    ends = np.r_[starts[1:], run.status.size].astype(int) if starts.size else starts
     for a, b in zip(starts, ends, strict=True):
         xs, _, _, _ = kf.rts_smoother(
             run.means[a:b].copy(), run.covs[a:b].copy(), Fs=run.Fs[a:b], Qs=run.Qs[a:b],

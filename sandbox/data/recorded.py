@@ -365,6 +365,11 @@ def _load_trial(
             + (f" ({why})" if why else "")
         )
     out, measured, counts = preprocess_rows(times, human, preprocess, **options)
+    if counts["new_frames"] < 2:
+        raise TrialError(
+            f"fewer than 2 valid human samples ({counts['missing_rows']} rows missing, "
+            f"{counts['zero_rows']} rows (0, 0, 0), {counts['stale_rows']} repeated)"
+        )
     report = {
         "file": str(path), "task": task, "preprocess": preprocess, "rows": n_rows,
         "rows_dropped": dropped, "repeated_timestamps": int(times.size - last.size),
