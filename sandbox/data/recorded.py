@@ -112,7 +112,9 @@ def _column_index(header: list[str], columns: Columns) -> list[int]:
         if len(hits) > 1:
             raise TrialError(f"column {col!r} appears {len(hits)} times (columns {hits})")
         if not hits:
-            close = difflib.get_close_matches(col, names, n=2, cutoff=0.75)
+            lower = {n.lower(): n for n in names}
+            close = [lower[c] for c in difflib.get_close_matches(col.lower(), list(lower), n=2,
+                                                                 cutoff=0.75)]
             hint = f" (did you mean {' or '.join(map(repr, close))}?)" if close else ""
             raise TrialError(f"missing column {col!r}{hint}")
         index.append(hits[0])

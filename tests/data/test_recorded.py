@@ -144,6 +144,7 @@ BAD_FILES = {
     "text_row.csv": (None, "row 5: non-numeric value 'oops' in column 'left_e0'"),
     "same_time.csv": (None, "only 1 usable time stamp"),
     "ragged.csv": (None, "row 3 has 5 fields"),
+    "upper.csv": (None, "missing column 't' \\(did you mean 'T'\\?\\)"),
     "no_hand.csv": (None, "fewer than 2 valid human samples \\(0 rows missing, 30 rows"),
 }
 
@@ -167,6 +168,8 @@ def make_bad(folder: Path, name: str) -> Path:
     if name == "text_row.csv":
         rows[3][HEADER.index("left_e0")] = "oops"
         return write_csv(path, HEADER, rows)
+    if name == "upper.csv":
+        return write_csv(path, ["T", *HEADER[1:]], rows)
     if name == "no_hand.csv":
         return write_csv(path, HEADER, [[r[0], 0.0, 0.0, 0.0, *r[4:]] for r in rows])
     if name == "same_time.csv":
