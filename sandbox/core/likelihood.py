@@ -173,6 +173,59 @@ class Scorer:
         aug[:, R, R] = dbd
         return aug, logdet_b
 
+    def joint_pairs(self, times: FloatArray, values: FloatArray, durations: FloatArray,
+                    tasks: np.ndarray) -> tuple[FloatArray, FloatArray]:
+        """Joint log-likelihood of a few (duration, task) pairs, vectorised over pairs.
+
+        Parameters
+        ----------
+        times, values : as for :meth:`joint`.
+        durations : ndarray, shape (M,)
+        tasks : ndarray of int, shape (M,)
+
+        Returns
+        -------
+        loglik : ndarray, shape (M,)
+        factors : ndarray, shape (M, R+1, R+1)
+            Augmented Cholesky factors (same layout as :meth:`joint`).
+        """
+        if len(self.kappas) != 1:
+            out = [self.joint(times, values, durations[i:i + 1], self._one_span(k))
+                   for i, k in enumerate(tasks)]
+            return (np.array([o.loglik[k][0] for o, k in zip(out, tasks)]),
+                    np.array([o.factors[k][0] for o, k in zip(out, tasks)]))
+        s, P, N, R1, M = times.size, self.P, self.N, self.R + 1, durations.size
+        psi = self.basis.evaluate(times[None, :] / durations[:, None])
+        psi_t = psi.transpose(0, 2, 1)
+        G, beta = psi_t @ psi, psi_t @ values
+        ld_a, W, ab, gamma = _b_part(G, beta, np.einsum("sp,sp->p", values, values),
+                                     self.kappas[0])
+        V = self.V_pad.reshape(N, self.K, P, R1).transpose(1, 0, 2, 3)[tasks]   # (M, N, P, R1)
+        WV = (W @ V.reshape(M, N, P * R1)).reshape(M, N * P, R1)
+        Vf = V.reshape(M, N * P, R1)
+        Kt = Vf.transpose(0, 2, 1) @ WV
+        x = (ab / np.sqrt(self.sigma2)).reshape(M, 1, N * P)
+        eps = (x @ Vf)[:, 0]
+        R = self.R
+        aug = Kt
+        idx = np.arange(R)
+        aug[:, idx, idx] += 1.0
+        e = eps[:, :R] - Kt[:, :R, R]
+        dbd = (gamma / self.sigma2).sum(axis=1) - 2.0 * eps[:, R] + Kt[:, R, R]
+        aug[:, R, :R] = e
+        aug[:, :R, R] = e
+        aug[:, R, R] = dbd
+        L = _cholesky(aug)
+        diag = np.diagonal(L, axis1=1, axis2=2)
+        const = s * P * LOG_2PI + s * np.log(self.sigma2).sum()
+        ll = -0.5 * (const + P * ld_a + 2.0 * np.log(diag[:, :R]).sum(axis=1) + diag[:, R] ** 2)
+        return ll, L
+
+    def _one_span(self, k: int) -> np.ndarray:
+        spans = np.zeros((self.K, 2), dtype=int)
+        spans[k] = (0, 1)
+        return spans
+
     # ------------------------------------------------------------ marginal
     def marginal(self, times: FloatArray, values: FloatArray, durations: FloatArray,
                  spans: np.ndarray) -> Scores:

@@ -167,8 +167,9 @@ def estimate_phase(scorer: Scorer, tasks, times: FloatArray, values: FloatArray,
         if factors is not None:
             factors[k] = scores.factors[k][i]
         brackets.append(_bracket(T, f, i))
+    pairs = scorer.joint_pairs if mode == "joint" else _marginal_pairs(scorer)
     for _ in range(refine_steps):
-        brackets = _refine(score, times, values, tasks, brackets, nominal, a_mean, a_std,
+        brackets = _refine(pairs, times, values, tasks, brackets, nominal, a_mean, a_std,
                            best_T, best_ll, best_lp, factors)
     return PhaseEstimate(best_T, best_T / nominal, best_ll, best_lp, factors,
                          spans[:, 1] - spans[:, 0])
@@ -192,27 +193,37 @@ def _vertex(br) -> float | None:
     return float(x) if x0 < x < x2 and x != x1 else None
 
 
-def _refine(score, times, values, tasks, brackets, nominal, a_mean, a_std,
+def _refine(score_pairs, times, values, tasks, brackets, nominal, a_mean, a_std,
             best_T, best_ll, best_lp, factors):
     trial = [(k, _vertex(br)) for k, br in enumerate(brackets) if br is not None]
     trial = [(k, x) for k, x in trial if x is not None]
     if not trial:
         return [None] * len(brackets)
-    durations = np.array([x for _, x in trial])
-    spans = np.zeros((len(tasks), 2), dtype=int)
-    for j, (k, _) in enumerate(trial):
-        spans[k] = (j, j + 1)
-    scores = score(times, values, durations, spans)
+    ks = np.array([k for k, _ in trial])
+    xs = np.array([x for _, x in trial])
+    lls, facs = score_pairs(times, values, xs, ks)
+    lps = log_alpha_prior(xs / nominal[ks], a_mean[ks], a_std[ks])
     new = [None] * len(brackets)
-    for k, x in trial:
-        ll = float(scores.loglik[k][0])
-        lp = float(log_alpha_prior(np.array([x / nominal[k]]), a_mean[k], a_std[k])[0])
+    for j, (k, x) in enumerate(trial):
+        ll, lp = float(lls[j]), float(lps[j])
         x0, x1, x2, f0, f1, f2 = brackets[k]
         if ll + lp > f1:
             best_T[k], best_ll[k], best_lp[k] = x, ll, lp
             if factors is not None:
-                factors[k] = scores.factors[k][0]
+                factors[k] = facs[j]
             new[k] = (x0, x, x1, f0, ll + lp, f1) if x < x1 else (x1, x, x2, f1, ll + lp, f2)
         else:
             new[k] = (x, x1, x2, ll + lp, f1, f2) if x < x1 else (x0, x1, x, f0, f1, ll + lp)
     return new
+
+
+def _marginal_pairs(scorer: Scorer):
+    """Per-step-marginal scores of (duration, task) pairs, in the shape of ``joint_pairs``."""
+    def score(times, values, durations, tasks):
+        out = []
+        for x, k in zip(durations, tasks):
+            spans = np.zeros((scorer.K, 2), dtype=int)
+            spans[k] = (0, 1)
+            out.append(scorer.marginal(times, values, np.array([x]), spans).loglik[k][0])
+        return np.array(out), None
+    return score

@@ -290,8 +290,8 @@ class _Predictor:
         end = max(duration, self._plan_t[-1], t + self.horizon)
         first = np.floor(t / self.dt) * self.dt + self.dt
         new_t = np.arange(first, end + self.dt, self.dt)
-        old_now = self._interp(np.array([t]))
-        old_new = self._interp(new_t)
+        old_mean, old_cov = self._interp(np.concatenate([[t], new_t]))
+        old_now, old_new = (old_mean[:1], old_cov[:1]), (old_mean[1:], old_cov[1:])
         mean, cov = trajectory_distribution(robot, self.model.basis,
                                             np.clip(new_t / duration, 0.0, 1.0))
         if self.blend:

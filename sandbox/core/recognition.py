@@ -9,7 +9,6 @@ few dozen observations differ by thousands of nats).
 from __future__ import annotations
 
 import numpy as np
-from scipy.special import logsumexp
 
 from sandbox.core.validation import FloatArray, check_array
 
@@ -35,4 +34,5 @@ def task_posterior(log_likelihood: FloatArray, priors: FloatArray) -> FloatArray
         raise ValueError(f"priors: expected non-negative values with a positive sum, got {p}")
     with np.errstate(divide="ignore"):
         score = ll + np.log(p)
-    return np.exp(score - logsumexp(score))
+    weights = np.exp(score - score.max())
+    return weights / weights.sum()

@@ -7,8 +7,9 @@ candidate c (a fixed :class:`~sandbox.core.phase.Lattice` of durations):
 * :math:`W_c = G_c M_c`, :math:`\\rho_{c,p} = M_c \\beta_{c,p}` and
   :math:`\\gamma_{c,p} = y_p^T (I + \\kappa\\Psi_c\\Psi_c^T)^{-1} y_p`,
 
-and, for every task k, :math:`\\tilde K_{ck} = \\sum_p \\tilde U_{kp}^T W_c \\tilde U_{kp}/\\sigma_p^2`
-and :math:`\\epsilon_{ck} = \\sum_p \\tilde U_{kp}^T \\rho_{c,p}/\\sigma_p^2`.
+and, for every task k,
+:math:`\\tilde K_{ck} = \\sum_p \\tilde U_{kp}^T W_c \\tilde U_{kp}/\\sigma_p^2` and
+:math:`\\epsilon_{ck} = \\sum_p \\tilde U_{kp}^T \\rho_{c,p}/\\sigma_p^2`.
 
 All of them grow with each observation :math:`(t_j, y_j)`: with
 :math:`\\psi = \\psi(t_j / T_c)`, :math:`v = M\\psi`, :math:`d = 1 + \\kappa\\psi^T v`
@@ -121,20 +122,20 @@ class StreamStatistics:
         P, R = sc.P, sc.R
         const = s * P * LOG_2PI + s * np.log(sc.sigma2).sum()
         gamma_term = (self.gamma / sc.sigma2).sum(axis=1)
-        loglik, factors = [], []
+        sizes = [int(b - a) for a, b in spans]
+        Kt = np.concatenate([self.Kt[a:b, k] for k, (a, b) in enumerate(spans)])
+        eps = np.concatenate([self.eps[a:b, k] for k, (a, b) in enumerate(spans)])
+        cand = np.concatenate([np.arange(a, b) for a, b in spans])
+        aug = Kt
         idx = np.arange(R)
-        for k in range(sc.K):
-            a, b = int(spans[k, 0]), int(spans[k, 1])
-            Kt, eps = self.Kt[a:b, k], self.eps[a:b, k]
-            aug = Kt.copy()
-            aug[:, idx, idx] += 1.0
-            e = eps[:, :R] - Kt[:, :R, R]
-            aug[:, R, :R] = e
-            aug[:, :R, R] = e
-            aug[:, R, R] = gamma_term[a:b] - 2.0 * eps[:, R] + Kt[:, R, R]
-            L = _cholesky(aug)
-            diag = np.diagonal(L, axis1=1, axis2=2)
-            logdet_k = 2.0 * np.log(diag[:, :R]).sum(axis=1)
-            loglik.append(-0.5 * (const + P * self.logdet_a[a:b] + logdet_k + diag[:, R] ** 2))
-            factors.append(L)
-        return Scores(loglik, factors)
+        aug[:, idx, idx] += 1.0
+        e = eps[:, :R] - Kt[:, :R, R]
+        aug[:, R, R] = gamma_term[cand] - 2.0 * eps[:, R] + Kt[:, R, R]
+        aug[:, R, :R] = e
+        aug[:, :R, R] = e
+        L = _cholesky(aug)
+        diag = np.diagonal(L, axis1=1, axis2=2)
+        logdet_k = 2.0 * np.log(diag[:, :R]).sum(axis=1)
+        ll = -0.5 * (const + P * self.logdet_a[cand] + logdet_k + diag[:, R] ** 2)
+        cuts = np.cumsum(sizes)[:-1]
+        return Scores(np.split(ll, cuts), np.split(L, cuts))

@@ -5,14 +5,14 @@ from sandbox.core.likelihood import Scorer
 from sandbox.core.model import IProMP
 from sandbox.core.phase import Lattice, estimate_phase
 
+from . import synth
+
 
 def candidate_grid(nominal, mean, std, t_last, n_candidates):
     tasks = [type("T", (), {"nominal_duration": n, "alpha_mean": m, "alpha_std": s})()
              for n, m, s in zip(nominal, mean, std)]
     lattice = Lattice.for_tasks(tasks, n_candidates)
     return (*lattice.grid(t_last), lattice.step)
-
-from . import synth
 
 
 @pytest.fixture(scope="module")

@@ -1,0 +1,1 @@
+"""Benchmarks behind ``python -m sandbox bench`` (medians of repeated runs, in one process)."""
