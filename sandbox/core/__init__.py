@@ -25,18 +25,21 @@ collaboration", IJRR 36(13-14), 2017.
 
 from sandbox.core.basis import GaussianBasis
 from sandbox.core.blending import blend, sigmoid_activations
+from sandbox.core.inference import Prediction, predict
 from sandbox.core.interaction import condition, log_marginal_likelihood, observation_matrix
-from sandbox.core.model import IProMP, TaskModel
+from sandbox.core.model import DemoFit, IProMP, TaskModel
 from sandbox.core.phase import PhaseEstimate, estimate_phase
 from sandbox.core.predictor import DynamicPredictor, StaticPredictor, Update
 from sandbox.core.promp import WeightDistribution, fit_weights, trajectory_distribution
 from sandbox.core.recognition import task_posterior
 
 __all__ = [
+    "DemoFit",
     "DynamicPredictor",
     "GaussianBasis",
     "IProMP",
     "PhaseEstimate",
+    "Prediction",
     "StaticPredictor",
     "TaskModel",
     "Update",
@@ -47,6 +50,7 @@ __all__ = [
     "fit_weights",
     "log_marginal_likelihood",
     "observation_matrix",
+    "predict",
     "sigmoid_activations",
     "task_posterior",
     "trajectory_distribution",

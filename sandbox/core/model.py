@@ -77,6 +77,29 @@ class TaskModel:
         return self.alpha_mean * self.nominal_duration
 
 
+@dataclass(frozen=True, eq=False)
+class DemoFit:
+    """What :meth:`IProMP.demo_fit` keeps of one demonstration.
+
+    Attributes
+    ----------
+    task : str
+    weights : ndarray, shape ((P+Q)*N,)
+    residual : ndarray, shape (P,)
+        Sum of squared residuals of the human dims' basis fit.
+    dof : ndarray, shape (P,)
+        Their degrees of freedom (valid samples - N).
+    duration : float
+        (s)
+    """
+
+    task: str
+    weights: FloatArray
+    residual: FloatArray
+    dof: FloatArray
+    duration: float
+
+
 class IProMP:
     """Interaction ProMPs for several tasks, fitted from paired demonstrations.
 
@@ -146,25 +169,43 @@ class IProMP:
         demos : sequence of Demonstration
             At least two per task, all with the same P, Q (and dim names).
         """
-        groups, P, Q = _check_demos(demos)
-        n = self.basis.n_basis
-        weights, residual, dof, durations = {}, np.zeros(P), np.zeros(P), {}
-        for task, items in groups.items():
-            w = []
-            for demo in items:
-                z = (demo.times - demo.times[0]) / (demo.times[-1] - demo.times[0])
-                values = np.hstack([demo.human, demo.robot])
-                wd = fit_weights(z, values, self.basis, self.ridge)
-                w.append(wd.ravel())
-                fit = self.basis.evaluate(z) @ wd[:P].T
-                err = demo.human - fit
-                ok = np.isfinite(err)
-                residual += (np.where(ok, err, 0.0) ** 2).sum(axis=0)
-                dof += np.maximum(ok.sum(axis=0) - n, 1)
-            weights[task] = np.array(w)
-            durations[task] = np.array([d.times[-1] - d.times[0] for d in items])
+        _check_demos(demos)
+        return self.fit_demo_fits([self.demo_fit(d) for d in demos], demos[0])
+
+    def demo_fit(self, demo: DemonstrationLike) -> DemoFit:
+        """Per-demo part of the fit: weights, residuals of the human dims, duration."""
+        P, n = np.shape(demo.human)[1], self.basis.n_basis
+        times = np.asarray(demo.times, dtype=np.float64)
+        z = (times - times[0]) / (times[-1] - times[0])
+        human = np.asarray(demo.human, dtype=np.float64)
+        wd = fit_weights(z, np.hstack([human, demo.robot]), self.basis, self.ridge)
+        err = human - self.basis.evaluate(z) @ wd[:P].T
+        ok = np.isfinite(err)
+        return DemoFit(str(demo.task), wd.ravel(), (np.where(ok, err, 0.0) ** 2).sum(axis=0),
+                       np.maximum(ok.sum(axis=0) - n, 1).astype(float),
+                       float(times[-1] - times[0]))
+
+    def fit_demo_fits(self, fits: Sequence[DemoFit], names_from=None) -> IProMP:
+        """Fit from per-demo parts (:meth:`demo_fit`); cheap, e.g. for leave-one-out.
+
+        ``names_from`` is a demonstration whose dim names the model keeps.
+        """
+        weights: dict[str, list] = {}
+        durations: dict[str, list] = {}
+        for f in fits:
+            weights.setdefault(f.task, []).append(f.weights)
+            durations.setdefault(f.task, []).append(f.duration)
+        small = [k for k, v in weights.items() if len(v) < 2]
+        if small:
+            raise ValueError(f"demos: expected at least two demonstrations per task, "
+                             f"got one for {small}")
+        residual = np.sum([f.residual for f in fits], axis=0)
+        dof = np.sum([f.dof for f in fits], axis=0)
+        P = residual.size
+        Q = fits[0].weights.size // self.basis.n_basis - P
         sigma2 = np.maximum(self.noise_scale * residual / dof, self.noise_floor**2)
-        self._set_fit(weights, durations, sigma2, P, Q, demos[0])
+        self._set_fit({k: np.array(v) for k, v in weights.items()},
+                      {k: np.array(v) for k, v in durations.items()}, sigma2, P, Q, names_from)
         return self
 
     def _set_fit(self, weights, durations, sigma2, P, Q, first) -> None:

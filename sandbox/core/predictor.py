@@ -29,10 +29,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from sandbox.core.blending import blend_unchecked, sigmoid_activations
-from sandbox.core.likelihood import Scorer, condition_robot
-from sandbox.core.phase import Lattice, estimate_phase
+from sandbox.core.inference import Prediction, predict
+from sandbox.core.likelihood import Scorer
+from sandbox.core.phase import Lattice
 from sandbox.core.promp import WeightDistribution, trajectory_distribution
-from sandbox.core.recognition import task_posterior
 from sandbox.core.statistics import StreamStatistics
 from sandbox.core.validation import (
     FloatArray,
@@ -122,7 +122,7 @@ class _Predictor:
         self.n_skipped = 0
         self._last_time = -np.inf
         self.updates: list[Update] = []
-        self._prediction: tuple[WeightDistribution, float] | None = None
+        self._prediction: Prediction | None = None
         self._stats = StreamStatistics(self.scorer, self._lattice) if self._incremental else None
         self._plan_t, self._plan_mean, self._plan_cov = self._prior_plan()
 
@@ -188,9 +188,12 @@ class _Predictor:
         """
         if self._prediction is None:
             raise RuntimeError("no update yet: observe more of the motion first")
-        dist, duration = self._prediction
-        times = check_array(times, "times", 1)
-        return trajectory_distribution(dist, self.model.basis, np.clip(times / duration, 0, 1))
+        return self._prediction.trajectory(self.model.basis, check_array(times, "times", 1))
+
+    @property
+    def last_prediction(self) -> Prediction | None:
+        """The latest update's :class:`Prediction` (None before the first update)."""
+        return self._prediction
 
     def observations(self) -> tuple[FloatArray, FloatArray]:
         """Kept (subsampled, valid) observations: times (s,), values (s, P)."""
@@ -232,17 +235,15 @@ class _Predictor:
             return None
         start = _time.perf_counter()
         stats = self._stats if self._stats is not None and self._stats.count == times.size else None
-        est = estimate_phase(self.scorer, self.model.task_models, times, values,
-                             n_candidates=self.n_candidates, width=self.width,
-                             refine_steps=self.refine_steps, mode=self.likelihood, stats=stats)
-        post = task_posterior(est.log_likelihood, self.model.priors)
-        k = int(np.argmax(post))
-        robot = self._condition(k, est, times, values)
-        jump = self._blend_in(t, robot, float(est.durations[k]))
-        self._prediction = (robot, float(est.durations[k]))
-        upd = Update(t, int(times.size), self.model.tasks[k], post, est.alphas, est.durations,
-                     est.log_likelihood, float(est.alphas[k]), float(est.durations[k]), jump,
-                     _time.perf_counter() - start)
+        pred = predict(self.model, self.scorer, times, values, likelihood=self.likelihood,
+                       n_candidates=self.n_candidates, width=self.width,
+                       refine_steps=self.refine_steps, stats=stats)
+        k = pred.task_index
+        jump = self._blend_in(t, pred.robot, pred.duration)
+        self._prediction = pred
+        upd = Update(t, int(times.size), self.model.tasks[k], pred.task_posterior, pred.alphas,
+                     pred.durations, pred.log_likelihood, float(pred.alphas[k]), pred.duration,
+                     jump, _time.perf_counter() - start)
         self.updates.append(upd)
         self._after_update()
         return upd
@@ -258,15 +259,6 @@ class _Predictor:
         times, values = self.observations()
         keep = times <= t
         return times[keep], values[keep]
-
-    def _condition(self, k, est, times, values) -> WeightDistribution:
-        task = self.model.task_models[k]
-        factor = None if est.factors is None else est.factors[k]
-        if factor is None:  # marginal mode: condition with the joint model at the MAP speed
-            spans = np.zeros((len(self.model.task_models), 2), dtype=int)
-            spans[k] = (0, 1)
-            factor = self.scorer.joint(times, values, est.durations[k:k + 1], spans).factors[k][0]
-        return condition_robot(task.weights, factor, self.model.n_human, self.scorer.rank[k])
 
     def _prior_plan(self):
         tasks, P, p = self.model.task_models, self.model.n_human, self.model.priors

@@ -86,7 +86,7 @@ def test_conditioning_never_widens_the_robot_distribution(model):
     k = model.task_index(pred.task)
     P = model.n_human
     prior = model.task_models[k].weights.dims(slice(P, None)).cov()
-    post = pred._prediction[0].cov()
+    post = pred.last_prediction.robot.cov()
     assert np.linalg.eigvalsh(prior - post).min() > -1e-10
 
 

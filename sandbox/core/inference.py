@@ -1,0 +1,88 @@
+"""One prediction from observations: speed, task and the conditioned robot motion.
+
+:func:`predict` is one update of the method (paper sec. 2): the MAP speed of
+every task (:mod:`sandbox.core.phase`), the task posterior
+(:mod:`sandbox.core.recognition`), and the robot weights of the most probable
+task conditioned on the observations (eq. 9, :func:`~sandbox.core.likelihood.condition_robot`).
+The online predictors (:mod:`sandbox.core.predictor`) call it at every window;
+the evaluation calls it for static predictions and the oracle.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from sandbox.core.likelihood import Scorer, condition_robot
+from sandbox.core.phase import estimate_phase
+from sandbox.core.promp import WeightDistribution, trajectory_distribution
+from sandbox.core.recognition import task_posterior
+from sandbox.core.statistics import StreamStatistics
+from sandbox.core.validation import FloatArray
+
+
+@dataclass(frozen=True, eq=False)
+class Prediction:
+    """One prediction from observations: speeds, task posterior and the robot's distribution.
+
+    Attributes
+    ----------
+    task_index : int
+        The chosen (most probable, or given) task.
+    task_posterior, alphas, durations, log_likelihood : ndarray, shape (K,)
+    robot : WeightDistribution
+        Conditioned robot weights of the chosen task (eq. 9).
+    duration : float
+        Its duration :math:`T^*` (s).
+    """
+
+    task_index: int
+    task_posterior: FloatArray
+    alphas: FloatArray
+    durations: FloatArray
+    log_likelihood: FloatArray
+    robot: WeightDistribution
+    duration: float
+
+    def trajectory(self, basis, times) -> tuple[FloatArray, FloatArray]:
+        """Robot mean (T, Q) and covariance (T, Q, Q) at ``times`` (s); holds after the end."""
+        z = np.clip(np.asarray(times, dtype=np.float64) / self.duration, 0.0, 1.0)
+        return trajectory_distribution(self.robot, basis, z)
+
+
+def predict(model, scorer: Scorer, times: FloatArray, values: FloatArray, *,
+            likelihood: str = "joint", n_candidates: int = 50, width: float = 3.0,
+            refine_steps: int = 1, stats: StreamStatistics | None = None,
+            task: int | None = None, duration: float | None = None) -> Prediction:
+    """Estimate speeds and task from observations and condition the robot (one update).
+
+    Parameters
+    ----------
+    model : IProMP
+    scorer : Scorer
+        ``Scorer(model)``.
+    times : ndarray, shape (s,)
+        Observation times since the motion started (s), s >= 1.
+    values : ndarray, shape (s, P)
+        Observed human dims, without NaN.
+    likelihood, n_candidates, width, refine_steps
+        As for :class:`DynamicPredictor`.
+    stats : StreamStatistics, optional
+        Statistics of exactly these observations (faster).
+    task, duration : optional
+        Condition this task at this duration instead of the estimated ones (an
+        oracle); the posterior and speed estimates are still reported.
+    """
+    est = estimate_phase(scorer, model.task_models, times, values, n_candidates=n_candidates,
+                         width=width, refine_steps=refine_steps, mode=likelihood, stats=stats)
+    post = task_posterior(est.log_likelihood, model.priors)
+    k = int(np.argmax(post)) if task is None else int(task)
+    T = float(est.durations[k]) if duration is None else float(duration)
+    if duration is None and est.factors is not None:
+        factor = est.factors[k]
+    else:
+        factor = scorer.joint_pairs(times, values, np.array([T]), np.array([k]))[1][0]
+    robot = condition_robot(model.task_models[k].weights, factor, model.n_human,
+                            scorer.rank[k])
+    return Prediction(k, post, est.alphas, est.durations, est.log_likelihood, robot, T)
