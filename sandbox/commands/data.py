@@ -137,6 +137,7 @@ def format_summary(result: dict[str, Any]) -> str:
         ("repeated_timestamps", "rows repeating the previous time stamp"),
         ("stale_rows", "rows re-sending a frame already received"),
         ("jumps", "jumps >= 5 cm between consecutive frames"),
+        ("excursions", "frames > 4 cm off their running median"),
         ("zero_rows", "(0, 0, 0) rows (person lost)"),
         ("missing_rows", "rows with a missing human value"),
         ("gate_rejected", "frames rejected by the causal filter's gate"),

@@ -232,8 +232,8 @@ def _rates(reports: list[dict]) -> dict[str, float]:
     }
 
 
-_GLITCHES = ("repeated_timestamps", "stale_rows", "jumps", "zero_rows", "missing_rows",
-             "frozen_segments", "frozen_s", "gate_rejected", "filter_resets")
+_GLITCHES = ("repeated_timestamps", "stale_rows", "jumps", "excursions", "zero_rows",
+             "missing_rows", "frozen_segments", "frozen_s", "gate_rejected", "filter_resets")
 
 
 def _glitch_totals(reports: list[dict]) -> dict[str, Any]:

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from sandbox.core.validation import FloatArray, check_array
+from sandbox.core.validation import FloatArray, check_array, check_positive
 
 
 @dataclass(frozen=True)
@@ -121,3 +121,56 @@ def _frozen_runs(
             n_seg, total = n_seg + 1, total + float(t[end] - start_t)
         k = end + 1
     return frozen, n_seg, total
+
+
+def excursions(
+    times: ArrayLike,
+    values: ArrayLike,
+    *,
+    window_s: float = 0.5,
+    threshold_m: float = 0.04,
+) -> np.ndarray:
+    """Flag samples that leave the track's running median (non-causal).
+
+    For each valid sample, the per-axis median of the valid samples around it
+    is taken: as many on each side, as many as fit within ``window_s / 2`` on
+    both sides (so the window shrinks near the ends of the track and of
+    dropouts instead of becoming lopsided); a sample farther than
+    ``threshold_m`` (m) from it is part of an excursion. A running median leaves
+    monotonic motion unchanged and ignores any excursion shorter than about
+    half the window, which is what the tracker's occlusion jumps are (mostly
+    2-3 frames). It uses later samples: offline (training demos) only.
+
+    Parameters
+    ----------
+    times : array_like, shape (T,)
+        Sample times (s), non-decreasing.
+    values : array_like, shape (T, P)
+        Positions (m), NaN where there is no sample to judge.
+    window_s : float
+        Width of the median window (s).
+    threshold_m : float
+        Distance from the running median beyond which a sample is flagged (m).
+
+    Returns
+    -------
+    ndarray of bool, shape (T,)
+    """
+    t = check_array(times, "times", 1)
+    y = check_array(values, "values", 2, shape=(t.size, None), allow_nan=True)
+    check_positive(window_s, "window_s")
+    check_positive(threshold_m, "threshold_m")
+    idx = np.flatnonzero(np.isfinite(y).all(axis=1))
+    tv, yv = t[idx], y[idx]
+    if idx.size == 0:
+        return np.zeros(t.size, dtype=bool)
+    # As many samples on each side (the fewer of the two within window_s / 2), so a
+    # moving hand is not biased near the ends of the track or of a dropout.
+    i = np.arange(idx.size)
+    lo = np.searchsorted(tv, tv - window_s / 2, side="left")
+    hi = np.searchsorted(tv, tv + window_s / 2, side="right")
+    m = np.minimum(i - lo, hi - 1 - i)
+    med = np.array([np.median(yv[k - r : k + r + 1], axis=0) for k, r in zip(i, m, strict=True)])
+    out = np.zeros(t.size, dtype=bool)
+    out[idx] = np.linalg.norm(yv - med, axis=1) > threshold_m
+    return out

@@ -28,8 +28,15 @@ What the loader does with a trial (everything it does is counted in
        missing and gated-out rows are marked, not invented). Each value only
        depends on earlier rows: use it for test streams.
    ``"smooth"`` (default)
-       the RTS-smoothed track at every row that lies in a gap of at most
-       ``max_fill_s`` between accepted frames, NaN elsewhere. For training demos.
+       first, frames farther than ``excursion_m`` from the running median of the
+       frames within +/- 0.25 s are set aside (the tracker's occlusion jumps,
+       :func:`sandbox.data.glitches.excursions`; this looks at later frames);
+       then the gated filter and the RTS smoother run on the remaining frames,
+       and the smoothed track is given at every row that lies in a gap of at
+       most ``max_fill_s`` (default 1 s) between accepted frames or at most
+       0.1 s after the last one, NaN elsewhere. For training demos: a long
+       gap left NaN makes a basis-function fit of the demo ill-posed there
+       (weights of metres), a bridged one does not.
 
 ``demo.meta["human_measured"]`` (bool, shape (T,)) marks the rows that carry a
 new, accepted tracker frame.
@@ -50,12 +57,16 @@ import numpy as np
 from sandbox.core.validation import FloatArray, check_choice, check_positive
 from sandbox.data.demonstration import Demonstration
 from sandbox.data.filtering import FilterConfig, filter_track, smooth_track
-from sandbox.data.glitches import find_glitches
+from sandbox.data.glitches import excursions, find_glitches
 
 HUMAN_COLUMNS = ("human_left_hand_x", "human_left_hand_y", "human_left_hand_z")
 ROBOT_COLUMNS = ("left_s0", "left_s1", "left_e0", "left_e1", "left_w0", "left_w1", "left_w2")
 TIME_COLUMN = "t"
 PREPROCESS = ("none", "causal", "smooth")
+#: Width (s) of the running-median window used to find excursions ("smooth").
+EXCURSION_WINDOW_S = 0.5
+#: "smooth" extrapolates past the last accepted frame by at most this (s).
+MAX_EXTRAPOLATE_S = 0.1
 
 
 class TrialError(ValueError):
@@ -205,8 +216,10 @@ def _human_track(
         return smoothed, used, stats
     k = np.searchsorted(t_used, times, side="right")  # next used frame index
     prev = t_used[np.maximum(k - 1, 0)]
-    nxt = np.where(k < t_used.size, t_used[np.minimum(k, t_used.size - 1)], times)
-    fill = (k > 0) & (nxt - prev <= max_fill_s)
+    inside = (k > 0) & (k < t_used.size)
+    nxt = t_used[np.minimum(k, t_used.size - 1)]
+    fill = inside & (nxt - prev <= max_fill_s)  # a gap bridged by the smoother
+    fill |= (k == t_used.size) & (times - prev <= min(max_fill_s, MAX_EXTRAPOLATE_S))
     fill |= used
     return np.where(fill[:, None], smoothed, np.nan), used, stats
 
@@ -218,8 +231,9 @@ def preprocess_rows(
     *,
     config: FilterConfig | None = None,
     freeze_s: float = 0.25,
-    max_fill_s: float = 0.25,
+    max_fill_s: float = 1.0,
     jump_m: float = 0.05,
+    excursion_m: float = 0.04,
 ) -> tuple[FloatArray, np.ndarray, dict[str, int | float]]:
     """Classify and preprocess human rows, then keep one row per time stamp.
 
@@ -230,7 +244,7 @@ def preprocess_rows(
         to the last of them.
     human : ndarray, shape (T, P)
         Human values (m), NaN where missing.
-    preprocess, config, freeze_s, max_fill_s, jump_m
+    preprocess, config, freeze_s, max_fill_s, jump_m, excursion_m
         As in :func:`load_trial`.
 
     Returns
@@ -244,14 +258,20 @@ def preprocess_rows(
         Glitch and filter counts (JSON-ready).
     """
     _check_options(preprocess, config=config, freeze_s=freeze_s, max_fill_s=max_fill_s,
-                   jump_m=jump_m)
+                   jump_m=jump_m, excursion_m=excursion_m)
     glitches = find_glitches(times, human, freeze_s=freeze_s, jump_m=jump_m)
-    stats = {"gate_rejected": 0, "filter_resets": 0}
+    measurement = np.where(glitches.fresh[:, None], human, np.nan)
+    away = np.zeros(times.size, dtype=bool)
+    if excursion_m > 0:
+        away = excursions(times, measurement, window_s=EXCURSION_WINDOW_S, threshold_m=excursion_m)
+    stats = {"excursions": int(away.sum()), "gate_rejected": 0, "filter_resets": 0}
     if preprocess == "none":
         out_rows, used = human, glitches.fresh
     else:
-        measurement = np.where(glitches.fresh[:, None], human, np.nan)
-        out_rows, used, stats = _human_track(times, measurement, preprocess, config, max_fill_s)
+        if preprocess == "smooth":
+            measurement[away] = np.nan  # set aside: offline only (the median sees ahead)
+        out_rows, used, counts = _human_track(times, measurement, preprocess, config, max_fill_s)
+        stats.update(counts)
     last = np.flatnonzero(np.r_[np.diff(times) > 0, True])
     group = np.cumsum(np.r_[True, np.diff(times) > 0]) - 1
     measured = np.bincount(group, weights=used.astype(float), minlength=last.size) > 0
@@ -268,7 +288,7 @@ def preprocess_demonstration(
     """Apply the loader's human preprocessing to any demonstration (e.g. synthetic).
 
     ``options`` are those of :func:`load_trial` (``config``, ``freeze_s``,
-    ``max_fill_s``, ``jump_m``). The robot and the times are unchanged;
+    ``max_fill_s``, ``jump_m``, ``excursion_m``). The robot and the times are unchanged;
     ``meta["report"]`` gets the glitch and filter counts and
     ``meta["human_measured"]`` the rows with an accepted new sample.
     ``preprocess="none"`` returns ``demo`` itself.
@@ -291,8 +311,9 @@ def load_trial(
     preprocess: str = "smooth",
     config: FilterConfig | None = None,
     freeze_s: float = 0.25,
-    max_fill_s: float = 0.25,
+    max_fill_s: float = 1.0,
     jump_m: float = 0.05,
+    excursion_m: float = 0.04,
 ) -> Demonstration:
     """Load one trial file as a :class:`Demonstration`.
 
@@ -311,9 +332,15 @@ def load_trial(
     freeze_s : float
         A stretch without a new tracker frame longer than this (s) is a frozen skeleton.
     max_fill_s : float
-        "smooth" fills gaps between accepted frames up to this long (s); longer stay NaN.
+        "smooth" bridges gaps between accepted frames up to this long (s);
+        longer ones stay NaN. ``meta["human_measured"]`` tells bridged rows apart.
     jump_m : float
         A step between consecutive tracker frames of at least this (m) counts as a jump.
+    excursion_m : float
+        "smooth" sets aside frames farther than this (m) from their running
+        median (0 disables). On the recorded handovers 4 cm sets aside 4.9 % of
+        the frames; on synthetic tracks with known truth it finds 67 % of the
+        frames more than 3 cm off, with 96 % precision.
 
     Returns
     -------
@@ -328,7 +355,7 @@ def load_trial(
         (:class:`TrialError`) the file cannot be used; the message says why.
     """
     options = {"config": config, "freeze_s": freeze_s, "max_fill_s": max_fill_s,
-               "jump_m": jump_m}
+               "jump_m": jump_m, "excursion_m": excursion_m}
     _check_options(preprocess, **options)
     path = Path(path)
     try:
@@ -338,12 +365,19 @@ def load_trial(
 
 
 def _check_options(
-    preprocess: str, *, config: Any, freeze_s: float, max_fill_s: float, jump_m: float
+    preprocess: str,
+    *,
+    config: Any,
+    freeze_s: float,
+    max_fill_s: float,
+    jump_m: float,
+    excursion_m: float,
 ) -> None:
     check_choice(preprocess, "preprocess", PREPROCESS)
     check_positive(freeze_s, "freeze_s")
     check_positive(max_fill_s, "max_fill_s", allow_zero=True)
     check_positive(jump_m, "jump_m")
+    check_positive(excursion_m, "excursion_m", allow_zero=True)
     if config is not None and not isinstance(config, FilterConfig):
         raise ValueError(f"config: expected a FilterConfig, got {type(config).__name__}")
 
@@ -425,7 +459,8 @@ def load_recorded(
     tasks : sequence of str, optional
         Tasks to load (folder names); default all.
     columns, preprocess, config, **options
-        As in :func:`load_trial` (``freeze_s``, ``max_fill_s``, ``jump_m``).
+        As in :func:`load_trial` (``freeze_s``, ``max_fill_s``, ``jump_m``,
+        ``excursion_m``).
 
     Returns
     -------

@@ -17,7 +17,7 @@ from sandbox.data.filtering import (
     holdout_errors,
     smooth_track,
 )
-from sandbox.data.glitches import find_glitches
+from sandbox.data.glitches import excursions, find_glitches
 
 #: A filter matched to a constant-velocity signal (little process noise).
 CV_CONFIG = FilterConfig(accel_std=0.2, noise_std=0.003)
@@ -235,3 +235,17 @@ def test_holdout_errors_on_a_clean_reach_are_at_the_noise_level():
 def test_holdout_errors_refuses_bad_every():
     with pytest.raises(ValueError, match="every"):
         holdout_errors([0.0, 1.0, 2.0], np.zeros((3, 3)) + 1.0, every=1)
+
+
+def test_excursions_flags_short_jumps_not_motion():
+    t = np.arange(60) / 30.0
+    y = np.array([1.1, -0.1, 0.25]) + t[:, None] * np.array([-0.6, 0.5, 0.1])  # 0.8 m/s
+    y = y + np.random.default_rng(9).normal(0.0, 0.002, y.shape)
+    assert not excursions(t, y).any()
+    jumped = y.copy()
+    jumped[30:33] += [0.0, 0.0, 0.08]  # a 3-frame, 8 cm occlusion jump
+    np.testing.assert_array_equal(np.flatnonzero(excursions(t, jumped)), [30, 31, 32])
+    gappy = y.copy()
+    gappy[20:40] = np.nan  # no lopsided window at the edges of a dropout or of the track
+    assert not excursions(t, gappy).any()
+    assert not excursions(t[:1], y[:1]).any()

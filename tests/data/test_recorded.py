@@ -106,6 +106,19 @@ def test_zero_and_missing_values_are_marked_and_reported(tmp_path):
     assert np.isnan(raw.human).any() and (raw.human == 0).all(axis=1).any()
 
 
+def test_smooth_sets_aside_a_short_excursion(tmp_path):
+    rows = trial_rows(60)
+    for row in rows:  # frames 30 and 31 (wherever they are sent) jump 8 cm up
+        if round((1.1 - row[1]) / 0.01) in (30, 31):
+            row[3] += 0.08
+    demo = load_trial(write_csv(tmp_path / "e" / "t.csv", HEADER, rows), preprocess="smooth")
+    assert demo.meta["report"]["excursions"] == 2
+    truth_z = 0.25
+    assert np.abs(demo.human[:, 2] - truth_z).max() < 0.01  # the smoothed track stays put
+    raw = load_trial(write_csv(tmp_path / "e" / "t.csv", HEADER, rows), preprocess="none")
+    assert raw.meta["report"]["excursions"] == 2 and raw.human[:, 2].max() > 0.32
+
+
 def test_smooth_leaves_long_gaps_unfilled(tmp_path):
     rows = trial_rows(60)
     for row in rows[60:120]:  # the hand is lost for 20 frames (about 0.44 s)
