@@ -21,7 +21,7 @@ import sys
 from typing import Any
 
 NAME = "data"
-HELP = "Inspect a recorded dataset: summary of trials and tracker glitches, filter check."
+HELP = "inspect a recorded dataset: summary of trials and tracker glitches, filter check."
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -15,7 +15,7 @@ import json
 from pathlib import Path
 
 NAME = "fit"
-HELP = "Fit one Interaction ProMP per task on a dataset and save the model (.npz)."
+HELP = "fit one Interaction ProMP per task on a dataset and save the model (.npz)."
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
