@@ -1,0 +1,262 @@
+"""The Baxter handover environment: simulation + robot + human + task."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+from numpy.typing import NDArray
+from sandbox.envs.human import HumanHand, HumanMotion
+from sandbox.envs.options import EpisodeOptions, parse_options
+from sandbox.envs.pybullet import Simulation
+from sandbox.envs.robot import BaxterArm
+from sandbox.envs.sources import FAMILIES, recorded_motion, synthetic_motion
+from sandbox.envs.task import HandoverTask, RewardWeights, object_for
+
+from sandbox.core.validation import check_array, check_positive
+from sandbox.data.synthetic.base import Q_HOME
+
+FloatArray = NDArray[np.float64]
+#: Physics steps run before the initial state is saved (lets the parked objects settle).
+SETTLE_STEPS = 100
+
+
+class BaxterHandoverEnv(gym.Env):
+    """A human hands an object to Baxter; Baxter's left arm must meet the hand and take it.
+
+    Description
+    -----------
+    A simulated Rethink Baxter (PyBullet, model from ``example-robot-data``)
+    stands at the origin of its ``base`` frame facing +x; a human 1.4 m in
+    front of it reaches toward it with an object in the left hand. The hand is
+    kinematic: it replays a synthetic reach (seeded, family ``"objects"``: box,
+    glasses case, tape; or ``"diverging"``: left, right, up, down, straight,
+    sharing their start) or a recorded trial. The robot sees the hand through
+    the skeleton tracker (30 Hz frames, jumps). When the gripper closes within
+    ``grasp_radius`` of the object's grasp point, the object is fixed to the
+    gripper and the hand lets go: the handover succeeds. The policy (e.g.
+    :class:`sandbox.policies.IProMPPolicy`) lives outside the environment.
+
+    Action space
+    ------------
+    ``Box(8,)`` float64: seven left-arm joint position targets (rad, bounds =
+    joint limits; clipped to them) in the order ``left_s0 ... left_w2``, then
+    a gripper command in [-1, 1] (> 0 closes, <= 0 opens). The motors track
+    the targets within the URDF's effort and speed limits (1.5 rad/s
+    shoulder/elbow, 4 rad/s wrist).
+
+    Observation space
+    -----------------
+    ``Dict``, float64 entries, Baxter's base frame:
+
+    ==========  =====  ==========================================================
+    key         shape  meaning
+    ==========  =====  ==========================================================
+    ``hand``    (3,)   latest tracker measurement of the human hand (m)
+    ``object``  (3,)   the object's grasp point (m)
+    ``q``       (7,)   left-arm joint positions (rad)
+    ``dq``      (7,)   left-arm joint velocities (rad/s)
+    ``gripper`` (1,)   finger opening, 0 closed .. 1 open
+    ``time``    (1,)   time since the episode started (s)
+    ==========  =====  ==========================================================
+
+    Rewards
+    -------
+    ``reward_distance + reward_success + reward_action_rate`` (each in
+    ``info``): minus the fingertip-to-grasp-point distance (m, weight 1),
+    +10 at the handover, minus 0.01 x the sum of squared joint-target rates
+    ((rad/s)^2). Weights: :class:`sandbox.envs.task.RewardWeights`.
+
+    Starting state
+    --------------
+    The arm at the recorded home configuration, gripper open, the hand at the
+    motion's first sample holding the object. Reset restores a saved
+    simulator state (nothing is reloaded).
+
+    Episode end
+    -----------
+    Terminated at the handover (``info["is_success"]``); truncated by the time
+    limit (``max_episode_steps=300``, 6 s at 50 Hz, when made with
+    ``gym.make``). After its last sample the hand holds still.
+
+    Arguments
+    ---------
+    ``gym.make("sandbox/BaxterHandover-v0", ...)`` after ``import sandbox.envs``
+    (or ``gym.make("sandbox.envs:sandbox/BaxterHandover-v0")``) with
+
+    * ``family`` ("objects" or "diverging"): synthetic tasks (set by the id);
+    * ``render_mode`` (None or "rgb_array");
+    * ``control_hz`` (50): steps per second; ``substeps`` (5): physics steps
+      per control step (physics at 250 Hz);
+    * ``grasp_radius`` (0.05 m); ``reward_weights`` (RewardWeights);
+    * ``default_object`` ("box"): object of tasks without one (diverging tasks).
+
+    ``reset(seed=..., options=...)`` options (all optional, validated):
+    ``task``; ``object`` (box, glasses_case, tape, measuring_tape, screwdriver;
+    default from the task: pencil_box -> box, gummed_paper -> tape,
+    measurement_tape -> measuring_tape, screw_driver -> screwdriver);
+    ``source`` ("synthetic" or a folder ``<root>/<task>/<trial>.csv``);
+    ``trial`` (recorded: index or file name); ``speed`` (human speed factor,
+    0.25-4); ``switch_to``, ``switch_phase`` (synthetic intent switch).
+
+    Version history
+    ---------------
+    * v0: initial version.
+
+    Attributes
+    ----------
+    sim : Simulation
+        The PyBullet world; ``sim.client`` and ``sim.bodies`` let a viewer mirror it.
+    robot : BaxterArm
+    human : HumanHand
+    task : HandoverTask
+    motion : HumanMotion or None
+        The current episode's hand motion.
+    """
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 50}
+
+    def __init__(self, family: str = "objects", render_mode: str | None = None, *,
+                 control_hz: float = 50.0, substeps: int = 5, grasp_radius: float = 0.05,
+                 reward_weights: RewardWeights | None = None,
+                 default_object: str = "box") -> None:
+        if family not in FAMILIES:
+            raise ValueError(f"family: expected one of {list(FAMILIES)}, got {family!r}")
+        if render_mode not in (None, *self.metadata["render_modes"]):
+            raise ValueError(f"render_mode: expected None or 'rgb_array', got {render_mode!r}")
+        if isinstance(substeps, bool) or int(substeps) != substeps or substeps < 1:
+            raise ValueError(f"substeps: expected an integer >= 1, got {substeps!r}")
+        self.family, self.render_mode, self.default_object = family, render_mode, default_object
+        self.dt = 1.0 / check_positive(control_hz, "control_hz")
+        self.substeps = int(substeps)
+        self.metadata = {**self.metadata, "render_fps": int(round(control_hz))}
+        self.sim = Simulation(physics_hz=control_hz * self.substeps)
+        self.robot = BaxterArm(self.sim)
+        self.human = HumanHand(self.sim)
+        self.task = HandoverTask(self.sim, self.robot, self.human, grasp_radius=grasp_radius,
+                                 weights=reward_weights or RewardWeights())
+        parse_options({"object": default_object}, family)  # validates default_object
+        self._settle_and_save()
+        self.action_space = self._action_space()
+        self.observation_space = self._observation_space()
+        self.motion: HumanMotion | None = None
+        self.episode: EpisodeOptions | None = None
+
+    # ------------------------------------------------------------------ spaces
+    def _action_space(self) -> spaces.Box:
+        low = np.append(self.robot.lower, -1.0)
+        high = np.append(self.robot.upper, 1.0)
+        return spaces.Box(low, high, dtype=np.float64)
+
+    def _observation_space(self) -> spaces.Dict:
+        speed = 4.0 * self.robot.max_velocity
+        return spaces.Dict({
+            "hand": spaces.Box(-3.0, 3.0, (3,), np.float64),
+            "object": spaces.Box(-3.0, 3.0, (3,), np.float64),
+            "q": spaces.Box(self.robot.lower, self.robot.upper, dtype=np.float64),
+            "dq": spaces.Box(-speed, speed, dtype=np.float64),
+            "gripper": spaces.Box(0.0, 1.0, (1,), np.float64),
+            "time": spaces.Box(0.0, 1e4, (1,), np.float64),
+        })
+
+    def _settle_and_save(self) -> None:
+        self.robot.reset(Q_HOME)
+        for _ in range(SETTLE_STEPS):
+            self.sim.step_physics()
+        self.sim.save()
+
+    # ------------------------------------------------------------------ API
+    def reset(self, *, seed: int | None = None,
+              options: Mapping[str, Any] | None = None) -> tuple[dict, dict]:
+        super().reset(seed=seed)
+        episode = parse_options(options, self.family)
+        motion = self._motion(episode)
+        object_name = episode.object or object_for(motion.task, self.default_object)
+        self.task.release()
+        self.sim.restore()
+        self.robot.reset(Q_HOME)
+        self.task.reset(object_name, motion.position(0.0))
+        self.motion, self.episode = motion, episode
+        self._steps, self._t, self._prev_target = 0, 0.0, Q_HOME.copy()
+        self._handover_time: float | None = None
+        info = {"task": motion.task, "object": object_name, "source": motion.source,
+                "speed": episode.speed, "duration": motion.duration}
+        return self._observation(), info
+
+    def step(self, action) -> tuple[dict, float, bool, bool, dict]:
+        if self.motion is None:
+            raise RuntimeError("step: call reset() before step()")
+        action = check_array(action, "action", 1, shape=(8,))
+        target = np.clip(action[:7], self.robot.lower, self.robot.upper)
+        self.robot.act(target, close=bool(action[7] > 0.0))
+        physics_dt = self.dt / self.substeps
+        for k in range(1, self.substeps + 1):
+            self.human.move_to(self.motion.position(self._t + k * physics_dt))
+            self.sim.step_physics()
+        self._steps += 1
+        self._t = self._steps * self.dt
+        handed = self.task.try_handover()
+        if handed:
+            self._handover_time = self._t
+        distance = self.task.distance()
+        terms = self.task.reward_terms(distance, handed, (target - self._prev_target) / self.dt)
+        self._prev_target = target
+        reward = float(sum(terms.values()))
+        info = {**terms, "distance": distance, "is_success": self.task.handed_over,
+                "handover_time": self._handover_time, "time": self._t,
+                "task": self.motion.task, "object": self.task.object}
+        return self._observation(), reward, handed, False, info
+
+    def render(self) -> NDArray[np.uint8] | None:
+        """RGB image (360, 480, 3) of the scene in ``"rgb_array"`` mode; None otherwise."""
+        if self.render_mode != "rgb_array":
+            return None
+        return self.sim.render()
+
+    def close(self) -> None:
+        """Disconnect the simulator (safe to call twice)."""
+        self.sim.close()
+
+    # ------------------------------------------------------------- internals
+    def _motion(self, episode: EpisodeOptions) -> HumanMotion:
+        if episode.source == "synthetic":
+            task = episode.task or self._random_task()
+            motion = synthetic_motion(self.family, task, self.np_random,
+                                      switch_to=episode.switch_to,
+                                      switch_phase=episode.switch_phase)
+        else:
+            motion = recorded_motion(episode.source, episode.task, episode.trial,
+                                     self.np_random)
+        return motion if episode.speed == 1.0 else motion.scaled(episode.speed)
+
+    def _random_task(self) -> str:
+        from sandbox.envs.sources import family_tasks
+
+        tasks = family_tasks(self.family)
+        return tasks[int(self.np_random.integers(len(tasks)))]
+
+    def _observation(self) -> dict[str, FloatArray]:
+        q, dq = self.robot.joint_state()
+        obs = {
+            "hand": self.motion.measurement(self._t),
+            "object": self.task.grasp_point(),
+            "q": q,
+            "dq": dq,
+            "gripper": np.array([self.robot.gripper_opening()]),
+            "time": np.array([self._t]),
+        }
+        return {k: np.clip(v, self.observation_space[k].low, self.observation_space[k].high)
+                for k, v in obs.items()}
+
+    @property
+    def bullet_client(self):
+        """The PyBullet client (for viewers mirroring the scene)."""
+        return self.sim.client
+
+    @property
+    def body_ids(self) -> dict[str, int]:
+        """Body name -> PyBullet body id (``baxter``, ``human_hand``, objects, ``table``...)."""
+        return dict(self.sim.bodies)

@@ -1,0 +1,144 @@
+"""The human: a hand motion (true path and tracker measurements) and a kinematic hand body.
+
+A :class:`HumanMotion` holds one episode's hand trajectory in Baxter's base
+frame: the *true* path that drives the hand body (and the object it holds)
+and what the skeleton tracker *measured* (steps, jumps, dropouts as NaN), which
+is what the robot observes. After its last sample the hand holds still.
+
+:class:`HumanHand` is the kinematic hand/forearm body (``urdf/human_hand.urdf``,
+no mass): the environment teleports it along the true path at every physics
+step, its forearm pointing from the hand toward the human's shoulder.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from sandbox.envs.pybullet import Simulation
+
+from sandbox import urdf
+from sandbox.core.validation import check_array, check_positive, check_times
+
+FloatArray = NDArray[np.float64]
+
+#: Where the forearm points to (m, Baxter's base frame): the human's left
+#: shoulder in the recordings, lowered to elbow height (the forearm's far end
+#: is drawn 0.31 m from the hand along this direction).
+SHOULDER = np.array([1.36, 0.0, 0.15])
+
+
+@dataclass(frozen=True, eq=False)
+class HumanMotion:
+    """One episode's hand motion.
+
+    Parameters
+    ----------
+    times : array_like, shape (T,)
+        Sample times (s), strictly increasing, starting at 0.
+    true : array_like, shape (T, 3)
+        True hand positions (m), finite: they drive the hand body.
+    measured : array_like, shape (T, 3)
+        Tracker measurements (m); NaN marks a dropout.
+    task : str
+        The task the human performs.
+    source : str
+        Where the motion came from (generator and seed, or file).
+    meta : mapping
+        Anything else (e.g. the recorded trial's preprocessing report).
+    """
+
+    times: FloatArray
+    true: FloatArray
+    measured: FloatArray
+    task: str
+    source: str = ""
+    meta: Mapping[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        times = check_times(self.times, "times")
+        if abs(times[0]) > 1e-9:
+            raise ValueError(f"times: expected the motion to start at 0 s, got {times[0]:g}")
+        true = check_array(self.true, "true", 2, shape=(times.size, 3))
+        measured = check_array(self.measured, "measured", 2, shape=(times.size, 3),
+                               allow_nan=True)
+        valid = np.isfinite(measured).all(axis=1)
+        if not valid.any():
+            raise ValueError("measured: expected at least one sample without NaN, got none")
+        last = np.maximum.accumulate(np.where(valid, np.arange(times.size), -1))
+        last[last < 0] = int(np.argmax(valid))  # before the first valid sample: that one
+        for name, value in (("times", times), ("true", true), ("measured", measured),
+                            ("_last_valid", last)):
+            value.setflags(write=False)
+            object.__setattr__(self, name, value)
+        object.__setattr__(self, "meta", dict(self.meta))
+
+    @property
+    def duration(self) -> float:
+        """Time of the last sample (s)."""
+        return float(self.times[-1])
+
+    def position(self, t: float) -> FloatArray:
+        """True hand position (3,) m at time ``t`` (s), linearly interpolated; held at the ends."""
+        i = int(np.clip(np.searchsorted(self.times, t, side="right"), 1, self.times.size - 1))
+        w = float(np.clip((t - self.times[i - 1]) / (self.times[i] - self.times[i - 1]), 0, 1))
+        return (1.0 - w) * self.true[i - 1] + w * self.true[i]
+
+    def measurement(self, t: float) -> FloatArray:
+        """Latest valid tracker sample (3,) m at or before ``t`` (s)."""
+        i = max(int(np.searchsorted(self.times, t, side="right")) - 1, 0)
+        return self.measured[self._last_valid[i]].copy()
+
+    def scaled(self, speed: float) -> HumanMotion:
+        """The same motion played ``speed`` times faster (times divided by ``speed``)."""
+        speed = check_positive(speed, "speed")
+        return HumanMotion(self.times / speed, self.true, self.measured, self.task,
+                           self.source, {**self.meta, "speed": speed})
+
+
+def forearm_orientation(hand: FloatArray) -> tuple[float, float, float, float]:
+    """Quaternion (x, y, z, w) turning the body's +x toward :data:`SHOULDER`, z kept up-ish."""
+    x = SHOULDER - hand
+    x = x / max(np.linalg.norm(x), 1e-9)
+    y = np.cross([0.0, 0.0, 1.0], x)
+    y = y / max(np.linalg.norm(y), 1e-9)
+    z = np.cross(x, y)
+    return _quaternion(np.column_stack([x, y, z]))
+
+
+def _quaternion(R: FloatArray) -> tuple[float, float, float, float]:
+    """Quaternion (x, y, z, w) of a rotation matrix (3, 3), stable for any rotation."""
+    trace = R[0, 0] + R[1, 1] + R[2, 2]
+    if trace > 0:
+        s = 2.0 * np.sqrt(1.0 + trace)
+        q = ((R[2, 1] - R[1, 2]) / s, (R[0, 2] - R[2, 0]) / s, (R[1, 0] - R[0, 1]) / s, s / 4)
+    else:
+        i = int(np.argmax(np.diag(R)))
+        j, k = (i + 1) % 3, (i + 2) % 3
+        s = 2.0 * np.sqrt(1.0 + R[i, i] - R[j, j] - R[k, k])
+        q = [0.0, 0.0, 0.0, (R[k, j] - R[j, k]) / s]
+        q[i], q[j], q[k] = s / 4, (R[j, i] + R[i, j]) / s, (R[k, i] + R[i, k]) / s
+    return tuple(float(v) for v in q)
+
+
+class HumanHand:
+    """The kinematic hand/forearm body (``"human_hand"``), moved by teleporting.
+
+    Parameters
+    ----------
+    sim : Simulation
+        Where to load it.
+    """
+
+    name = "human_hand"
+
+    def __init__(self, sim: Simulation) -> None:
+        self.sim = sim
+        sim.load_urdf(self.name, urdf.path("human_hand"), SHOULDER - [0.3, 0.0, 0.0])
+
+    def move_to(self, position: FloatArray) -> None:
+        """Put the tracked hand point at ``position`` (3,) m, the forearm toward the shoulder."""
+        self.sim.set_pose(self.name, position, forearm_orientation(position))

@@ -1,0 +1,177 @@
+"""The handover task: the object in the human's hand, its transfer to the gripper, the reward.
+
+While the human holds it, the object is fixed (a PyBullet constraint) to the
+kinematic hand, its grasp point at :data:`HOLD_OFFSET` from the tracked hand
+point (where the demonstrated gripper tip met the hand). When the gripper is
+closed (:func:`~sandbox.envs.robot.BaxterArm.gripper_closed`) with its
+fingertip point within ``grasp_radius`` of the grasp point, the object is
+fixed to the gripper where it is and the hand lets go: that is the handover,
+and the episode's success. The robot passes through the hand and the object
+(their collisions are off), so reaching never pushes them.
+
+Reward per step (:class:`RewardWeights`; the terms are returned in ``info``
+and sum to the reward)::
+
+    reward_distance    = -distance * d            d: fingertip to grasp point (m)
+    reward_success     =  success  * [handover happened in this step]
+    reward_action_rate = -action_rate * sum_j ((a_j - a_prev_j) / dt)^2   (rad/s)^2
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from sandbox.envs.human import HumanHand
+from sandbox.envs.pybullet import Simulation
+from sandbox.envs.robot import BaxterArm
+
+from sandbox import urdf
+from sandbox.core.validation import check_positive
+from sandbox.data.synthetic.robot import GRASP_OFFSET
+
+FloatArray = NDArray[np.float64]
+
+#: Object for each task label (recorded tasks and the synthetic objects family).
+TASK_OBJECTS = {
+    "pencil_box": "box",
+    "gummed_paper": "tape",
+    "measurement_tape": "measuring_tape",
+    "screw_driver": "screwdriver",
+    "box": "box",
+    "glasses_case": "glasses_case",
+    "tape": "tape",
+}
+#: Object for any other task (e.g. the diverging family's).
+DEFAULT_OBJECT = "box"
+#: Grasp point of the held object relative to the tracked hand point (m): the
+#: median place where the recorded gripper tip met the hand.
+HOLD_OFFSET = GRASP_OFFSET
+#: Floor height in Baxter's base frame (m): the bottom of Baxter's pedestal.
+FLOOR_Z = -0.926
+#: Table placement (m): centre of its top surface, 0.74 m above the floor.
+TABLE_TOP = np.array([0.85, 0.1, FLOOR_Z + 0.74])
+
+
+@dataclass(frozen=True)
+class RewardWeights:
+    """Weights of the reward terms.
+
+    Parameters
+    ----------
+    distance : float
+        Per metre of fingertip-to-grasp-point distance, every step.
+    success : float
+        Bonus for the handover (once).
+    action_rate : float
+        Per (rad/s)^2 of the change of the joint targets between steps, summed over joints.
+    """
+
+    distance: float = 1.0
+    success: float = 10.0
+    action_rate: float = 0.01
+
+    def __post_init__(self) -> None:
+        for name in ("distance", "success", "action_rate"):
+            check_positive(getattr(self, name), f"reward weight {name}", allow_zero=True)
+
+
+def object_for(task: str, default: str = DEFAULT_OBJECT) -> str:
+    """Object handed over in ``task`` (:data:`TASK_OBJECTS`, else ``default``)."""
+    return TASK_OBJECTS.get(task, default)
+
+
+class HandoverTask:
+    """Objects, their transfer from the hand to the gripper, and the reward terms.
+
+    Parameters
+    ----------
+    sim : Simulation
+    robot : BaxterArm
+    human : HumanHand
+    grasp_radius : float
+        Largest fingertip-to-grasp-point distance (m) at which closing the gripper grasps.
+    weights : RewardWeights
+    """
+
+    def __init__(self, sim: Simulation, robot: BaxterArm, human: HumanHand, *,
+                 grasp_radius: float = 0.05, weights: RewardWeights = RewardWeights()) -> None:
+        self.sim, self.robot, self.human = sim, robot, human
+        self.grasp_radius = check_positive(grasp_radius, "grasp_radius")
+        self.weights = weights
+        sim.load_urdf("floor", urdf.path("floor"), (0.0, 0.0, FLOOR_Z), fixed=True)
+        sim.load_urdf("table", urdf.path("table"), TABLE_TOP, fixed=True)
+        sim.disable_collisions(robot.name, human.name)
+        for name in urdf.OBJECTS:
+            sim.load_urdf(name, urdf.path(name), self.parking(name))
+            sim.disable_collisions(robot.name, name)
+            sim.disable_collisions(human.name, name)
+        self.object: str | None = None
+        self._constraint: int | None = None
+        self.handed_over = False
+
+    @staticmethod
+    def parking(name: str) -> tuple[float, float, float]:
+        """Where an unused object rests (m): on the floor behind Baxter."""
+        return (-2.5, -1.0 + 0.5 * urdf.OBJECTS.index(name), FLOOR_Z + 0.06)
+
+    def release(self) -> None:
+        """Remove the object's constraint (call before restoring a saved state)."""
+        if self._constraint is not None:
+            self.sim.detach(self._constraint)
+            self._constraint = None
+
+    def reset(self, object_name: str, hand: FloatArray) -> None:
+        """Put ``object_name`` in the hand at ``hand`` (3,) m and fix it there."""
+        if object_name not in urdf.OBJECTS:
+            raise ValueError(f"object: expected one of {list(urdf.OBJECTS)}, got {object_name!r}")
+        self.release()
+        self.object, self.handed_over = object_name, False
+        self.human.move_to(hand)
+        self.sim.set_pose(object_name, hand + HOLD_OFFSET)
+        self._constraint = self.sim.attach(self.human.name, -1, object_name)
+
+    def grasp_point(self) -> FloatArray:
+        """World position (3,) m of the object's grasp point."""
+        return self.sim.pose(self._require_object())[0]
+
+    def distance(self) -> float:
+        """Fingertip-to-grasp-point distance (m)."""
+        return float(np.linalg.norm(self.robot.tip_position() - self.grasp_point()))
+
+    def try_handover(self) -> bool:
+        """Transfer the object if the closed gripper is within reach; True if it happened now."""
+        if self.handed_over or not self.robot.gripper_closed():
+            return False
+        if self.distance() > self.grasp_radius:
+            return False
+        self.release()
+        self._constraint = self.sim.attach(self.robot.name, self.robot.tip_link,
+                                           self._require_object())
+        self.handed_over = True
+        return True
+
+    def reward_terms(self, distance: float, handed_now: bool, rate: FloatArray) -> dict:
+        """The reward terms (see the module docstring) from the step's outcome.
+
+        Parameters
+        ----------
+        distance : float
+            Fingertip-to-grasp-point distance (m) after the step.
+        handed_now : bool
+            Whether the handover happened in this step.
+        rate : ndarray, shape (7,)
+            Change of the joint targets divided by the control period (rad/s).
+        """
+        w = self.weights
+        return {
+            "reward_distance": -w.distance * distance,
+            "reward_success": w.success if handed_now else 0.0,
+            "reward_action_rate": -w.action_rate * float(np.dot(rate, rate)),
+        }
+
+    def _require_object(self) -> str:
+        if self.object is None:
+            raise RuntimeError("no object yet: reset the task first")
+        return self.object

@@ -1,0 +1,188 @@
+"""Policies for the handover environments: the Interaction ProMP predictor as a controller.
+
+A policy maps each observation of :mod:`sandbox.envs` (a dict with ``hand``,
+``object``, ``q``, ``time``...) to an action (8,): seven joint targets (rad)
+and a gripper command. :class:`IProMPPolicy` feeds the observed hand position
+to a :class:`~sandbox.core.DynamicPredictor` and steers the arm along the
+blended plan; :class:`StaticPolicy` does the same with the static baseline
+(:class:`~sandbox.core.StaticPredictor`, one prediction after a fraction of
+the motion).
+
+From the plan to an action, at control period ``dt``:
+
+* the target is the plan's mean at the next control time ``t + dt``;
+* it moves from the previous target by at most ``max_velocity * dt`` per
+  joint (Baxter's URDF speed limits), so targets are always reachable;
+* the gripper closes when the fingertip (forward kinematics of the observed
+  joints) is within ``close_radius`` of the object, and stays open otherwise.
+
+The predictor expects about 20 observations per second (the paper keeps one
+of every 5 samples at ~100 Hz): the policy keeps one of every
+``round(control_hz / 20)`` observations (2 at 50 Hz: 25 per second).
+
+:func:`fit_family_model` fits the model on seeded synthetic demonstrations of
+an environment's family, cached in-process.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Mapping
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sandbox.core import DynamicPredictor, IProMP, StaticPredictor
+from sandbox.core.validation import check_array, check_positive
+
+FloatArray = NDArray[np.float64]
+
+#: Speed limits (rad/s) of Baxter's left-arm joints ``left_s0 ... left_w2`` (from its URDF).
+MAX_VELOCITY = np.array([1.5, 1.5, 1.5, 1.5, 4.0, 4.0, 4.0])
+#: Observations per second the predictor is designed for.
+PREDICTOR_HZ = 20.0
+
+
+@functools.lru_cache(maxsize=8)
+def fit_family_model(family: str = "diverging", n_per_task: int = 20, seed: int = 0,
+                     n_basis: int = 31) -> IProMP:
+    """An IProMP fitted on synthetic demonstrations of ``family`` (cached per arguments).
+
+    Parameters
+    ----------
+    family : str
+        A synthetic dataset name (``"diverging"``, ``"objects"``, ``"two_task"``):
+        the environment's family.
+    n_per_task : int
+        Demonstrations per task.
+    seed : int
+        Seed of the demonstrations.
+    n_basis : int
+        Basis functions per dim.
+
+    Returns
+    -------
+    IProMP
+        Shared by every caller with the same arguments: do not modify it.
+    """
+    from sandbox.data.synthetic import make_dataset
+
+    demos = make_dataset(family, n_per_task, np.random.default_rng(seed))
+    return IProMP(n_basis=n_basis).fit(demos)
+
+
+class IProMPPolicy:
+    """Dynamic Interaction ProMP controller: re-predict every ``dow_t`` seconds, follow the plan.
+
+    Parameters
+    ----------
+    model : IProMP
+        A fitted model (human dims: hand x, y, z; robot dims: the 7 left-arm joints).
+    dow_t : float
+        Dynamic observation window (s).
+    control_hz : float
+        The environment's control rate (Hz); sets the step and the subsampling.
+    close_radius : float
+        Fingertip-to-object distance (m) under which the gripper closes.
+    max_velocity : array_like, shape (7,), optional
+        Joint speed limits (rad/s); default :data:`MAX_VELOCITY`.
+    **options
+        More options of the predictor (``blend_rate``, ``likelihood``...).
+
+    Attributes
+    ----------
+    predictor : DynamicPredictor
+    history : list of (float, str)
+        The recognised task after each observation: ``(time, task)``.
+
+    Examples
+    --------
+    >>> import gymnasium as gym, sandbox.envs
+    >>> env = gym.make("sandbox/BaxterHandoverDiverging-v0")
+    >>> policy = IProMPPolicy(fit_family_model("diverging"), dow_t=0.2)
+    >>> obs, info = env.reset(seed=3)
+    >>> done = False
+    >>> while not done:
+    ...     obs, reward, terminated, truncated, info = env.step(policy(obs))
+    ...     done = terminated or truncated
+    >>> info["is_success"], policy.task == info["task"]
+    (True, True)
+    >>> env.close()
+    """
+
+    def __init__(self, model: IProMP, *, dow_t: float = 0.2, control_hz: float = 50.0,
+                 close_radius: float = 0.045, max_velocity=None, **options) -> None:
+        self._setup(control_hz, close_radius, max_velocity)
+        self.predictor = DynamicPredictor(model, dow_t=dow_t, subsample=self.subsample,
+                                          **options)
+        self.reset()
+
+    def _setup(self, control_hz: float, close_radius: float, max_velocity) -> None:
+        from sandbox.robot import BaxterKinematics
+
+        self.dt = 1.0 / check_positive(control_hz, "control_hz")
+        self.subsample = max(1, int(round(control_hz / PREDICTOR_HZ)))
+        self.close_radius = check_positive(close_radius, "close_radius")
+        limits = MAX_VELOCITY if max_velocity is None else max_velocity
+        self.max_velocity = check_array(limits, "max_velocity", 1, shape=(7,))
+        check_positive(float(self.max_velocity.min()), "max_velocity")
+        self.kinematics = BaxterKinematics()
+
+    def reset(self) -> None:
+        """Forget the episode (called automatically when the observed time goes back)."""
+        self.predictor.reset()
+        self._target: FloatArray | None = None
+        self._last_time = -np.inf
+        self.history: list[tuple[float, str]] = []
+
+    def __call__(self, obs: Mapping[str, FloatArray]) -> FloatArray:
+        """The action (8,) for observation ``obs``: joint targets (rad), gripper command."""
+        t = float(np.asarray(obs["time"]).reshape(-1)[0])
+        if t < self._last_time:
+            self.reset()
+        self._last_time = t
+        q = check_array(obs["q"], "obs['q']", 1, shape=(7,))
+        self.predictor.observe(t, check_array(obs["hand"], "obs['hand']", 1, shape=(3,),
+                                              allow_nan=True))
+        self.history.append((t, self.predictor.task))
+        with np.errstate(divide="ignore", invalid="ignore"):  # repeated plan knots (core)
+            mean, _ = self.predictor.command(t + self.dt)
+        previous = q if self._target is None else self._target
+        if not np.isfinite(mean).all():
+            mean = previous  # hold rather than pass a non-finite target on
+        step = self.max_velocity * self.dt
+        self._target = previous + np.clip(mean - previous, -step, step)
+        tip = self.kinematics.fk(q, link="left_gripper")
+        close = np.linalg.norm(tip - np.asarray(obs["object"], dtype=float)) < self.close_radius
+        return np.append(self._target, 1.0 if close else -1.0)
+
+    @property
+    def task(self) -> str:
+        """The task the predictor recognises now."""
+        return self.predictor.task
+
+    @property
+    def task_posterior(self) -> dict[str, float]:
+        """p(task | observations so far)."""
+        return self.predictor.task_posterior
+
+
+class StaticPolicy(IProMPPolicy):
+    """The static baseline as a controller: predict once after observing ``ratio`` of the motion.
+
+    Parameters
+    ----------
+    model : IProMP
+        A fitted model.
+    ratio : float
+        Fraction of the expected (prior mean) duration observed before the one prediction.
+    control_hz, close_radius, max_velocity, **options
+        As for :class:`IProMPPolicy`.
+    """
+
+    def __init__(self, model: IProMP, *, ratio: float = 0.3, control_hz: float = 50.0,
+                 close_radius: float = 0.045, max_velocity=None, **options) -> None:
+        self._setup(control_hz, close_radius, max_velocity)
+        self.predictor = StaticPredictor(model, ratio=ratio, subsample=self.subsample,
+                                         **options)
+        self.reset()

@@ -1,0 +1,232 @@
+"""Scripted scenarios: seeded handover episodes of a chosen scenario and policy.
+
+=================  =========================================================================
+scenario           what the human does
+=================  =========================================================================
+``diverging``      a synthetic diverging reach (left, right, up, down or straight), box
+``objects``        a synthetic object handover (box, glasses case or tape)
+``intent_switch``  a diverging reach that switches to another direction at 30-60 % of it
+``recorded``       a recorded trial replayed (needs ``data``); the model is fitted on the
+                   set's other trials (leave-one-out)
+=================  =========================================================================
+
+Policies: ``"dynamic"`` (:class:`~sandbox.policies.IProMPPolicy`, window
+``dow_t``), ``"static"`` (:class:`~sandbox.policies.StaticPolicy`, ``ratio``)
+or any callable ``model -> policy``. Synthetic scenarios use a model fitted on
+seeded synthetic demonstrations of the family (:func:`sandbox.policies.fit_family_model`).
+
+Episode ``i`` is ``env.reset(seed=seed + i)``, so a scenario run is reproducible.
+
+Examples
+--------
+>>> results = run_scenario("diverging", "dynamic", n_episodes=2, seed=0)
+>>> summary = summarize(results)
+>>> sorted(summary)[:3]
+['final_distance_m', 'handover_time_s', 'n_episodes']
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from sandbox.core.validation import check_choice
+
+#: Scenario name -> (environment id, synthetic family).
+SCENARIOS = {
+    "diverging": ("sandbox/BaxterHandoverDiverging-v0", "diverging"),
+    "objects": ("sandbox/BaxterHandover-v0", "objects"),
+    "intent_switch": ("sandbox/BaxterHandoverDiverging-v0", "diverging"),
+    "recorded": ("sandbox/BaxterHandover-v0", None),
+}
+POLICIES = ("dynamic", "static")
+
+
+@dataclass(frozen=True)
+class EpisodeResult:
+    """What happened in one episode.
+
+    Attributes
+    ----------
+    seed : int
+        The episode's ``reset`` seed.
+    task : str
+        The human's task (for an intent switch, the task switched to).
+    object : str
+    success : bool
+        Whether the handover happened.
+    handover_time : float or None
+        When (s from the episode's start).
+    final_distance : float
+        Fingertip to the object's grasp point (m) at the end of the episode
+        (the grasp point rides in the human hand until the handover).
+    min_distance : float
+        Smallest such distance (m) during the episode.
+    recognised : tuple of (float, str)
+        The task the policy recognised after each step's observation: (time s, task).
+    steps : int
+    options : dict
+        The ``reset`` options used.
+    """
+
+    seed: int
+    task: str
+    object: str
+    success: bool
+    handover_time: float | None
+    final_distance: float
+    min_distance: float
+    recognised: tuple[tuple[float, str], ...]
+    steps: int
+    options: dict = field(default_factory=dict)
+
+    @property
+    def final_task(self) -> str:
+        """The task recognised at the end (``""`` if no step was taken)."""
+        return self.recognised[-1][1] if self.recognised else ""
+
+
+def run_scenario(scenario: str = "diverging", policy: str | Callable = "dynamic", *,
+                 n_episodes: int = 20, seed: int = 0, dow_t: float = 0.2, ratio: float = 0.3,
+                 data: str | Path | None = None, env=None, model=None,
+                 options: Mapping[str, Any] | None = None) -> list[EpisodeResult]:
+    """Run ``n_episodes`` seeded episodes of ``scenario`` with ``policy``.
+
+    Parameters
+    ----------
+    scenario : str
+        One of :data:`SCENARIOS`.
+    policy : {"dynamic", "static"} or callable
+        The controller, or a factory ``model -> policy`` (a policy maps an
+        observation to an action and has ``reset()`` and ``task``).
+    n_episodes : int
+        Episodes (>= 1).
+    seed : int
+        Episode ``i`` resets with ``seed + i``.
+    dow_t : float
+        Window (s) of the dynamic policy.
+    ratio : float
+        Observed fraction of the static policy.
+    data : str or Path, optional
+        Folder of the recorded set (``recorded`` scenario only).
+    env : gymnasium.Env, optional
+        An environment made from the scenario's id, reused (not closed); by
+        default one is made and closed.
+    model : IProMP, optional
+        The model (synthetic scenarios; default: fitted on the family's
+        synthetic demonstrations, seed 0, 20 per task).
+    options : mapping, optional
+        Extra ``reset`` options for every episode (e.g. ``{"speed": 1.5}``).
+
+    Returns
+    -------
+    list of EpisodeResult
+    """
+    check_choice(scenario, "scenario", tuple(SCENARIOS))
+    if not callable(policy):
+        check_choice(policy, "policy", POLICIES)
+    if isinstance(n_episodes, bool) or int(n_episodes) != n_episodes or n_episodes < 1:
+        raise ValueError(f"n_episodes: expected an integer >= 1, got {n_episodes!r}")
+    if (scenario == "recorded") != (data is not None):
+        raise ValueError("data: expected the recorded set's folder for the 'recorded' "
+                         f"scenario and nothing otherwise, got scenario={scenario!r}, "
+                         f"data={data!r}")
+    make_policy = _policy_factory(policy, dow_t, ratio)
+    episodes = _episodes(scenario, int(n_episodes), int(seed), data, model, options or {})
+    own_env = env is None
+    if own_env:
+        import gymnasium as gym
+
+        import sandbox.envs  # noqa: F401  (registers the environments)
+
+        env = gym.make(SCENARIOS[scenario][0])
+    try:
+        return [run_episode(env, make_policy(m), s, opts) for s, m, opts in episodes]
+    finally:
+        if own_env:
+            env.close()
+
+
+def run_episode(env, policy, seed: int, options: Mapping[str, Any]) -> EpisodeResult:
+    """One episode of ``policy`` in ``env`` until termination or truncation."""
+    obs, info = env.reset(seed=seed, options=dict(options))
+    policy.reset()
+    recognised, distances, done, steps = [], [], False, 0
+    step_info: dict = {"is_success": False, "handover_time": None, "distance": np.nan}
+    while not done:
+        t = float(obs["time"][0])
+        obs, _, terminated, truncated, step_info = env.step(policy(obs))
+        recognised.append((t, policy.task))
+        distances.append(step_info["distance"])
+        done, steps = terminated or truncated, steps + 1
+    return EpisodeResult(
+        seed=seed, task=info["task"], object=info["object"],
+        success=bool(step_info["is_success"]), handover_time=step_info["handover_time"],
+        final_distance=float(step_info["distance"]), min_distance=float(np.min(distances)),
+        recognised=tuple(recognised), steps=steps, options=dict(options))
+
+
+def summarize(results: list[EpisodeResult]) -> dict[str, float]:
+    """Success rate, mean handover time (s, successes only), median final distance (m),
+    and the fraction of episodes whose final recognised task is the true one."""
+    if not results:
+        raise ValueError("results: expected at least one episode, got none")
+    times = [r.handover_time for r in results if r.success]
+    return {
+        "n_episodes": float(len(results)),
+        "success_rate": float(np.mean([r.success for r in results])),
+        "handover_time_s": float(np.mean(times)) if times else float("nan"),
+        "final_distance_m": float(np.median([r.final_distance for r in results])),
+        "recognition_rate": float(np.mean([r.final_task == r.task for r in results])),
+    }
+
+
+# ------------------------------------------------------------------ internals
+def _policy_factory(policy, dow_t: float, ratio: float) -> Callable:
+    if callable(policy):
+        return policy
+    from sandbox.policies import IProMPPolicy, StaticPolicy
+
+    if policy == "dynamic":
+        return lambda model: IProMPPolicy(model, dow_t=dow_t)
+    return lambda model: StaticPolicy(model, ratio=ratio)
+
+
+def _episodes(scenario, n, seed, data, model, options):
+    """(seed, model, reset options) of every episode."""
+    if scenario == "recorded":
+        return _recorded_episodes(Path(data), n, seed, options)
+    from sandbox.policies import fit_family_model
+
+    model = model if model is not None else fit_family_model(SCENARIOS[scenario][1])
+    out = []
+    for i in range(n):
+        opts = dict(options)
+        if scenario == "intent_switch":
+            rng = np.random.default_rng(seed + i)
+            a, b = rng.choice(list(model.tasks), size=2, replace=False)
+            opts.update(task=str(a), switch_to=str(b), switch_phase=float(rng.uniform(0.3, 0.6)))
+        out.append((seed + i, model, opts))
+    return out
+
+
+def _recorded_episodes(root: Path, n, seed, options):
+    """Each episode replays a random trial with a model fitted on all the other trials."""
+    from sandbox.core import IProMP
+    from sandbox.data.recorded import load_recorded
+
+    demos, _ = load_recorded(root)
+    rng = np.random.default_rng(seed)
+    picks = rng.choice(len(demos), size=n, replace=n > len(demos))
+    out = []
+    for i, k in enumerate(picks):
+        held_out = demos[int(k)]
+        model = IProMP().fit([d for j, d in enumerate(demos) if j != int(k)])
+        opts = {**options, "source": str(root), "task": held_out.task,
+                "trial": Path(held_out.source).name}
+        out.append((seed + i, model, opts))
+    return out
