@@ -13,9 +13,10 @@ from sandbox.envs.human import HumanHand, HumanMotion
 from sandbox.envs.options import EpisodeOptions, parse_options
 from sandbox.envs.pybullet import Simulation
 from sandbox.envs.robot import BaxterArm
-from sandbox.envs.sources import FAMILIES, recorded_motion, synthetic_motion
+from sandbox.envs.sources import FAMILIES, family_tasks, recorded_motion, synthetic_motion
 from sandbox.envs.task import HandoverTask, RewardWeights, object_for
 
+from sandbox import urdf
 from sandbox.core.validation import check_array, check_positive
 from sandbox.data.synthetic.base import Q_HOME
 
@@ -129,6 +130,9 @@ class BaxterHandoverEnv(gym.Env):
             raise ValueError(f"render_mode: expected None or 'rgb_array', got {render_mode!r}")
         if isinstance(substeps, bool) or int(substeps) != substeps or substeps < 1:
             raise ValueError(f"substeps: expected an integer >= 1, got {substeps!r}")
+        if default_object not in urdf.OBJECTS:
+            raise ValueError(f"default_object: expected one of {list(urdf.OBJECTS)}, "
+                             f"got {default_object!r}")
         self.family, self.render_mode, self.default_object = family, render_mode, default_object
         self.dt = 1.0 / check_positive(control_hz, "control_hz")
         self.substeps = int(substeps)
@@ -138,7 +142,6 @@ class BaxterHandoverEnv(gym.Env):
         self.human = HumanHand(self.sim)
         self.task = HandoverTask(self.sim, self.robot, self.human, grasp_radius=grasp_radius,
                                  weights=reward_weights or RewardWeights())
-        parse_options({"object": default_object}, family)  # validates default_object
         self._settle_and_save()
         self.action_space = self._action_space()
         self.observation_space = self._observation_space()
@@ -194,7 +197,7 @@ class BaxterHandoverEnv(gym.Env):
         self.robot.act(target, close=bool(action[7] > 0.0))
         physics_dt = self.dt / self.substeps
         for k in range(1, self.substeps + 1):
-            self.human.move_to(self.motion.position(self._t + k * physics_dt))
+            self.task.move_hand(self.motion.position(self._t + k * physics_dt))
             self.sim.step_physics()
         self._steps += 1
         self._t = self._steps * self.dt
@@ -233,8 +236,6 @@ class BaxterHandoverEnv(gym.Env):
         return motion if episode.speed == 1.0 else motion.scaled(episode.speed)
 
     def _random_task(self) -> str:
-        from sandbox.envs.sources import family_tasks
-
         tasks = family_tasks(self.family)
         return tasks[int(self.np_random.integers(len(tasks)))]
 

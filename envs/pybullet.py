@@ -72,10 +72,15 @@ class Simulation:
         return body
 
     def set_pose(self, name: str, position: ArrayLike,
-                 orientation: Sequence[float] = IDENTITY) -> None:
-        """Teleport body ``name``'s base to ``position`` (3,) m, ``orientation`` (4,)."""
-        self.client.resetBasePositionAndOrientation(self.bodies[name], _vec(position),
-                                                    list(orientation))
+                 orientation: Sequence[float] = IDENTITY, *, at_rest: bool = False) -> None:
+        """Teleport body ``name``'s base to ``position`` (3,) m, ``orientation`` (4,).
+
+        ``at_rest`` also zeroes its velocity (for a dynamic body moved kinematically).
+        """
+        body = self.bodies[name]
+        self.client.resetBasePositionAndOrientation(body, _vec(position), list(orientation))
+        if at_rest:
+            self.client.resetBaseVelocity(body, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
 
     def pose(self, name: str) -> tuple[FloatArray, FloatArray]:
         """Base position (3,) m and quaternion (4,) (x, y, z, w) of body ``name``."""

@@ -1,11 +1,12 @@
 """The handover task: the object in the human's hand, its transfer to the gripper, the reward.
 
-While the human holds it, the object is fixed (a PyBullet constraint) to the
-kinematic hand, its grasp point at :data:`HOLD_OFFSET` from the tracked hand
-point (where the demonstrated gripper tip met the hand). When the gripper is
+While the human holds it, the object moves with the kinematic hand (both are
+teleported at every physics step, the object at rest), its grasp point at
+:data:`HOLD_OFFSET` from the tracked hand point (where the demonstrated gripper
+tip met the hand). When the gripper is
 closed (:func:`~sandbox.envs.robot.BaxterArm.gripper_closed`) with its
 fingertip point within ``grasp_radius`` of the grasp point, the object is
-fixed to the gripper where it is and the hand lets go: that is the handover,
+fixed to the gripper where it is (a PyBullet constraint) and the hand lets go: that is the handover,
 and the episode's success. The robot passes through the hand and the object
 (their collisions are off), so reaching never pushes them.
 
@@ -123,14 +124,18 @@ class HandoverTask:
             self._constraint = None
 
     def reset(self, object_name: str, hand: FloatArray) -> None:
-        """Put ``object_name`` in the hand at ``hand`` (3,) m and fix it there."""
+        """Put ``object_name`` in the hand at ``hand`` (3,) m."""
         if object_name not in urdf.OBJECTS:
             raise ValueError(f"object: expected one of {list(urdf.OBJECTS)}, got {object_name!r}")
         self.release()
         self.object, self.handed_over = object_name, False
+        self.move_hand(hand)
+
+    def move_hand(self, hand: FloatArray) -> None:
+        """Move the hand to ``hand`` (3,) m, and the object with it until the handover."""
         self.human.move_to(hand)
-        self.sim.set_pose(object_name, hand + HOLD_OFFSET)
-        self._constraint = self.sim.attach(self.human.name, -1, object_name)
+        if not self.handed_over:
+            self.sim.set_pose(self._require_object(), hand + HOLD_OFFSET, at_rest=True)
 
     def grasp_point(self) -> FloatArray:
         """World position (3,) m of the object's grasp point."""

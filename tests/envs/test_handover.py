@@ -1,0 +1,188 @@
+"""The handover environments through the Gymnasium API: registration, checker, determinism."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+import sandbox.envs
+from gymnasium.utils.env_checker import check_env, data_equivalence
+from sandbox.envs import ENV_IDS, MAX_EPISODE_STEPS, BaxterHandoverEnv
+
+from sandbox.data.synthetic.base import Q_HOME
+
+TERMS = ("reward_distance", "reward_success", "reward_action_rate")
+
+
+def rollout(env, seed: int, n_steps: int = 120, options=None, close_after: int = 60):
+    """Observations, rewards and infos of a seeded random rollout (gripper closes late)."""
+    obs, info = env.reset(seed=seed, options=options)
+    rng = np.random.default_rng(0)
+    out = [obs, info]
+    for k in range(n_steps):
+        action = rng.uniform(env.action_space.low, env.action_space.high)
+        action[7] = 1.0 if k >= close_after else -1.0
+        obs, reward, terminated, truncated, info = env.step(action)
+        out += [obs, reward, terminated, truncated, info]
+        if terminated or truncated:
+            break
+    return out
+
+
+@pytest.fixture(scope="module")
+def second_env():
+    """A second diverging environment, made directly (not through ``gym.make``)."""
+    env = BaxterHandoverEnv(family="diverging")
+    yield env
+    env.close()
+
+
+def test_ids_are_registered_with_a_time_limit():
+    assert ENV_IDS == ["sandbox/BaxterHandover-v0", "sandbox/BaxterHandoverDiverging-v0"]
+    for env_id, family in zip(ENV_IDS, ("objects", "diverging")):
+        spec = gym.spec(env_id)
+        assert spec.max_episode_steps == MAX_EPISODE_STEPS
+        assert spec.kwargs["family"] == family
+
+
+def test_reimporting_does_not_register_twice():
+    import importlib
+
+    importlib.reload(sandbox.envs)
+    assert sandbox.envs.ENV_IDS == ENV_IDS
+
+
+@pytest.mark.filterwarnings("ignore:.*symmetric and normalized")  # targets are in rad, by design
+@pytest.mark.parametrize("fixture", ["objects_env", "diverging_env"])
+def test_check_env(fixture, request):
+    check_env(request.getfixturevalue(fixture).unwrapped, skip_render_check=False)
+
+
+def test_module_prefixed_make_1000_random_steps_and_close_twice():
+    env = gym.make("sandbox.envs:sandbox/BaxterHandover-v0")
+    env.reset(seed=0)
+    env.action_space.seed(0)
+    episodes = 0
+    for _ in range(1000):
+        obs, reward, terminated, truncated, _ = env.step(env.action_space.sample())
+        assert env.observation_space.contains(obs) and np.isfinite(reward)
+        if terminated or truncated:
+            episodes += 1
+            env.reset()
+    assert episodes >= 3  # 300-step time limit
+    env.close()
+    env.close()
+
+
+def test_same_seed_same_rollout_across_resets_and_instances(diverging_env, second_env):
+    first = rollout(diverging_env, seed=5)
+    rollout(diverging_env, seed=6)  # something else in between
+    assert data_equivalence(first, rollout(diverging_env, seed=5), exact=True)
+    assert data_equivalence(first, rollout(second_env, seed=5), exact=True)
+    assert not data_equivalence(first[0], rollout(diverging_env, seed=7, n_steps=0)[0])
+
+
+def test_two_envs_stepped_alternately_do_not_interfere(diverging_env, second_env):
+    alone = rollout(diverging_env, seed=3, n_steps=40)
+    obs_a, _ = diverging_env.reset(seed=3)
+    second_env.reset(seed=11)
+    rng, other = np.random.default_rng(0), np.random.default_rng(1)
+    for _ in range(40):
+        action = rng.uniform(diverging_env.action_space.low, diverging_env.action_space.high)
+        action[7] = -1.0
+        second_env.step(other.uniform(second_env.action_space.low, second_env.action_space.high))
+        obs_a, *_ = diverging_env.step(action)
+    assert data_equivalence(obs_a, alone[2 + 5 * 39], exact=True)
+    assert diverging_env.unwrapped.bullet_client._client != second_env.bullet_client._client
+
+
+def test_reward_is_the_sum_of_its_terms(diverging_env):
+    out = rollout(diverging_env, seed=2, n_steps=80, close_after=0)
+    for reward, info in zip(out[3::5], out[6::5]):
+        assert reward == pytest.approx(sum(info[k] for k in TERMS), abs=1e-12)
+        assert info["reward_distance"] == pytest.approx(-info["distance"])
+        assert info["reward_action_rate"] <= 0.0
+
+
+def test_holding_still_costs_no_action_rate_and_ends_by_time_limit(diverging_env):
+    diverging_env.reset(seed=1)
+    action = np.append(Q_HOME, -1.0)
+    steps = 0
+    truncated = False
+    while not truncated:
+        obs, reward, terminated, truncated, info = diverging_env.step(action)
+        assert info["reward_action_rate"] == 0.0 and not terminated
+        steps += 1
+    assert steps == MAX_EPISODE_STEPS
+    assert obs["time"][0] == pytest.approx(MAX_EPISODE_STEPS / 50.0)
+    assert info["handover_time"] is None and not info["is_success"]
+
+
+def test_spaces_and_first_observation(objects_env):
+    env = objects_env.unwrapped
+    assert env.action_space.shape == (8,)
+    np.testing.assert_array_equal(env.action_space.low[:7], env.robot.lower)
+    obs, info = objects_env.reset(seed=0)
+    assert set(obs) == {"hand", "object", "q", "dq", "gripper", "time"}
+    np.testing.assert_allclose(obs["q"], Q_HOME, atol=1e-6)
+    assert obs["gripper"][0] == pytest.approx(1.0) and obs["time"][0] == 0.0
+    assert np.linalg.norm(obs["object"] - obs["hand"]) < 0.1
+    assert info["task"] in ("box", "glasses_case", "tape") and info["object"] == info["task"]
+
+
+def test_out_of_range_targets_act_like_the_limits(diverging_env):
+    env = diverging_env.unwrapped
+    runs = []
+    for target in (env.robot.upper + 5.0, env.robot.upper, env.robot.lower - 5.0):
+        env.reset(seed=0)
+        runs.append([env.step(np.append(target, -1.0))[0]["q"] for _ in range(20)])
+    np.testing.assert_array_equal(runs[0], runs[1])
+    assert np.all(runs[0][-1] > Q_HOME) and np.all(runs[2][-1] < Q_HOME)
+
+
+@pytest.mark.parametrize("action", [np.zeros(7), np.zeros((1, 8)), np.full(8, np.nan), "up"])
+def test_bad_action_is_refused(diverging_env, action):
+    diverging_env.reset(seed=0)
+    with pytest.raises(ValueError, match="action"):
+        diverging_env.unwrapped.step(action)
+
+
+def test_step_before_reset_is_refused():
+    env = BaxterHandoverEnv(family="diverging")
+    try:
+        with pytest.raises(RuntimeError, match="reset"):
+            env.step(np.append(Q_HOME, -1.0))
+    finally:
+        env.close()
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"family": "kitchen"}, "family"),
+    ({"render_mode": "human"}, "render_mode"),
+    ({"substeps": 0}, "substeps"),
+    ({"substeps": 2.5}, "substeps"),
+    ({"control_hz": -50.0}, "control_hz"),
+    ({"default_object": "banana"}, "default_object"),
+])
+def test_bad_constructor_arguments(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        BaxterHandoverEnv(**kwargs)
+
+
+def test_render_rgb_array(objects_env, diverging_env):
+    objects_env.reset(seed=0)
+    image = objects_env.render()
+    assert image.shape == (360, 480, 3) and image.dtype == np.uint8
+    assert image.std() > 10  # not a blank frame
+    diverging_env.reset(seed=0)
+    assert diverging_env.render() is None
+    assert objects_env.metadata["render_modes"] == ["rgb_array"]
+
+
+def test_viewer_hook_names_the_bodies(objects_env):
+    env = objects_env.unwrapped
+    ids = env.body_ids
+    for name in ("baxter", "human_hand", "table", "floor", "box", "tape", "screwdriver"):
+        assert name in ids
+    assert len(set(ids.values())) == len(ids)
+    assert env.bullet_client.getNumBodies() == len(ids)
