@@ -177,6 +177,10 @@ class _Predictor:
         cov = (1 - w) * self._plan_cov[i - 1] + w * self._plan_cov[i]
         return mean, cov
 
+    def commands(self, times) -> tuple[FloatArray, FloatArray]:
+        """Planned commands at many ``times`` (s): means (T, Q) and covariances (T, Q, Q)."""
+        return self._interp(check_array(times, "times", 1))
+
     def plan(self) -> tuple[FloatArray, FloatArray, FloatArray]:
         """The whole current plan: knot times (n,), means (n, Q), covariances (n, Q, Q)."""
         return self._plan_t.copy(), self._plan_mean.copy(), self._plan_cov.copy()
@@ -238,12 +242,24 @@ class _Predictor:
         pred = predict(self.model, self.scorer, times, values, likelihood=self.likelihood,
                        n_candidates=self.n_candidates, width=self.width,
                        refine_steps=self.refine_steps, stats=stats)
-        k = pred.task_index
-        jump = self._blend_in(t, pred.robot, pred.duration)
-        self._prediction = pred
-        upd = Update(t, int(times.size), self.model.tasks[k], pred.task_posterior, pred.alphas,
-                     pred.durations, pred.log_likelihood, float(pred.alphas[k]), pred.duration,
-                     jump, _time.perf_counter() - start)
+        return self.apply(t, pred, n_observations=int(times.size), started=start)
+
+    def apply(self, t: float, prediction: Prediction, *, n_observations: int = 0,
+              started: float | None = None) -> Update:
+        """Blend a prediction made elsewhere (:func:`~sandbox.core.inference.predict`) into
+        the plan at time ``t``, exactly as an update does; returns the recorded update.
+
+        Lets several predictors that differ only in how they blend share one
+        estimate (e.g. windows of an evaluation fed the same observations).
+        """
+        start = _time.perf_counter() if started is None else started
+        k = prediction.task_index
+        jump = self._blend_in(float(t), prediction.robot, prediction.duration)
+        self._prediction = prediction
+        upd = Update(float(t), int(n_observations), self.model.tasks[k],
+                     prediction.task_posterior, prediction.alphas, prediction.durations,
+                     prediction.log_likelihood, float(prediction.alphas[k]),
+                     prediction.duration, jump, _time.perf_counter() - start)
         self.updates.append(upd)
         self._after_update()
         return upd
@@ -367,11 +383,19 @@ class DynamicPredictor(_Predictor):
         self._next_update = self.dow_t
 
     def _maybe_update(self, t: float) -> Update | None:
-        if t < self._next_update - 1e-9:   # tolerate accumulated float error in t
+        if not self.is_boundary(t):
             return None
         upd = self.update(t)
-        self._next_update = (np.floor(t / self.dow_t + 1e-9) + 1) * self.dow_t
+        self._next_update = self.next_boundary(t)
         return upd
+
+    def is_boundary(self, t: float) -> bool:
+        """Whether an observation at ``t`` triggers an update (a window boundary was reached)."""
+        return t >= self._next_update - 1e-9   # tolerate accumulated float error in t
+
+    def next_boundary(self, t: float) -> float:
+        """The first window boundary after an update at ``t``."""
+        return float((np.floor(t / self.dow_t + 1e-9) + 1) * self.dow_t)
 
     def _after_update(self) -> None:
         if self.window == "latest" and self._stats is not None:

@@ -1,0 +1,35 @@
+"""``python -m sandbox plot REPORT.json [REPORT2.json] --out DIR``: the paper's figures."""
+
+from __future__ import annotations
+
+NAME = "plot"
+HELP = "draw the evaluation figures (PNG) of one report, or compare two"
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("reports", nargs="+", help="report.json (a second one to compare)")
+    parser.add_argument("--out", required=True, help="folder for the PNG files")
+
+
+def run(args) -> int:
+    import json
+    from pathlib import Path
+
+    from sandbox.eval.plots import plot_report
+
+    if len(args.reports) > 2:
+        raise ValueError(f"expected one or two reports, got {len(args.reports)}")
+    reports = []
+    for name in args.reports:
+        path = Path(name)
+        try:
+            reports.append(json.loads(path.read_text()))
+        except (OSError, json.JSONDecodeError) as error:
+            raise ValueError(
+                f"{name}: expected a report.json written by evaluate ({error})") from None
+        if not {"static", "dynamic", "oracle", "tasks"} <= set(reports[-1]):
+            raise ValueError(f"{name}: not a report written by 'python -m sandbox evaluate'")
+    other = reports[1] if len(reports) > 1 else None
+    for path in plot_report(reports[0], args.out, other):
+        print(path)
+    return 0

@@ -1,0 +1,247 @@
+"""Leave-one-out cross-validation of the static and dynamic formulations (paper sec. 4).
+
+Every trial is predicted by models of all tasks fitted on all other trials
+(multi-task recognition). Training demos use the smoothing preprocessing, the
+test stream the causal one (only samples received so far), as DESIGN.md asks.
+For each trial this module computes, on the same kept observations
+(valid tracker frames, 1 kept in ``subsample``):
+
+* the oracle: all observations, the true task at the true duration;
+* the static formulation at each observed ratio f of the true duration (one
+  prediction, evaluated over the whole motion, as the paper does);
+* the dynamic formulation at each window dow_t (the executed, blended command).
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import asdict, dataclass, field
+from multiprocessing import get_context
+
+import numpy as np
+
+from sandbox.core import DynamicPredictor, IProMP, predict
+from sandbox.core.likelihood import Scorer
+from sandbox.core.phase import Lattice
+from sandbox.core.statistics import StreamStatistics
+from sandbox.eval import metrics
+
+RATIOS = tuple(round(0.1 * i, 1) for i in range(1, 10))
+WINDOWS = (1.0, 0.5, 0.2, 0.1)
+CURVE = tuple(round(0.1 * i, 1) for i in range(1, 11))
+
+
+@dataclass(frozen=True)
+class EvalConfig:
+    """What an evaluation runs (all of it goes into ``report.json``).
+
+    Attributes
+    ----------
+    ratios : observed fractions of the static formulation.
+    windows : dynamic observation windows dow_t (s).
+    subsample : keep 1 of this many valid tracker frames (~30 Hz -> ~15 Hz).
+    likelihood, window_mode, n_candidates, refine_steps, blend_rate, blend_delay :
+        predictor options (:class:`~sandbox.core.DynamicPredictor`).
+    n_basis, regularizer, noise_scale : model options (:class:`~sandbox.core.IProMP`).
+    goal_tol : distance (m) for time-to-correct.
+    curve : fractions of the motion at which recognition over time is reported.
+    """
+
+    ratios: tuple[float, ...] = RATIOS
+    windows: tuple[float, ...] = WINDOWS
+    subsample: int = 2
+    likelihood: str = "joint"
+    window_mode: str = "all"
+    n_candidates: int = 50
+    refine_steps: int = 1
+    blend_rate: float = 50.0
+    blend_delay: float = 0.1
+    n_basis: int = 31
+    regularizer: float = 1e-2
+    noise_scale: float = 1.0
+    goal_tol: float = 0.05
+    curve: tuple[float, ...] = field(default=CURVE)
+
+    def model(self) -> IProMP:
+        """An unfitted model with these options."""
+        return IProMP(n_basis=self.n_basis, regularizer=self.regularizer,
+                      noise_scale=self.noise_scale)
+
+    def predictor_options(self) -> dict:
+        return {"subsample": self.subsample, "likelihood": self.likelihood,
+                "n_candidates": self.n_candidates, "refine_steps": self.refine_steps,
+                "blend_rate": self.blend_rate, "blend_delay": self.blend_delay}
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def kept_observations(times, human, subsample: int):
+    """Valid rows (no NaN), 1 kept in ``subsample``, as the predictors keep them."""
+    valid = np.flatnonzero(np.isfinite(human).all(axis=1))[::subsample]
+    return times[valid], human[valid]
+
+
+def evaluate_trial(model: IProMP, test, config: EvalConfig, fk) -> dict:
+    """All measures of one held-out trial (see the module docstring)."""
+    t = test.times - test.times[0]
+    T, q = float(t[-1]), test.robot
+    k = model.task_index(test.task)
+    goal = fk(q[-1])
+    scorer = Scorer(model)
+    t_obs, y_obs = kept_observations(t, test.human, config.subsample)
+    opts = dict(likelihood=config.likelihood, n_candidates=config.n_candidates,
+                refine_steps=config.refine_steps)
+    oracle = predict(model, scorer, t_obs, y_obs, task=k, duration=T, **opts)
+    windows = {w: update_times(t, t_obs, w) for w in config.windows}
+    cuts = {f: f * T for f in config.ratios}
+    shared = set(cuts.values())
+    if config.window_mode == "all":
+        shared |= {x for times in windows.values() for x in times}
+    preds = predictions_at(model, scorer, t_obs, y_obs, sorted(shared), config, opts)
+    out = {"task": test.task, "source": test.source, "duration": T,
+           "oracle": _score(oracle.trajectory(model.basis, t), q, goal, fk, 0.0), "static": {}}
+    for f, cut in cuts.items():
+        pred = preds[cut]
+        res = _score(pred.trajectory(model.basis, t), q, goal, fk, abs(pred.duration - T))
+        res["recognition"] = float(pred.task_index == k)
+        out["static"][f"{f:.1f}"] = res
+    out["dynamic"] = {f"{w:.1f}": _dynamic(model, test, t, q, T, goal, fk, w, config,
+                                           windows[w], preds, t_obs)
+                      for w in config.windows}
+    return out
+
+
+def update_times(t, t_obs, window: float) -> list[float]:
+    """Row times at which a :class:`DynamicPredictor` fed this stream updates."""
+    out, boundary = [], window
+    for ti in t:
+        if ti >= boundary - 1e-9:
+            if np.searchsorted(t_obs, ti, side="right") > 0:
+                out.append(float(ti))
+            boundary = float((np.floor(ti / window + 1e-9) + 1) * window)
+    return out
+
+
+def predictions_at(model, scorer, t_obs, y_obs, times, config, opts) -> dict:
+    """:func:`~sandbox.core.predict` from the observations up to each time (sorted times)."""
+    stats = None
+    if config.likelihood == "joint" and len(scorer.kappas) == 1:
+        stats = StreamStatistics(scorer, Lattice.for_tasks(model.task_models,
+                                                           config.n_candidates))
+    out, fed = {}, 0
+    for tau in times:
+        n = int(np.searchsorted(t_obs, tau, side="right"))
+        if stats is not None:
+            for j in range(fed, n):
+                stats.add(t_obs[j], y_obs[j])
+            fed = n
+        out[tau] = predict(model, scorer, t_obs[:n], y_obs[:n], stats=stats, **opts)
+    return out
+
+
+def _score(traj, q, goal, fk, e_phi) -> dict:
+    mean, cov = traj
+    return {"e_p": float(np.linalg.norm(fk(mean[-1]) - goal)),
+            "e_q": metrics.joint_rms(mean, q), "e_phi": float(e_phi),
+            "nll": metrics.gaussian_nll(q, mean, cov), "coverage": metrics.coverage(q, mean, cov)}
+
+
+def _dynamic(model, test, t, q, T, goal, fk, window, config, times, preds, t_obs) -> dict:
+    pred = DynamicPredictor(model, dow_t=window, window=config.window_mode, incremental=False,
+                            **config.predictor_options())
+    fractions, goal_err, believed = [], [], []
+
+    def record(upd):
+        fractions.append(upd.time / T)
+        goal_err.append(float(np.linalg.norm(fk(pred.plan()[1][-1]) - goal)))
+        believed.append(upd.task == test.task)
+
+    if config.window_mode == "all":        # the same estimates a streamed predictor makes
+        for tau in times:
+            record(pred.apply(tau, preds[tau],
+                              n_observations=int(np.searchsorted(t_obs, tau, side="right"))))
+    else:
+        for ti, yi in zip(t, test.human):
+            upd = pred.observe(ti, yi)
+            if upd is not None:
+                record(upd)
+    res = _score(pred.commands(t), q, goal, fk, abs(pred.duration - T))
+    res["recognition"] = float(pred.task == test.task)
+    res["time_to_correct"] = metrics.time_to_correct(np.array(fractions), np.array(goal_err),
+                                                     config.goal_tol)
+    res["jumps"] = [u.jump for u in pred.updates]
+    prior_ok = model.tasks[int(np.argmax(model.priors))] == test.task
+    curve = []
+    for c in config.curve:
+        i = int(np.searchsorted(fractions, c + 1e-9, side="right"))
+        curve.append(float(believed[i - 1]) if i > 0 else float(prior_ok))
+    res["recognition_curve"] = curve
+    res["n_updates"] = len(pred.updates)
+    return res
+
+
+# ------------------------------------------------------------------ runner
+_STATE: dict = {}
+
+
+def _init(train, test, fits, config) -> None:
+    _STATE.update(train=train, test=test, fits=fits, config=config)
+
+
+def _run_one(i: int) -> dict:
+    from sandbox.robot import BaxterKinematics
+
+    train, test, fits, config = (_STATE[k] for k in ("train", "test", "fits", "config"))
+    fk = _STATE.setdefault("fk", BaxterKinematics().fk)
+    model = config.model().fit_demo_fits(fits[:i] + fits[i + 1:], train[0])
+    return evaluate_trial(model, test[i], config, fk)
+
+
+def run_loocv(train, test, config: EvalConfig, *, workers: int = 1,
+              progress: bool = False) -> tuple[list[dict], float]:
+    """Leave-one-out over all trials. Returns the per-trial results and the wall time (s).
+
+    Parameters
+    ----------
+    train, test : sequence of Demonstration
+        The same trials, preprocessed for training (smoothed) and as test streams
+        (causal); ``train[i]`` and ``test[i]`` must be the same trial.
+    config : EvalConfig
+    workers : int
+        Processes (fork); 1 runs in this process.
+    progress : bool
+        Show a tqdm progress bar.
+    """
+    if len(train) != len(test) or any(a.source != b.source or a.task != b.task
+                                      for a, b in zip(train, test)):
+        raise ValueError("train and test: expected the same trials in the same order")
+    start = time.perf_counter()
+    fits = [config.model().demo_fit(d) for d in train]
+    _init(train, test, fits, config)
+    indices = range(len(test))
+    bar = _bar(len(test), progress)
+    if workers <= 1:
+        results = []
+        for i in indices:
+            results.append(_run_one(i))
+            bar.update()
+    else:
+        ctx = get_context("fork")
+        with ProcessPoolExecutor(workers, mp_context=ctx, initializer=_init,
+                                 initargs=(train, test, fits, config)) as pool:
+            results = []
+            for res in pool.map(_run_one, indices, chunksize=max(1, len(test) // (8 * workers))):
+                results.append(res)
+                bar.update()
+    bar.close()
+    return results, time.perf_counter() - start
+
+
+def _bar(total: int, enabled: bool):
+    from tqdm import tqdm
+
+    return tqdm(total=total, desc="trials", unit="trial", disable=not enabled,
+                file=None if enabled else open(os.devnull, "w"))

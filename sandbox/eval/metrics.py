@@ -1,0 +1,119 @@
+"""Error measures of DESIGN.md section 5 (paper sec. 3.1) and a few beyond the paper.
+
+For a test trial with true robot joints q(t) (T x Q) at times t, true duration T:
+
+* :func:`joint_rms` (e_q): RMS over time steps and joints of q_hat(t) - q(t) (rad);
+* :func:`goal_error` (e_p): distance (m) between forward kinematics of q_hat(T) and q(T);
+* e_phi: |T_hat - T| (s);
+* :func:`time_to_correct`: earliest fraction of the motion after which the
+  predicted goal stays within ``tol`` of the true goal;
+* :func:`gaussian_nll` and :func:`coverage`: calibration of the predicted
+  per-step distribution of the robot joints;
+* :func:`window_metric` (eq. 20): :math:`m(dow) = \\sum_i \\gamma_i e_i(dow) / \\max_{dow} e_i`;
+* :func:`bootstrap_ci`: percentile confidence interval of a mean.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+import numpy as np
+from scipy.stats import chi2
+
+from sandbox.core.validation import FloatArray
+
+
+def joint_rms(q_hat: FloatArray, q: FloatArray) -> float:
+    """e_q: RMS over time steps and joints (rad). Shapes (T, Q)."""
+    return float(np.sqrt(np.mean((np.asarray(q_hat) - np.asarray(q)) ** 2)))
+
+
+def goal_error(q_hat_end: FloatArray, q_end: FloatArray, fk: Callable) -> float:
+    """e_p: distance (m) between ``fk(q_hat_end)`` and ``fk(q_end)``."""
+    return float(np.linalg.norm(fk(q_hat_end) - fk(q_end)))
+
+
+def time_to_correct(fractions: FloatArray, goal_errors: FloatArray, tol: float = 0.05) -> float:
+    """Earliest fraction after which every later predicted goal is within ``tol`` (m).
+
+    Parameters
+    ----------
+    fractions : ndarray, shape (U,)
+        Fraction of the motion at each update, increasing.
+    goal_errors : ndarray, shape (U,)
+        Distance of that update's predicted goal from the true goal (m).
+
+    Returns
+    -------
+    float
+        The fraction, or 1.0 if the last prediction is not within ``tol`` (never
+        correct before the end).
+    """
+    ok = np.asarray(goal_errors) <= tol
+    if ok.size == 0 or not ok[-1]:
+        return 1.0
+    bad = np.flatnonzero(~ok)
+    first = 0 if bad.size == 0 else bad[-1] + 1
+    return float(np.asarray(fractions)[first])
+
+
+def gaussian_nll(q: FloatArray, mean: FloatArray, cov: FloatArray) -> float:
+    """Mean over steps of :math:`-\\log\\mathcal{N}(q_t; \\mu_t, \\Sigma_t)` (nats per step)."""
+    d = (np.asarray(q) - mean)[..., None]
+    L = np.linalg.cholesky(cov)
+    w = np.linalg.solve(L, d)[..., 0]
+    logdet = 2.0 * np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(axis=-1)
+    Q = mean.shape[-1]
+    return float(np.mean(0.5 * (Q * np.log(2 * np.pi) + logdet + (w**2).sum(axis=-1))))
+
+
+def coverage(q: FloatArray, mean: FloatArray, cov: FloatArray) -> float:
+    """Fraction of steps whose true q lies in the 95 % ellipsoid of N(mean_t, cov_t)."""
+    d = (np.asarray(q) - mean)[..., None]
+    w = np.linalg.solve(np.linalg.cholesky(cov), d)[..., 0]
+    return float(np.mean((w**2).sum(axis=-1) <= chi2.ppf(0.95, mean.shape[-1])))
+
+
+def window_metric(errors: dict[str, Sequence[float]], gamma: Sequence[float]) -> list[float]:
+    """Window-selection metric m (eq. 20) for each window.
+
+    Parameters
+    ----------
+    errors : dict
+        ``{"e_p": [...], "e_q": [...], "e_phi": [...]}``, one entry per window.
+    gamma : (3,) weights of e_p, e_q, e_phi.
+    """
+    out = np.zeros(len(errors["e_p"]))
+    for g, key in zip(gamma, ("e_p", "e_q", "e_phi")):
+        e = np.asarray(errors[key], dtype=float)
+        top = e.max()
+        out += g * (e / top if top > 0 else np.zeros_like(e))
+    return out.tolist()
+
+
+def bootstrap_ci(values: FloatArray, groups: FloatArray | None = None, *, n_boot: int = 1000,
+                 level: float = 0.95, rng: np.random.Generator | None = None,
+                 statistic: Callable | None = None) -> tuple[float, float]:
+    """Percentile bootstrap confidence interval of a mean (or ``statistic``).
+
+    Resamples trials with replacement within each group (task), so a
+    macro-average over tasks keeps its task weights.
+    """
+    values = np.asarray(values, dtype=float)
+    if values.size == 0:
+        return (float("nan"), float("nan"))
+    rng = np.random.default_rng(0) if rng is None else rng
+    groups = np.zeros(values.size, dtype=int) if groups is None else np.asarray(groups)
+    stat = statistic or _macro_mean
+    labels = np.unique(groups)
+    idx = [np.flatnonzero(groups == g) for g in labels]
+    samples = np.empty(n_boot)
+    for b in range(n_boot):
+        pick = np.concatenate([rng.choice(i, size=i.size, replace=True) for i in idx])
+        samples[b] = stat(values[pick], groups[pick])
+    lo, hi = np.quantile(samples, [(1 - level) / 2, (1 + level) / 2])
+    return float(lo), float(hi)
+
+
+def _macro_mean(values: FloatArray, groups: FloatArray) -> float:
+    return float(np.mean([values[groups == g].mean() for g in np.unique(groups)]))

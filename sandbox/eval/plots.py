@@ -1,0 +1,137 @@
+"""The paper's evaluation figures from ``report.json`` files (the only matplotlib user).
+
+* ``direct.png``: e_p, e_q, e_phi against dow_t, per task and mean (paper Fig. 5).
+* ``comparative.png``: static - dynamic differences against the observed ratio,
+  one curve per window (paper Fig. 6).
+* ``average_comparison.png`` (two reports): the differences averaged over
+  windows, one curve per report (Exp. 1 vs Exp. 2, paper Fig. 8).
+* ``recognition.png``: recognition over the motion (dynamic, per window) and
+  against the observed ratio (static).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+MEASURES = (("e_p", "goal position error e_p (m)"), ("e_q", "joint RMS error e_q (rad)"),
+            ("e_phi", "phase error e_phi (s)"))
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def plot_report(report: dict, out_dir, other: dict | None = None) -> list[Path]:
+    """Write the figures of one report (and the comparison with ``other``); returns paths."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = [_direct(report, out / "direct.png"), _comparative(report, out / "comparative.png"),
+             _recognition(report, out / "recognition.png")]
+    if other is not None:
+        paths.append(_average(report, other, out / "average_comparison.png"))
+    return paths
+
+
+def _windows(report):
+    return list(report["dynamic"])
+
+
+def _direct(report, path):
+    plt = _plt()
+    fig, axes = plt.subplots(1, 3, figsize=(13, 3.8))
+    windows = _windows(report)
+    x = [float(w) for w in windows]
+    for ax, (key, label) in zip(axes, MEASURES):
+        for task in report["tasks"] + ["mean"]:
+            y = [report["dynamic"][w][task][key] for w in windows]
+            style = dict(color="k", lw=2.5) if task == "mean" else dict(lw=1.2, alpha=0.8)
+            ax.plot(x, y, marker="o", label=task, **style)
+        ci = np.array([report["dynamic"][w]["mean"][key + "_ci"] for w in windows])
+        ax.fill_between(x, ci[:, 0], ci[:, 1], color="k", alpha=0.12)
+        ax.set_xscale("log")
+        ax.set_xticks(x, [f"{v:g}" for v in x])
+        ax.set_xlabel("dynamic window dow_t (s)")
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=8)
+    fig.suptitle(f"Direct evaluation of the dynamic formulation: {report['dataset']}")
+    return _save(fig, path)
+
+
+def _comparative(report, path):
+    plt = _plt()
+    fig, axes = plt.subplots(1, 3, figsize=(13, 3.8))
+    ratios = list(report["static"])
+    x = [float(f) for f in ratios]
+    for ax, (key, label) in zip(axes, MEASURES):
+        for w in _windows(report):
+            y = [report["differences"][f][w][key] for f in ratios]
+            ax.plot(x, y, marker="o", label=f"dow_t = {w} s")
+        ax.axhline(0.0, color="k", lw=0.8)
+        ax.set_xlabel("static observed ratio f")
+        ax.set_ylabel(f"static - dynamic, {label.split(' (')[0].split()[-1]}")
+        ax.set_title(label, fontsize=9)
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=8)
+    fig.suptitle("Comparative evaluation (positive: the dynamic formulation is better)")
+    return _save(fig, path)
+
+
+def _average(report, other, path):
+    plt = _plt()
+    fig, axes = plt.subplots(1, 3, figsize=(13, 3.8))
+    for rep in (report, other):
+        ratios = list(rep["static"])
+        x = [float(f) for f in ratios]
+        for ax, (key, label) in zip(axes, MEASURES):
+            y = [np.mean([rep["differences"][f][w][key] for w in _windows(rep)]) for f in ratios]
+            ax.plot(x, y, marker="o", label=rep["dataset"])
+            ax.axhline(0.0, color="k", lw=0.8)
+            ax.set_xlabel("static observed ratio f")
+            ax.set_title(f"static - dynamic (mean over windows): {label}", fontsize=9)
+            ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=8)
+    fig.suptitle("Average comparison of two experiments")
+    return _save(fig, path)
+
+
+def _recognition(report, path):
+    plt = _plt()
+    fig, axes = plt.subplots(1, 2, figsize=(11, 3.8))
+    curve = report["recognition_over_time"]
+    for w in _windows(report):
+        axes[0].plot(curve["fractions"], curve[w], marker="o", label=f"dynamic, dow_t = {w} s")
+    axes[0].set_xlabel("fraction of the motion observed")
+    axes[0].set_ylabel("trials with the right task")
+    axes[0].set_ylim(0, 1.02)
+    axes[0].axhline(1 / len(report["tasks"]), color="k", ls=":", label="chance")
+    axes[0].legend(fontsize=8)
+    ratios = list(report["static"])
+    for task in report["tasks"] + ["mean"]:
+        y = [report["static_recognition"][task][f] for f in ratios]
+        style = dict(color="k", lw=2.5) if task == "mean" else dict(lw=1.2)
+        axes[1].plot([float(f) for f in ratios], y, marker="o", label=task, **style)
+    axes[1].set_xlabel("static observed ratio f")
+    axes[1].set_ylabel("static recognition rate")
+    axes[1].set_ylim(0, 1.02)
+    axes[1].legend(fontsize=8)
+    for ax in axes:
+        ax.grid(alpha=0.3)
+    fig.suptitle(f"Task recognition: {report['dataset']}")
+    return _save(fig, path)
+
+
+def _save(fig, path: Path) -> Path:
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)
+    return path

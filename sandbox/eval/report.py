@@ -1,0 +1,142 @@
+"""Aggregate per-trial results into ``report.json`` (the keys of the evaluation issue).
+
+Every section holds, per task and for the task ``"mean"`` (macro-average: the
+mean of the task means, as the paper averages over tasks), the mean of each
+measure and its 95 % bootstrap confidence interval (``<measure>_ci``,
+resampling trials within tasks). Beyond the paper: calibration (``nll`` per
+step, ``coverage`` of the 95 % ellipsoid), command jumps at updates, recognition
+over time, the differences static - dynamic for every ratio and window.
+"""
+
+from __future__ import annotations
+
+from itertools import permutations
+
+import numpy as np
+
+from sandbox.eval import metrics
+
+GAMMAS = [(1 / 3, 1 / 3, 1 / 3)] + sorted(set(permutations((0.5, 0.25, 0.25))), reverse=True)
+MEASURES = ("e_p", "e_q", "e_phi")
+
+
+def gamma_label(gamma) -> str:
+    """"0.33,0.33,0.33" style label of a weight triple."""
+    return ",".join(f"{g:.2f}" for g in gamma)
+
+
+def _section(trials: list[dict], tasks: list[str], get, keys, n_boot: int) -> dict:
+    labels = np.array([r["task"] for r in trials])
+    out: dict = {}
+    for task in tasks + ["mean"]:
+        rows = trials if task == "mean" else [r for r, lab in zip(trials, labels) if lab == task]
+        groups = np.array([r["task"] for r in rows])
+        entry = {}
+        for key in keys:
+            values = np.array([get(r)[key] for r in rows], dtype=float)
+            if task == "mean":
+                entry[key] = float(np.mean([values[groups == g].mean() for g in tasks]))
+            else:
+                entry[key] = float(values.mean())
+            lo, hi = metrics.bootstrap_ci(values, groups, n_boot=n_boot,
+                                          rng=np.random.default_rng(0))
+            entry[f"{key}_ci"] = [lo, hi]
+        out[task] = entry
+    return out
+
+
+def build_report(trials: list[dict], config: dict, dataset: str, runtime_s: float,
+                 n_boot: int = 1000) -> dict:
+    """The report dictionary (see the module docstring)."""
+    tasks = list(dict.fromkeys(r["task"] for r in trials))
+    ratios = [f"{f:.1f}" for f in config["ratios"]]
+    windows = [f"{w:.1f}" for w in config["windows"]]
+    report = {
+        "dataset": dataset,
+        "tasks": tasks,
+        "n_trials": {t: sum(r["task"] == t for r in trials) for t in tasks},
+        "config": config,
+        "static": {f: _section(trials, tasks, lambda r, f=f: r["static"][f],
+                               MEASURES + ("recognition", "nll", "coverage"), n_boot)
+                   for f in ratios},
+        "dynamic": {w: _section(trials, tasks, lambda r, w=w: r["dynamic"][w],
+                                MEASURES + ("recognition", "time_to_correct", "nll",
+                                            "coverage"), n_boot)
+                    for w in windows},
+        "oracle": _section(trials, tasks, lambda r: r["oracle"], MEASURES + ("nll", "coverage"),
+                           n_boot),
+    }
+    report["window_metric"], report["best_window"] = _window_metric(report, windows)
+    report["differences"] = {
+        f: {w: {m: report["static"][f]["mean"][m] - report["dynamic"][w]["mean"][m]
+                for m in MEASURES} for w in windows} for f in ratios}
+    report["static_recognition"] = {
+        task: {f: report["static"][f][task]["recognition"] for f in ratios}
+        for task in tasks + ["mean"]}
+    report["recognition_over_time"] = {
+        "fractions": list(config["curve"]),
+        **{w: np.mean([r["dynamic"][w]["recognition_curve"] for r in trials], axis=0).tolist()
+           for w in windows}}
+    report["jumps"] = {w: _jumps([j for r in trials for j in r["dynamic"][w]["jumps"]])
+                       for w in windows}
+    report["runtime_s"] = round(float(runtime_s), 2)
+    return report
+
+
+def _window_metric(report: dict, windows: list[str]):
+    errors = {m: [report["dynamic"][w]["mean"][m] for w in windows] for m in MEASURES}
+    metric, best = {}, {}
+    for gamma in GAMMAS:
+        values = metrics.window_metric(errors, gamma)
+        label = gamma_label(gamma)
+        metric[label] = dict(zip(windows, values))
+        best[label] = windows[int(np.argmin(values))]
+    return metric, best
+
+
+def _jumps(values: list[float]) -> dict:
+    v = np.asarray(values, dtype=float)
+    if v.size == 0:
+        return {"n": 0}
+    return {"n": int(v.size), "mean": float(v.mean()), "median": float(np.median(v)),
+            "p95": float(np.quantile(v, 0.95)), "max": float(v.max())}
+
+
+def to_markdown(report: dict) -> str:
+    """Tables of a report in Markdown (means with 95 % bootstrap intervals)."""
+    lines = [f"### Evaluation of `{report['dataset']}`", "",
+             f"{sum(report['n_trials'].values())} trials "
+             f"({', '.join(f'{t}: {n}' for t, n in report['n_trials'].items())}), "
+             f"leave-one-out, {report['runtime_s']} s.", ""]
+    lines += _table("Dynamic formulation (mean over tasks)",
+                    {f"dow_t = {w} s": report["dynamic"][w]["mean"] for w in report["dynamic"]},
+                    MEASURES + ("recognition", "time_to_correct", "coverage"))
+    lines += _table("Static formulation (mean over tasks)",
+                    {f"ratio {f}": report["static"][f]["mean"] for f in report["static"]},
+                    MEASURES + ("recognition", "coverage"))
+    lines += _table("Oracle (all observations, true task and duration)",
+                    {"oracle": report["oracle"]["mean"]}, MEASURES)
+    lines += ["#### Static recognition rate by task and ratio (paper Table II)", "",
+              "| ratio | " + " | ".join(report["tasks"]) + " | mean |",
+              "|---|" + "---|" * (len(report["tasks"]) + 1)]
+    for f in report["static"]:
+        cells = [f"{report['static_recognition'][t][f]:.2f}" for t in report["tasks"] + ["mean"]]
+        lines.append(f"| {f} | " + " | ".join(cells) + " |")
+    lines += ["", "#### Window-selection metric m (lower is better)", "",
+              "| gamma (e_p, e_q, e_phi) | " + " | ".join(report["dynamic"]) + " | best |",
+              "|---|" + "---|" * (len(report["dynamic"]) + 1)]
+    for label, values in report["window_metric"].items():
+        cells = [f"{values[w]:.3f}" for w in report["dynamic"]]
+        lines.append(f"| {label} | " + " | ".join(cells) + f" | {report['best_window'][label]} |")
+    return "\n".join(lines) + "\n"
+
+
+def _table(title: str, rows: dict, keys) -> list[str]:
+    units = {"e_p": "m", "e_q": "rad", "e_phi": "s"}
+    head = " | ".join(f"{k} ({units[k]})" if k in units else k for k in keys)
+    out = [f"#### {title}", "", f"| | {head} |", "|---|" + "---|" * len(keys)]
+    for name, entry in rows.items():
+        cells = [f"{entry[k]:.3f} [{entry[k + '_ci'][0]:.3f}, {entry[k + '_ci'][1]:.3f}]"
+                 for k in keys]
+        out.append(f"| {name} | " + " | ".join(cells) + " |")
+    return out + [""]

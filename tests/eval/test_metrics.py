@@ -1,0 +1,62 @@
+import numpy as np
+import pytest
+
+from sandbox.eval import metrics
+from sandbox.robot import BaxterKinematics
+
+
+def test_perfect_prediction_gives_zero_errors():
+    rng = np.random.default_rng(0)
+    q = rng.uniform(-0.5, 0.5, (50, 7))
+    fk = BaxterKinematics().fk
+    assert metrics.joint_rms(q, q) == 0.0
+    assert metrics.goal_error(q[-1], q[-1], fk) == 0.0
+
+
+def test_shifted_prediction_gives_the_shift():
+    q = np.zeros((40, 7))
+    assert metrics.joint_rms(q + 0.1, q) == pytest.approx(0.1)
+    shift = np.zeros(7)
+    shift[0] = 0.2                     # first joint only
+    assert metrics.joint_rms(q + shift, q) == pytest.approx(np.sqrt(0.2**2 / 7))
+    fk = lambda x: np.asarray(x)[:3]   # noqa: E731 - a Cartesian "robot"
+    assert metrics.goal_error(np.array([0.03, 0.04, 0.0]), np.zeros(3), fk) == pytest.approx(0.05)
+
+
+def test_time_to_correct():
+    f = np.array([0.2, 0.4, 0.6, 0.8, 1.0])
+    assert metrics.time_to_correct(f, np.array([0.2, 0.01, 0.2, 0.01, 0.02])) == 0.8
+    assert metrics.time_to_correct(f, np.full(5, 0.01)) == 0.2
+    assert metrics.time_to_correct(f, np.array([0.01, 0.01, 0.01, 0.01, 0.3])) == 1.0
+    assert metrics.time_to_correct(np.array([]), np.array([])) == 1.0
+
+
+def test_calibration_of_a_known_gaussian():
+    rng = np.random.default_rng(1)
+    Q, T = 3, 20000
+    cov = np.diag([0.1, 0.2, 0.3])
+    q = rng.multivariate_normal(np.zeros(Q), cov, size=T)
+    mean = np.zeros((T, Q))
+    covs = np.broadcast_to(cov, (T, Q, Q))
+    assert metrics.coverage(q, mean, covs) == pytest.approx(0.95, abs=0.01)
+    expected = 0.5 * (Q * np.log(2 * np.pi) + np.log(np.linalg.det(cov)) + Q)
+    assert metrics.gaussian_nll(q, mean, covs) == pytest.approx(expected, rel=0.01)
+
+
+def test_window_metric_normalises_by_the_worst_window():
+    errors = {"e_p": [1.0, 2.0], "e_q": [3.0, 3.0], "e_phi": [0.0, 0.0]}
+    m = metrics.window_metric(errors, (0.5, 0.25, 0.25))
+    np.testing.assert_allclose(m, [0.5 * 0.5 + 0.25, 0.5 + 0.25])
+
+
+def test_bootstrap_interval_contains_the_mean_and_shrinks_with_n():
+    rng = np.random.default_rng(2)
+    small = rng.normal(1.0, 1.0, 30)
+    large = rng.normal(1.0, 1.0, 3000)
+    lo, hi = metrics.bootstrap_ci(small)
+    assert lo < small.mean() < hi
+    lo2, hi2 = metrics.bootstrap_ci(large, n_boot=300)
+    assert hi2 - lo2 < (hi - lo) / 4
+    groups = np.repeat([0, 1], 15)
+    lo3, hi3 = metrics.bootstrap_ci(np.r_[np.zeros(15), np.ones(15)], groups)
+    assert lo3 == hi3 == 0.5        # macro-average keeps task weights exactly
