@@ -20,9 +20,10 @@ name               what
 ``floor``          6 x 6 m floor slab (origin: top surface centre)
 =================  =====================================================================
 
-Objects have their origin at their grasp point (their centre, the handle's
-centre for the screwdriver). Files resolve from a source checkout and from an
-installed wheel alike (they are package data).
+Objects have their origin at their grasp point, which is also their centre of
+mass (inside the handle for the screwdriver), so a simulator's base pose is the
+grasp point. Files resolve from a source checkout and from an installed wheel
+alike (they are package data).
 """
 
 from __future__ import annotations

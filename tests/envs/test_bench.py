@@ -1,0 +1,29 @@
+"""The environment benchmark functions (figures only checked for shape, never for speed)."""
+
+from __future__ import annotations
+
+import math
+
+from sandbox.bench import env as bench
+
+
+def test_env_vs_raw_reports_rates_and_their_ratio():
+    result = bench.env_vs_raw(n_steps=20, blocks=1)
+    assert set(result) == {"env_steps_per_s", "raw_pybullet_steps_per_s", "env_raw_ratio"}
+    assert all(math.isfinite(v) and v > 0 for v in result.values())
+    ratio = result["env_steps_per_s"] / result["raw_pybullet_steps_per_s"]
+    assert math.isclose(result["env_raw_ratio"], ratio)
+
+
+def test_policy_steps_per_s_runs_whole_episodes():
+    assert bench.policy_steps_per_s(n_episodes=1) > 0
+
+
+def test_run_env_benchmarks_merges_and_rounds(monkeypatch):
+    monkeypatch.setattr(bench, "env_vs_raw", lambda: {"env_steps_per_s": 500.123,
+                                                      "raw_pybullet_steps_per_s": 800.0,
+                                                      "env_raw_ratio": 0.6251})
+    monkeypatch.setattr(bench, "policy_steps_per_s", lambda: 300.06)
+    assert bench.run_env_benchmarks() == {"env_steps_per_s": 500.1,
+                                          "raw_pybullet_steps_per_s": 800.0,
+                                          "env_raw_ratio": 0.625, "policy_steps_per_s": 300.1}

@@ -1,0 +1,94 @@
+"""The human hand motion and its kinematic body."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from sandbox.envs.human import SHOULDER, HumanMotion, _quaternion, forearm_orientation
+from scipy.spatial.transform import Rotation
+
+
+def motion(measured=None) -> HumanMotion:
+    times = np.array([0.0, 0.5, 1.0, 2.0])
+    true = np.array([[1.0, 0.0, 0.2], [0.9, 0.0, 0.2], [0.8, 0.1, 0.2], [0.8, 0.1, 0.3]])
+    return HumanMotion(times, true, true if measured is None else measured, "left", "test")
+
+
+def test_position_interpolates_and_holds_at_the_ends():
+    m = motion()
+    np.testing.assert_allclose(m.position(0.25), [0.95, 0.0, 0.2])
+    np.testing.assert_allclose(m.position(1.5), [0.8, 0.1, 0.25])
+    np.testing.assert_allclose(m.position(-1.0), m.true[0])
+    np.testing.assert_allclose(m.position(10.0), m.true[-1])
+    assert m.duration == 2.0
+
+
+def test_measurement_is_the_latest_valid_sample():
+    measured = motion().true.copy()
+    measured[0] = np.nan
+    measured[2] = np.nan
+    m = motion(measured)
+    np.testing.assert_array_equal(m.measurement(0.0), measured[1])  # none yet: the first valid
+    np.testing.assert_array_equal(m.measurement(0.7), measured[1])
+    np.testing.assert_array_equal(m.measurement(1.9), measured[1])  # row 2 is a dropout
+    np.testing.assert_array_equal(m.measurement(2.0), measured[3])
+    m.measurement(0.7)[0] = 99.0  # a copy: the motion does not change
+    assert m.measured[1, 0] != 99.0
+
+
+def test_scaled_plays_faster_and_keeps_the_path():
+    m = motion()
+    fast = m.scaled(2.0)
+    assert fast.duration == 1.0 and fast.meta["speed"] == 2.0
+    np.testing.assert_allclose(fast.position(0.75), m.position(1.5))
+    with pytest.raises(ValueError, match="speed"):
+        m.scaled(0.0)
+
+
+def test_arrays_are_read_only_copies():
+    true = motion().true.copy()
+    m = HumanMotion(np.array([0.0, 1.0]), true[:2], true[:2], "x")
+    true[0, 0] = 5.0
+    assert m.true[0, 0] == 1.0
+    with pytest.raises(ValueError):
+        m.true[0, 0] = 2.0
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"times": [0.5, 1.0]}, "start at 0"),
+    ({"times": [0.0, 0.0]}, "strictly increasing"),
+    ({"true": np.full((2, 3), np.nan)}, "true: expected finite"),
+    ({"measured": np.full((2, 3), np.nan)}, "at least one sample"),
+    ({"true": np.zeros((2, 2))}, "true: expected shape"),
+])
+def test_bad_motion_is_refused(kwargs, match):
+    args = {"times": [0.0, 1.0], "true": np.zeros((2, 3)), "measured": np.zeros((2, 3)),
+            "task": "t"}
+    with pytest.raises(ValueError, match=match):
+        HumanMotion(**{**args, **kwargs})
+
+
+def test_quaternion_matches_scipy_for_any_rotation():
+    for R in Rotation.random(100, random_state=0).as_matrix():
+        q = np.array(_quaternion(R))
+        ref = Rotation.from_matrix(R).as_quat()
+        assert min(np.abs(q - ref).max(), np.abs(q + ref).max()) < 1e-9
+
+
+def test_forearm_points_at_the_shoulder():
+    hand = np.array([0.9, -0.1, 0.25])
+    R = Rotation.from_quat(forearm_orientation(hand)).as_matrix()
+    direction = (SHOULDER - hand) / np.linalg.norm(SHOULDER - hand)
+    np.testing.assert_allclose(R[:, 0], direction, atol=1e-12)
+    assert R[2, 2] > 0.5  # the palm's z stays up-ish
+
+
+def test_hand_body_follows_the_motion(diverging_env):
+    obs, _ = diverging_env.reset(seed=0)
+    env = diverging_env.unwrapped
+    for _ in range(30):
+        obs, *_ = env.step(np.append(obs["q"], -1.0))
+    position, quaternion = env.sim.pose("human_hand")
+    np.testing.assert_allclose(position, env.motion.position(obs["time"][0]), atol=1e-9)
+    np.testing.assert_allclose(np.abs(quaternion), np.abs(forearm_orientation(position)),
+                               atol=1e-6)
