@@ -51,7 +51,7 @@ class OverlayStyle:
     bar_width: float = 0.06
     bar_gap: float = 0.05
     bar_height: float = 0.3
-    label_height: float = 0.025
+    label_height: float = 0.035
 
 
 def _translation(p: ArrayLike) -> FloatArray:
@@ -88,13 +88,17 @@ class PredictionOverlay:
         Forward kinematics for joint-space plans (default: a new one).
     link : str
         Link whose path is drawn (default the gripper's fingertip point).
+    panel : meshcat.Visualizer, optional
+        Node of the bar panel (default ``vis["panel"]``; a :class:`Viewer` hangs
+        it on the camera, so it stays in view).
     panel_pose : array_like, shape (4, 4), optional
-        Pose of the bar panel (x toward the viewer, z up); default beside Baxter.
+        Pose of the panel in its parent (its x axis toward the viewer, z up);
+        default beside Baxter, facing the front-left.
     style : OverlayStyle
     """
 
     def __init__(self, vis, *, rng: np.random.Generator, tasks, kinematics=None,
-                 link: str = "left_gripper", panel_pose: ArrayLike | None = None,
+                 link: str = "left_gripper", panel=None, panel_pose: ArrayLike | None = None,
                  style: OverlayStyle = OverlayStyle()) -> None:
         if not isinstance(rng, np.random.Generator):
             raise ValueError(f"rng: expected a numpy.random.Generator, got {type(rng).__name__}")
@@ -115,6 +119,7 @@ class PredictionOverlay:
         self._panel_version = -1
         self._n_updates = 0
         self._executed: list[FloatArray] = []
+        self.panel = vis["panel"] if panel is None else panel
         pose = facing([0.25, -0.75, 0.35], [2.0, 1.0, 0.5]) if panel_pose is None else panel_pose
         self._panel_pose = check_array(pose, "panel_pose", 2, shape=(4, 4))
         self._build_panel()
@@ -236,13 +241,13 @@ class PredictionOverlay:
         return i * (self.style.bar_width + self.style.bar_gap)
 
     def _build_panel(self) -> None:
-        s, panel = self.style, self.vis["panel"]
+        s, panel = self.style, self.panel
         panel.set_transform(self._panel_pose)
         columns = [*self.tasks, "speed"]
         width = self._bar_y(len(columns) - 1) + s.bar_width + 2 * s.bar_gap
         board = _translation([-0.01, width / 2 - s.bar_gap - s.bar_width / 2, s.bar_height / 2])
         panel["board"].set_object(objects.box([0.004, width, s.bar_height + 0.12],
-                                              [1.0, 1.0, 1.0, 0.55]))
+                                              [0.95, 0.95, 0.95, 1.0]))
         panel["board"].set_transform(board)
         for i, name in enumerate(columns):
             column = panel[f"c{i}"]
@@ -266,7 +271,7 @@ class PredictionOverlay:
                 )
             values.append((min(p, 1.0), f"{100 * p:.0f}%"))
         values.append((min(alpha / 2.0, 1.0), f"x{alpha:.2f}"))
-        panel, old = self.vis["panel"], self._panel_version
+        panel, old = self.panel, self._panel_version
         self._panel_version += 1
         for i, (height, text) in enumerate(values):
             column = panel[f"c{i}"]

@@ -31,10 +31,13 @@ from sandbox.viz.scene import Scene
 from sandbox.viz.server import LiveServer
 
 #: Default camera position and the point it looks at, in the world (m).
-DEFAULT_CAMERA = (1.95, 0.95, 1.15)
-DEFAULT_TARGET = (0.6, 0.15, 0.0)
-#: Where the bar panel of the overlays stands (m); it faces the camera.
-PANEL_POSITION = (0.35, -0.7, 0.3)
+DEFAULT_CAMERA = (2.3, 1.1, 1.25)
+DEFAULT_TARGET = (0.55, 0.05, 0.1)
+#: A link name that identifies a Baxter among simulated bodies.
+BAXTER_LINK = "left_upper_shoulder"
+#: Pose (with scale) of the overlays' bar panel in the camera frame (x right, y up, looking
+#: along -z): 1.5 m ahead, upper left, facing the camera, so it stays in view as the view turns.
+HUD_POSE = np.array([[0.0, 0.45, 0, -0.55], [0, 0, 0.45, 0.42], [0.45, 0, 0, -1.5], [0, 0, 0, 1]])
 #: Height of the floor grid (m) in Baxter's base frame (the pedestal's feet).
 FLOOR_Z = -0.93
 
@@ -159,6 +162,25 @@ class Viewer:
         options.setdefault("links", [n for n in baxter.links if n in drawn])
         return self.add_body(baxter.client, baxter.body, name, **options)
 
+    def add_simulation(self, sim) -> list[BodyMirror]:
+        """Mirror every named body of a simulation (``sim.client``, ``sim.bodies``).
+
+        Bodies already mirrored are skipped; a Baxter (recognised by its link
+        names) is drawn as in :meth:`add_baxter`.
+        """
+        from sandbox.robot import visuals
+        from sandbox.viz.bodies import link_names
+
+        drawn = {v.link for v in visuals()}
+        added = []
+        for name, body in sim.bodies.items():
+            if name in self.bodies:
+                continue
+            links = set(link_names(sim.client, body).values())
+            options = {"links": sorted(links & drawn)} if BAXTER_LINK in links else {}
+            added.append(self.add_body(sim.client, body, name, **options))
+        return added
+
     def remove_body(self, name: str) -> None:
         """Stop mirroring a body and remove it (hidden from then on in a recording)."""
         if name not in self.bodies:
@@ -175,19 +197,22 @@ class Viewer:
         rng : numpy.random.Generator
             Draws the samples of the uncertainty tube.
         **options
-            Passed to :class:`~sandbox.viz.overlays.PredictionOverlay`; the bar
-            panel faces the camera by default.
+            Passed to :class:`~sandbox.viz.overlays.PredictionOverlay`; by
+            default the bar panel hangs on the camera (upper left of the view).
 
         Returns
         -------
         PredictionOverlay
             Also kept as :attr:`overlay`.
         """
-        from sandbox.viz.overlays import PredictionOverlay, facing
+        from sandbox.viz.overlays import PredictionOverlay
 
         if self.overlay is not None:
             self.overlay.vis.delete()
-        options.setdefault("panel_pose", facing(PANEL_POSITION, self.camera))
+            self.overlay.panel.delete()
+        if "panel" not in options and "panel_pose" not in options:
+            options["panel"] = self.vis["/Cameras/default/rotated/<object>/overlay_panel"]
+            options["panel_pose"] = HUD_POSE
         self.overlay = PredictionOverlay(self.vis["overlays"], tasks=tasks, rng=rng, **options)
         return self.overlay
 
