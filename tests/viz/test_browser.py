@@ -1,0 +1,104 @@
+"""The saved HTML replay in a real browser (headless Chromium): the robot is drawn, and the
+recorded animation moves it. Opened from file:// with networking disabled."""
+
+from __future__ import annotations
+
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sandbox.viz import Viewer
+
+SIZE = (640, 480)
+
+
+def _screenshot(chromium: str, html: Path, tmp_path: Path, fragment: str = "") -> np.ndarray:
+    """RGB pixels (h, w, 3) of ``html`` rendered by headless Chromium with a fresh profile."""
+    from PIL import Image
+
+    out = tmp_path / f"{html.stem}{fragment.replace('#', '_').replace('=', '')}.png"
+    profile = tmp_path / f"profile-{out.stem}"
+    command = [
+        chromium, "--headless", "--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader",
+        "--disable-background-networking", "--disable-component-update", "--disable-sync",
+        "--no-first-run", "--hide-scrollbars", f"--user-data-dir={profile}",
+        f"--screenshot={out}", f"--window-size={SIZE[0]},{SIZE[1]}",
+        "--virtual-time-budget=4000", html.resolve().as_uri() + fragment,
+    ]
+    run = subprocess.run(command, capture_output=True, text=True, timeout=180)
+    assert out.is_file(), f"no screenshot (exit {run.returncode}): {run.stderr[-2000:]}"
+    return np.asarray(Image.open(out).convert("RGB"), dtype=np.int16)
+
+
+def _project(viewer: Viewer, point) -> tuple[int, int]:
+    """Pixel (column, row) of a world point in the viewer's initial camera."""
+    camera = viewer.camera - viewer.target
+    p = np.asarray(point, dtype=float) - viewer.target - camera
+    forward = -camera / np.linalg.norm(camera)
+    right = np.cross(forward, [0.0, 0.0, 1.0])
+    right /= np.linalg.norm(right)
+    up = np.cross(right, forward)
+    depth, tan = p @ forward, np.tan(np.radians(viewer.fov) / 2)
+    x = (p @ right) / (depth * tan * SIZE[0] / SIZE[1])
+    y = (p @ up) / (depth * tan)
+    return int((x + 1) / 2 * SIZE[0]), int((1 - y) / 2 * SIZE[1])
+
+
+def _changed(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.abs(a - b).sum(axis=2) > 60
+
+
+def _window(mask: np.ndarray, pixel: tuple[int, int], half: int = 40) -> np.ndarray:
+    col, row = pixel
+    return mask[max(row - half, 0): row + half, max(col - half, 0): col + half]
+
+
+@pytest.fixture(scope="module")
+def replays(baxter, tmp_path_factory):
+    """An empty scene, and Baxter moving its left arm for 1 s, both as saved replays."""
+    from sandbox.robot import q_home
+    from sandbox.robot.bullet import reset_arm
+
+    folder = tmp_path_factory.mktemp("replays")
+    empty = Viewer()
+    scene = Viewer()
+    scene.add_baxter(baxter)
+    start, end = q_home(), q_home() + np.array([0.6, -0.4, 0.0, -0.6, 0.0, 0.5, 0.0])
+    try:
+        for t in np.arange(0.0, 1.0 + 1e-9, 1 / 30):
+            reset_arm(baxter, start + (end - start) * t)
+            scene.update(t)
+    finally:
+        reset_arm(baxter, q_home())
+    return (empty, empty.save_html(folder / "empty.html"),
+            scene, scene.save_html(folder / "baxter.html"), (start, end))
+
+
+def test_screenshot_shows_the_robot(chromium, replays, tmp_path):
+    empty, empty_html, scene, scene_html, _ = replays
+    background = _screenshot(chromium, empty_html, tmp_path)
+    robot = _screenshot(chromium, scene_html, tmp_path)
+    assert background.shape == robot.shape == (SIZE[1], SIZE[0], 3)
+    changed = _changed(background, robot)
+    assert changed.mean() > 0.03, "the robot barely shows"
+    torso = _project(scene, [0.0, 0.0, 0.3])
+    assert _window(changed, torso).mean() > 0.5, "nothing drawn where Baxter's torso stands"
+    corner = changed[: SIZE[1] // 8, -SIZE[0] // 8:]  # the sky above the robot's right
+    assert corner.mean() < 0.05
+
+
+def test_replay_animation_moves_the_arm(chromium, replays, tmp_path):
+    from sandbox.robot import BaxterKinematics
+
+    _, _, scene, scene_html, (start, end) = replays
+    first = _screenshot(chromium, scene_html, tmp_path, "#t=0")
+    last = _screenshot(chromium, scene_html, tmp_path, "#t=1")
+    changed = _changed(first, last)
+    kin = BaxterKinematics()
+    for q in (start, end):  # the forearm left one place and arrived at the other
+        pixel = _project(scene, kin.fk(q, link="left_lower_forearm"))
+        assert _window(changed, pixel, 25).mean() > 0.25, f"no change at the forearm {pixel}"
+    pedestal = _project(scene, [0.0, 0.0, -0.6])
+    assert _window(changed, pedestal, 20).mean() < 0.02  # what does not move stays

@@ -1,0 +1,105 @@
+"""The viewer without a browser: frame throttling, recording, bodies, files, arguments."""
+
+from __future__ import annotations
+
+import base64
+import re
+
+import numpy as np
+import pytest
+import umsgpack
+
+from sandbox.viz import Viewer
+
+
+@pytest.fixture(scope="module")
+def viewer(baxter):
+    viewer = Viewer(fps=10)
+    viewer.add_baxter(baxter)
+    return viewer
+
+
+def test_one_update_per_frame(viewer, baxter):
+    from sandbox.robot import q_home
+    from sandbox.robot.bullet import reset_arm
+
+    sent = []
+    for t in np.arange(0.0, 0.5, 0.02):  # 50 Hz simulation, 10 fps viewer
+        reset_arm(baxter, q_home() + t + 0.01)
+        sent.append(viewer.update(t))
+    shown = [n for n in sent if n > 0]
+    assert len(shown) == 5 + 1  # frames 0..5 (0.48 s rounds to frame 5)
+    assert sent.count(0) == len(sent) - len(shown)
+    # 0.48 s fell in the frame shown at 0.46 s: forcing it sends what moved since
+    assert viewer.update(0.48, force=True) > 0
+    assert viewer.update(0.48, force=True) == 0  # nothing moved since
+    reset_arm(baxter, q_home())
+
+
+def test_recorded_frames_become_the_replay(viewer, tmp_path):
+    path = viewer.save_html(tmp_path / "sub" / "replay.html")
+    blobs = re.findall(r'^"([A-Za-z0-9+/=]+)"', path.read_text(), flags=re.M)
+    last = umsgpack.unpackb(base64.b64decode(blobs[-1]))
+    assert last["type"] == "set_animation"
+    paths = {a["path"] for a in last["animations"]}
+    assert "/meshcat/bodies/baxter/left_wrist" in paths
+    assert "/meshcat/bodies/baxter/torso" not in paths  # never moved
+    assert viewer.scene.timeline.n_frames >= 5
+    assert path.stat().st_size > 1_000_000  # meshes and the viewer inlined
+    with pytest.raises(ValueError, match=".html"):
+        viewer.save_html(tmp_path / "replay.png")
+
+
+def test_duplicate_and_unknown_bodies(viewer, baxter):
+    with pytest.raises(ValueError, match="already"):
+        viewer.add_baxter(baxter)
+    with pytest.raises(ValueError, match="expected one of"):
+        viewer.remove_body("nobody")
+
+
+def test_add_simulation_skips_known_bodies_and_filters_baxter(baxter):
+    import pybullet
+
+    class Sim:  # what envs.pybullet.Simulation offers a viewer
+        client = baxter.client
+        bodies = {"baxter": baxter.body}
+
+    box = baxter.client.createVisualShape(pybullet.GEOM_BOX, halfExtents=[0.1, 0.1, 0.1])
+    Sim.bodies["box"] = baxter.client.createMultiBody(0, -1, box, basePosition=[1, 0, 0])
+    try:
+        viewer = Viewer()
+        added = viewer.add_simulation(Sim)
+        assert [m.name for m in added] == ["baxter", "box"]
+        assert "left_hand_link" not in viewer.bodies["baxter"].links  # collision fallback
+        assert viewer.add_simulation(Sim) == []
+        viewer.remove_body("box")
+        assert "box" not in viewer.bodies
+    finally:
+        baxter.client.removeBody(Sim.bodies["box"])
+
+
+def test_overlay_hangs_its_panel_on_the_camera():
+    viewer = Viewer()
+    overlay = viewer.add_overlay(["a", "b"], rng=np.random.default_rng(0))
+    assert viewer.overlay is overlay
+    panel = [k for k in viewer.scene.nodes if "overlay_panel" in k]
+    assert panel and all(k.startswith("/Cameras/default/rotated/<object>/") for k in panel)
+    again = viewer.add_overlay(["a"], rng=np.random.default_rng(0))
+    assert viewer.overlay is again
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [({"camera": [1, 2]}, "camera"), ({"target": [0, 0, np.inf]}, "target"),
+     ({"fov": 0}, "fov"), ({"fps": -1}, "fps")],
+)
+def test_bad_arguments(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        Viewer(**kwargs)
+
+
+def test_bad_times():
+    viewer = Viewer()
+    for t in (-0.1, np.nan):
+        with pytest.raises(ValueError, match="t:"):
+            viewer.update(t)
