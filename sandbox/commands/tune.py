@@ -28,8 +28,8 @@ def run(args) -> int:
     train, test, _ = load_pair(args.data, seed=args.seed)
     print("| " + " | ".join(HEADER) + " |")
     best, rows = tune(train, test, window=args.window, workers=max(1, args.workers))
-    chosen = {k: getattr(best, k) for k in ("noise_scale", "regularizer", "likelihood",
-                                            "window_mode", "n_basis")}
+    chosen = {k: getattr(best, k) for k in ("noise_floor", "regularizer", "likelihood",
+                                            "window_mode", "n_basis", "blend_rate")}
     print(f"\nchosen: {chosen}")
     if args.out:
         Path(args.out).write_text(table(rows) + f"\nchosen: {chosen}\n")

@@ -14,9 +14,11 @@ Choices this project makes (DESIGN.md section 3):
 * :math:`\\Sigma_y` is diagonal and estimated from the data: the residuals of each
   training demo's own basis fit of the human dims, pooled over demos and tasks,
   divided by the residual degrees of freedom (sum of valid samples minus N per
-  demo and dim), scaled by ``noise_scale`` and floored at ``noise_floor``
-  (tracker resolution). It measures how far a real hand track departs from a
-  smooth N-basis curve: sensor noise, 30 Hz steps and jitter.
+  demo and dim), scaled by ``noise_scale`` and floored at ``noise_floor``.
+  The residuals measure how far a hand track departs from a smooth N-basis
+  curve (sensor noise, 30 Hz steps, jitter); the floor (2 cm by default,
+  chosen by cross-validation) stands for what a live track departs from the
+  model by, which smoothed training demos cannot show.
 * The regulariser :math:`\\Lambda` (see :mod:`sandbox.core.promp`) is relative:
   for a robot dim, ``regularizer`` x the mean variance of its weights across
   the task's demos; for the human dims the same overall size (``regularizer`` x
@@ -106,7 +108,9 @@ class IProMP:
     Parameters
     ----------
     n_basis : int
-        Basis functions per dim (N).
+        Basis functions per dim (N). Default 21, chosen by leave-one-out on the
+        recorded handovers (``python -m sandbox tune``; 15, 21 and 31 were within
+        noise of each other; the paper uses 31).
     basis_width : float or None
         Variance of each basis function in phase units (see :class:`GaussianBasis`).
     basis_margin : float
@@ -116,11 +120,17 @@ class IProMP:
         eq. 1) without a margin misfit the ends of a motion by centimetres, where
         the handover happens; normalised ones represent constants exactly.
     regularizer : float
-        Relative size of the weight-covariance regulariser (module docstring).
+        Relative size of the weight-covariance regulariser (module docstring);
+        default chosen by leave-one-out on the recorded handovers.
     noise_scale : float
         Multiplies the estimated observation noise :math:`\\Sigma_y`.
     noise_floor : float
-        Lower bound of every :math:`\\sigma_p` (m).
+        Lower bound of every :math:`\\sigma_p` (m). Default 2 cm, chosen by
+        leave-one-out on the recorded handovers: smoothed training demos leave
+        ~1 mm residuals, but a live, causally filtered track departs from what
+        the model can explain by ~2 cm (tracker jumps and occlusions, motion the
+        demos do not span); trusting observations more made every prediction
+        worse, including the oracle's.
     min_alpha_std : float
         Lower bound of :math:`\\sigma_\\alpha`.
     ridge : float
@@ -139,14 +149,14 @@ class IProMP:
 
     def __init__(
         self,
-        n_basis: int = 31,
+        n_basis: int = 21,
         *,
         basis_width: float | None = None,
         basis_margin: float = 0.0,
         normalized_basis: bool = True,
-        regularizer: float = 1e-2,
+        regularizer: float = 1e-3,
         noise_scale: float = 1.0,
-        noise_floor: float = 1e-3,
+        noise_floor: float = 0.02,
         min_alpha_std: float = 0.02,
         ridge: float = 1e-8,
         priors: Mapping[str, float] | None = None,

@@ -44,7 +44,7 @@ class EvalConfig:
     subsample : keep 1 of this many valid tracker frames (~30 Hz -> ~15 Hz).
     likelihood, window_mode, n_candidates, refine_steps, blend_rate, blend_delay :
         predictor options (:class:`~sandbox.core.DynamicPredictor`).
-    n_basis, regularizer, noise_scale : model options (:class:`~sandbox.core.IProMP`).
+    n_basis, regularizer, noise_scale, noise_floor : model options (:class:`~sandbox.core.IProMP`).
     goal_tol : distance (m) for time-to-correct.
     curve : fractions of the motion at which recognition over time is reported.
     """
@@ -58,16 +58,17 @@ class EvalConfig:
     refine_steps: int = 1
     blend_rate: float = 50.0
     blend_delay: float = 0.1
-    n_basis: int = 31
-    regularizer: float = 1e-2
+    n_basis: int = 21
+    regularizer: float = 1e-3
     noise_scale: float = 1.0
+    noise_floor: float = 0.02
     goal_tol: float = 0.05
     curve: tuple[float, ...] = field(default=CURVE)
 
     def model(self) -> IProMP:
         """An unfitted model with these options."""
         return IProMP(n_basis=self.n_basis, regularizer=self.regularizer,
-                      noise_scale=self.noise_scale)
+                      noise_scale=self.noise_scale, noise_floor=self.noise_floor)
 
     def predictor_options(self) -> dict:
         return {"subsample": self.subsample, "likelihood": self.likelihood,

@@ -20,11 +20,12 @@ from sandbox.eval.report import build_report
 
 #: Options swept, in order, with their candidate values.
 GRID: dict[str, tuple] = {
-    "noise_scale": (1.0, 4.0, 16.0, 64.0, 256.0, 1024.0),
-    "regularizer": (1e-3, 1e-2, 3e-2, 1e-1),
+    "noise_floor": (0.001, 0.005, 0.01, 0.02, 0.04),
+    "regularizer": (1e-4, 1e-3, 1e-2, 1e-1),
     "likelihood": ("joint", "marginal"),
     "window_mode": ("all", "latest"),
     "n_basis": (15, 21, 31),
+    "blend_rate": (20.0, 50.0, 100.0),
 }
 TARGETS = {"e_p": 0.05, "e_phi": 0.20, "miss": 0.30}
 
@@ -63,8 +64,9 @@ def _row(rep: dict, cfg: EvalConfig, window: float, ratio: float, name: str, val
     s = rep["static"][f"{ratio:.1f}"]["mean"]
     return {
         "swept": name, "value": value,
-        "noise_scale": cfg.noise_scale, "regularizer": cfg.regularizer,
+        "noise_floor": cfg.noise_floor, "regularizer": cfg.regularizer,
         "likelihood": cfg.likelihood, "window_mode": cfg.window_mode, "n_basis": cfg.n_basis,
+        "blend_rate": cfg.blend_rate, "jump_p95": rep["jumps"][f"{window:.1f}"].get("p95"),
         "e_p": d["e_p"], "e_q": d["e_q"], "e_phi": d["e_phi"], "recognition": d["recognition"],
         "coverage": d["coverage"], "static_e_p": s["e_p"],
         "static_recognition": s["recognition"], "oracle_e_p": rep["oracle"]["mean"]["e_p"],
@@ -72,8 +74,9 @@ def _row(rep: dict, cfg: EvalConfig, window: float, ratio: float, name: str, val
     }
 
 
-HEADER = ("swept", "noise_scale", "regularizer", "likelihood", "window_mode", "n_basis",
-          "e_p", "e_q", "e_phi", "recognition", "coverage", "static_e_p", "oracle_e_p", "J")
+HEADER = ("swept", "noise_floor", "regularizer", "likelihood", "window_mode", "n_basis",
+          "blend_rate", "e_p", "e_q", "e_phi", "recognition", "coverage", "jump_p95",
+          "static_e_p", "oracle_e_p", "J")
 
 
 def _format(row: dict) -> str:

@@ -158,6 +158,16 @@ class Scene:
         self.recording = True
         self.frame = int(round(float(t) * self.timeline.fps))
 
+    def restart(self) -> None:
+        """Forget the recording (e.g. at a new episode); objects hidden at its end are dropped."""
+        for path, props in list(self.timeline.tracks.items()):
+            keys = props.get("visible")
+            if keys and not keys[max(keys)] and path in self.nodes:
+                del self.nodes[path]
+        self.timeline = Timeline(self.timeline.fps)
+        self.recording = False
+        self.frame = 0
+
     # -- the meshcat window interface --------------------------------------------------------
 
     def send(self, command) -> None:

@@ -225,6 +225,8 @@ class Viewer:
         frame = int(round(float(t) * self.scene.timeline.fps))
         if frame == self._frame:
             return False
+        if self._frame is not None and frame < self._frame:
+            self._wall_start = None  # time went back (a new episode): pace from here
         self._frame = frame
         if self.record:
             self.scene.set_time(t)
@@ -248,6 +250,13 @@ class Viewer:
         delay = self._wall_start + t - now
         if delay > 0:
             time.sleep(delay)
+
+    def restart_recording(self) -> None:
+        """Start a new recording (e.g. at ``env.reset``): the next replay begins at the next
+        :meth:`update`; objects that ended hidden are dropped from it."""
+        self.scene.restart()
+        self._frame = None
+        self._wall_start = None
 
     # -- output --------------------------------------------------------------------------
 

@@ -161,3 +161,16 @@ def test_bad_times_and_rates():
         Scene(fps=0)
     with pytest.raises(ValueError, match="t:"):
         Scene().set_time(-1.0)
+
+
+def test_restart_forgets_the_recording_and_hidden_objects(scene):
+    scene, vis = scene
+    scene.set_time(0.0)
+    vis["kept"].set_object(objects.sphere(0.1, [1, 1, 1, 1]))
+    vis["gone"].set_object(objects.sphere(0.1, [1, 1, 1, 1]))
+    scene.set_time(0.5)
+    vis["gone"].delete()
+    vis["kept"].set_transform(_pose(1.0))
+    scene.restart()
+    assert not scene.recording and scene.timeline.lower() == []
+    assert "/meshcat/kept" in scene.nodes and "/meshcat/gone" not in scene.nodes
