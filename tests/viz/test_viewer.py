@@ -103,3 +103,32 @@ def test_bad_times():
     for t in (-0.1, np.nan):
         with pytest.raises(ValueError, match="t:"):
             viewer.update(t)
+
+
+def test_realtime_pacing_sleeps_until_the_frame_is_due(monkeypatch):
+    import sandbox.viz.viewer as module
+
+    clock = {"now": 100.0}
+    slept = []
+    monkeypatch.setattr(module.time, "monotonic", lambda: clock["now"])
+    monkeypatch.setattr(module.time, "sleep", lambda s: slept.append(s))
+    viewer = Viewer(realtime=True, fps=10)
+    viewer.update(0.0)
+    clock["now"] += 0.05  # 50 ms of work
+    viewer.update(0.3)
+    assert slept == [pytest.approx(0.25)]
+    clock["now"] += 1.0  # late: no sleep
+    viewer.update(0.4)
+    viewer.update(0.0)  # time went back (new episode): pacing restarts, no sleep
+    assert len(slept) == 1
+
+
+def test_restart_recording_begins_a_new_replay(baxter):
+    viewer = Viewer(fps=10)
+    viewer.vis["probe"].set_transform(np.eye(4))
+    viewer.update(0.0)
+    viewer.update(0.5)
+    assert viewer.scene.recording
+    viewer.restart_recording()
+    assert not viewer.scene.recording and viewer.scene.timeline.n_frames == 0
+    assert viewer.update(0.0) == 0 and viewer.scene.recording  # frame 0 is new again
