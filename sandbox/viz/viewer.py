@@ -74,7 +74,9 @@ class Viewer:
     Attributes
     ----------
     vis : meshcat.Visualizer
-        Root node (``/meshcat``); draw anything else under it.
+        Root node (``/meshcat``), in the simulation's world frame; draw anything
+        else under it. (It is shifted by ``-target`` in the browser's world,
+        around whose origin meshcat's camera orbits.)
     scene : Scene
         The in-process scene and its recording.
     server : LiveServer or None
@@ -90,7 +92,8 @@ class Viewer:
                  realtime: bool = False, open_browser: bool = False) -> None:
         camera = check_array(camera, "camera", 1, shape=(3,))
         target = check_array(target, "target", 1, shape=(3,))
-        self.server = LiveServer() if live else None
+        fov, fps = check_positive(fov, "fov"), check_positive(fps, "fps")
+        self.server = LiveServer() if live else None  # after every check: nothing to leak
         self.scene = Scene(self.server, fps)
         self.vis = meshcat.Visualizer(window=self.scene)
         self.record = bool(record)
@@ -99,7 +102,7 @@ class Viewer:
         self.bodies: dict[str, BodyMirror] = {}
         self.overlay = None
         self.camera = camera
-        self.fov = check_positive(fov, "fov")
+        self.fov = fov
         self.target = target
         self._frame: int | None = None
         self._wall_start: float | None = None
