@@ -36,8 +36,8 @@ def _save(viewer, name: str, folder: Path) -> str:
     return f"{path.stat().st_size / 1e6:.2f} MB (written in {time.perf_counter() - start:.2f} s)"
 
 
-def bench_baxter(resolution: float | None, folder: Path) -> None:
-    """Baxter alone, the left arm sweeping for 3 s."""
+def bench_baxter(resolution: float | None, folder: Path, live: bool = False) -> None:
+    """Baxter alone, the left arm sweeping for 3 s (through a live server if ``live``)."""
     from sandbox.robot import q_home
     from sandbox.robot.bullet import connect, load_baxter, reset_arm
     from sandbox.viz import Viewer
@@ -50,7 +50,7 @@ def bench_baxter(resolution: float | None, folder: Path) -> None:
     for cache in ("cold", "warm"):
         if cache == "cold":
             _load_cached.cache_clear()
-        viewer = Viewer(fps=FPS, resolution=resolution)
+        viewer = Viewer(fps=FPS, resolution=resolution, live=live and cache == "warm")
         start = time.perf_counter()
         mirror = viewer.add_baxter(baxter)
         builds.append(f"{cache} {time.perf_counter() - start:.2f} s")
@@ -61,7 +61,9 @@ def bench_baxter(resolution: float | None, folder: Path) -> None:
         start = time.perf_counter()
         viewer.update(t)
         frames.append(time.perf_counter() - start)
-    print(f"  baxter  : build {', '.join(builds)}; {mirror.n_triangles} triangles; "
+    viewer.close()
+    label = "baxter (live)" if live else "baxter"
+    print(f"  {label}: build {', '.join(builds)}; {mirror.n_triangles} triangles; "
           f"{len(frames)} frames, update {_ms(frames)}; replay {_save(viewer, 'baxter', folder)}")
     client.disconnect()
 
@@ -105,6 +107,8 @@ def bench_episode(resolution: float | None, folder: Path) -> None:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default=None, help="folder for the replays (default: temp)")
+    parser.add_argument("--live", action="store_true",
+                        help="also time Baxter through a live meshcat server (no browser)")
     parser.add_argument("--resolutions", default="0.002,none",
                         help="mesh grids in m, comma separated ('none': full meshes)")
     args = parser.parse_args(argv)
@@ -117,6 +121,8 @@ def main(argv: list[str] | None = None) -> int:
         sub = folder / f"res-{text.strip()}"
         sub.mkdir(exist_ok=True)
         bench_baxter(resolution, sub)
+        if args.live:
+            bench_baxter(resolution, sub, live=True)
         bench_episode(resolution, sub)
     return 0
 
