@@ -12,6 +12,7 @@ step, its forearm pointing from the hand toward the human's shoulder.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -83,8 +84,9 @@ class HumanMotion:
 
     def position(self, t: float) -> FloatArray:
         """True hand position (3,) m at time ``t`` (s), linearly interpolated; held at the ends."""
-        i = int(np.clip(np.searchsorted(self.times, t, side="right"), 1, self.times.size - 1))
-        w = float(np.clip((t - self.times[i - 1]) / (self.times[i] - self.times[i - 1]), 0, 1))
+        i = min(max(int(np.searchsorted(self.times, t, side="right")), 1), self.times.size - 1)
+        t0, t1 = float(self.times[i - 1]), float(self.times[i])
+        w = min(max((t - t0) / (t1 - t0), 0.0), 1.0)
         return (1.0 - w) * self.true[i - 1] + w * self.true[i]
 
     def measurement(self, t: float) -> FloatArray:
@@ -100,13 +102,18 @@ class HumanMotion:
 
 
 def forearm_orientation(hand: FloatArray) -> tuple[float, float, float, float]:
-    """Quaternion (x, y, z, w) turning the body's +x toward :data:`SHOULDER`, z kept up-ish."""
-    x = SHOULDER - hand
-    x = x / max(np.linalg.norm(x), 1e-9)
-    y = np.cross([0.0, 0.0, 1.0], x)
-    y = y / max(np.linalg.norm(y), 1e-9)
-    z = np.cross(x, y)
-    return _quaternion(np.column_stack([x, y, z]))
+    """Quaternion (x, y, z, w) turning the body's +x toward :data:`SHOULDER`, z kept up-ish.
+
+    The body's y axis is horizontal (z_world x x), its z axis completes the frame.
+    Written out in floats: it runs at every physics step.
+    """
+    dx, dy, dz = (float(v) for v in SHOULDER - hand)
+    n = max(math.sqrt(dx * dx + dy * dy + dz * dz), 1e-9)
+    x = (dx / n, dy / n, dz / n)
+    h = max(math.hypot(x[0], x[1]), 1e-9)
+    y = (-x[1] / h, x[0] / h, 0.0)
+    z = (-x[2] * y[1], x[2] * y[0], x[0] * y[1] - x[1] * y[0])
+    return _quaternion(np.array([[x[0], y[0], z[0]], [x[1], y[1], z[1]], [x[2], y[2], z[2]]]))
 
 
 def _quaternion(R: FloatArray) -> tuple[float, float, float, float]:
