@@ -57,6 +57,11 @@ def run(args) -> int:
         reports[name] = rep
         print(f"{name}: {sum(rep['n_trials'].values())} trials in {runtime:.1f} s")
     body = [START, "", _summary_table(reports), ""]
+    tune_table = out / "tune.md"
+    if tune_table.is_file():
+        body += ["<details><summary>Cross-validation of the defaults "
+                 "(<code>python -m sandbox tune</code>, dynamic at dow_t = 0.2 s)</summary>", "",
+                 tune_table.read_text(), "</details>", ""]
     for name, rep in reports.items():
         rel = (out / name).as_posix()
         body += [f"<details><summary>All tables: {rep['dataset']}</summary>", "",
