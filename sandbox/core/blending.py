@@ -76,20 +76,27 @@ def blend_unchecked(means, covs, act):
 def _pair(m1, S1, a1, m2, S2, a2):
     """Product of (m1, S1)^a1 and (m2, S2)^a2 per step; result has activation 1 (or a1/a2)."""
     both = (a1 > 0) & (a2 > 0)
+    if both.all():                                   # the usual case: no masking needed
+        mean, cov = _product(m1, S1, a1, m2, S2, a2)
+        return mean, cov, np.ones_like(a1)
     only2 = (a1 <= 0) & (a2 > 0)
     mean, cov = m1.copy(), S1.copy()
     act = np.where(a1 > 0, a1, a2)
     if only2.any():
         mean[only2], cov[only2] = m2[only2], S2[only2]
     if both.any():
-        b1, b2 = a1[both][:, None, None], a2[both][:, None, None]
-        s1, s2 = S1[both], S2[both]
-        M = b2 * s1 + b1 * s2
-        rhs = np.concatenate([s1, m1[both][..., None], m2[both][..., None]], axis=2)
-        sol = np.linalg.solve(M, rhs)
-        new_cov = s2 @ sol[..., :-2]
-        new_mean = (b1 * (s2 @ sol[..., -2:-1]) + b2 * (s1 @ sol[..., -1:]))[..., 0]
-        cov[both] = 0.5 * (new_cov + new_cov.transpose(0, 2, 1))
-        mean[both] = new_mean
+        mean[both], cov[both] = _product(m1[both], S1[both], a1[both], m2[both], S2[both],
+                                         a2[both])
         act[both] = 1.0
     return mean, cov, act
+
+
+def _product(m1, S1, a1, m2, S2, a2):
+    """Symmetric form of the product for activations > 0 (module docstring)."""
+    b1, b2 = a1[:, None, None], a2[:, None, None]
+    M = b2 * S1 + b1 * S2
+    rhs = np.concatenate([S1, m1[..., None], m2[..., None]], axis=2)
+    sol = np.linalg.solve(M, rhs)
+    new_cov = S2 @ sol[..., :-2]
+    new_mean = (b1 * (S2 @ sol[..., -2:-1]) + b2 * (S1 @ sol[..., -1:]))[..., 0]
+    return new_mean, 0.5 * (new_cov + new_cov.transpose(0, 2, 1))
