@@ -24,6 +24,7 @@ reward), ``options`` (``reset`` options), ``handover`` (the environment).
 from __future__ import annotations
 
 import gymnasium as gym
+
 from sandbox.envs.handover import BaxterHandoverEnv
 from sandbox.envs.task import RewardWeights
 

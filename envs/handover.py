@@ -9,16 +9,16 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
+
+from sandbox import urdf
+from sandbox.core.validation import check_array, check_positive
+from sandbox.data.synthetic.base import Q_HOME
 from sandbox.envs.human import HumanHand, HumanMotion
 from sandbox.envs.options import EpisodeOptions, parse_options
 from sandbox.envs.pybullet import Simulation
 from sandbox.envs.robot import BaxterArm
 from sandbox.envs.sources import FAMILIES, family_tasks, recorded_motion, synthetic_motion
 from sandbox.envs.task import HandoverTask, RewardWeights, object_for
-
-from sandbox import urdf
-from sandbox.core.validation import check_array, check_positive
-from sandbox.data.synthetic.base import Q_HOME
 
 FloatArray = NDArray[np.float64]
 #: Physics steps run before the initial state is saved (lets the parked objects settle).

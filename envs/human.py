@@ -19,10 +19,10 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-from sandbox.envs.pybullet import Simulation
 
 from sandbox import urdf
 from sandbox.core.validation import check_array, check_positive, check_times
+from sandbox.envs.pybullet import Simulation
 
 FloatArray = NDArray[np.float64]
 

@@ -8,9 +8,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from sandbox.envs.sources import family_tasks
 
 from sandbox import urdf
+from sandbox.envs.sources import family_tasks
 
 #: Keys accepted in ``options``.
 OPTION_KEYS = ("task", "object", "source", "trial", "speed", "switch_to", "switch_phase")

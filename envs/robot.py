@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from sandbox.envs.pybullet import Simulation
 
 from sandbox.data.synthetic.base import Q_HOME
+from sandbox.envs.pybullet import Simulation
 
 FloatArray = NDArray[np.float64]
 

@@ -17,12 +17,12 @@ import functools
 from pathlib import Path
 
 import numpy as np
-from sandbox.envs.human import HumanMotion
 
 from sandbox.data.synthetic.families import DIVERGING_VARIABILITY, OBJECTS, diverging_specs
 from sandbox.data.synthetic.generator import generate
 from sandbox.data.synthetic.intent import intent_switch_demo
 from sandbox.data.synthetic.tasks import TaskSpec, Variability
+from sandbox.envs.human import HumanMotion
 
 #: Synthetic families and their tasks.
 FAMILIES = ("objects", "diverging")

@@ -6,10 +6,10 @@ import doctest
 
 import numpy as np
 import pytest
-from sandbox.envs.sources import synthetic_motion
 
 import sandbox.policies
 from sandbox.data.synthetic.base import Q_HOME
+from sandbox.envs.sources import synthetic_motion
 from sandbox.policies import (
     MAX_VELOCITY,
     IProMPPolicy,

@@ -7,8 +7,8 @@ import doctest
 import gymnasium as gym
 import numpy as np
 import pytest
-import sandbox.envs  # noqa: F401  (registers the environments)
 
+import sandbox.envs  # noqa: F401  (registers the environments)
 import sandbox.scenarios
 from sandbox.data.synthetic.base import Q_HOME
 from sandbox.scenarios import EpisodeResult, run_scenario, summarize

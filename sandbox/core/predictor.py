@@ -172,7 +172,8 @@ class _Predictor:
             raise ValueError(f"t: expected a finite time, got {t!r}")
         pt = self._plan_t
         i = int(np.clip(np.searchsorted(pt, t, side="right"), 1, pt.size - 1))
-        w = float(np.clip((t - pt[i - 1]) / (pt[i] - pt[i - 1]), 0.0, 1.0))
+        span = pt[i] - pt[i - 1]
+        w = float(np.clip((t - pt[i - 1]) / span, 0.0, 1.0)) if span > 0 else 1.0
         mean = (1 - w) * self._plan_mean[i - 1] + w * self._plan_mean[i]
         cov = (1 - w) * self._plan_cov[i - 1] + w * self._plan_cov[i]
         return mean, cov
@@ -294,10 +295,11 @@ class _Predictor:
         return knots, mean, cov
 
     def _blend_in(self, t: float, robot: WeightDistribution, duration: float) -> float:
-        keep = self._plan_t <= t
+        keep = self._plan_t < t                       # knot t is added below: no duplicate
         end = max(duration, self._plan_t[-1], t + self.horizon)
-        first = np.floor(t / self.dt) * self.dt + self.dt
+        first = (np.floor(t / self.dt + 1e-9) + 1.0) * self.dt
         new_t = np.arange(first, end + self.dt, self.dt)
+        new_t = new_t[new_t > t + 1e-9]
         old_mean, old_cov = self._interp(np.concatenate([[t], new_t]))
         old_now, old_new = (old_mean[:1], old_cov[:1]), (old_mean[1:], old_cov[1:])
         mean, cov = trajectory_distribution(robot, self.model.basis,
@@ -315,7 +317,9 @@ class _Predictor:
     def _interp(self, times: FloatArray) -> tuple[FloatArray, FloatArray]:
         pt = self._plan_t
         i = np.clip(np.searchsorted(pt, times, side="right"), 1, pt.size - 1)
-        w = np.clip((times - pt[i - 1]) / (pt[i] - pt[i - 1]), 0.0, 1.0)
+        span = pt[i] - pt[i - 1]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            w = np.where(span > 0, np.clip((times - pt[i - 1]) / span, 0.0, 1.0), 1.0)
         mean = (1 - w)[:, None] * self._plan_mean[i - 1] + w[:, None] * self._plan_mean[i]
         cov = ((1 - w)[:, None, None] * self._plan_cov[i - 1]
                + w[:, None, None] * self._plan_cov[i])

@@ -171,3 +171,17 @@ def test_horizon_extends_the_plan_past_the_update(model):
         pred.observe(t, y)
     times, _, _ = pred.plan()
     assert times[-1] >= 0.5 + 2.0 - 1e-9
+
+
+def test_update_on_a_plan_knot_keeps_knots_strictly_increasing(model):
+    """Regression: an update exactly on a knot used to duplicate it (division by zero)."""
+    pred = DynamicPredictor(model, dow_t=0.1)
+    demo = synth.replay(0, 2.0)
+    with np.errstate(divide="raise", invalid="raise"):
+        for t, y in zip(np.round(demo.times, 2), demo.human):
+            pred.observe(t, y)
+            mean, _ = pred.command(t)
+            assert np.isfinite(mean).all()
+    times, means, _ = pred.plan()
+    assert np.all(np.diff(times) > 0)
+    assert np.isfinite(pred.commands(times)[0]).all()

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import gymnasium as gym
 import pytest
+
 import sandbox.envs  # noqa: F401  (registers the environments)
 
 

@@ -5,11 +5,11 @@ from __future__ import annotations
 import gymnasium as gym
 import numpy as np
 import pytest
-import sandbox.envs
 from gymnasium.utils.env_checker import check_env, data_equivalence
-from sandbox.envs import ENV_IDS, MAX_EPISODE_STEPS, BaxterHandoverEnv
 
+import sandbox.envs
 from sandbox.data.synthetic.base import Q_HOME
+from sandbox.envs import ENV_IDS, MAX_EPISODE_STEPS, BaxterHandoverEnv
 
 TERMS = ("reward_distance", "reward_success", "reward_action_rate")
 

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from sandbox.envs.human import SHOULDER, HumanMotion, _quaternion, forearm_orientation
 from scipy.spatial.transform import Rotation
+
+from sandbox.envs.human import SHOULDER, HumanMotion, _quaternion, forearm_orientation
 
 
 def motion(measured=None) -> HumanMotion:

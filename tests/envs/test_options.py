@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from sandbox.envs.options import OPTION_KEYS, EpisodeOptions, parse_options
 
 

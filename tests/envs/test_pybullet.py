@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from sandbox.envs.pybullet import Simulation
 
 from sandbox import urdf
+from sandbox.envs.pybullet import Simulation
 
 
 @pytest.fixture()

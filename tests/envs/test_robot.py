@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from sandbox.envs.robot import Q_RIGHT, RIGHT_JOINTS
 
 from sandbox.data.synthetic.base import Q_HOME
+from sandbox.envs.robot import Q_RIGHT, RIGHT_JOINTS
 from sandbox.policies import MAX_VELOCITY
 from sandbox.robot import BaxterKinematics
 

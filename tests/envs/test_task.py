@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from sandbox.envs.task import HOLD_OFFSET, TASK_OBJECTS, RewardWeights, object_for
 
 from sandbox.data.synthetic.base import Q_HOME
 from sandbox.data.synthetic.robot import Q_HANDOVER
+from sandbox.envs.task import HOLD_OFFSET, TASK_OBJECTS, RewardWeights, object_for
 from sandbox.robot import BaxterKinematics
 
 

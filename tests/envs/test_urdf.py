@@ -10,9 +10,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from sandbox.envs.pybullet import Simulation
 
 from sandbox import urdf
+from sandbox.envs.pybullet import Simulation
 
 REPO = Path(__file__).resolve().parents[2]
 #: Documented mass (kg) and bounding box (m, x y z as loaded) of every object.
