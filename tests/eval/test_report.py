@@ -44,3 +44,30 @@ def test_report_keys_and_known_means():
     text = to_markdown(rep)
     assert "Table II" in text and "dow_t = 0.2 s" in text
     assert np.isfinite(rep["jumps"]["0.2"]["max"])
+
+
+def test_tune_keeps_the_current_value_unless_clearly_better(monkeypatch):
+    from sandbox.eval import tune as tune_mod
+
+    fake = {0.01: 3.00, 0.02: 2.98, 0.04: 2.80}     # J by noise_floor
+
+    def run(train, test, cfg, workers):
+        return [], 0.0
+
+    def report(trials, cfg, name, runtime, n_boot):
+        J = fake[cfg["noise_floor"]]
+        entry = {"e_p": J * 0.05, "e_q": 0.0, "e_phi": 0.0, "recognition": 1.0, "coverage": 1.0}
+        return {"dynamic": {"0.2": {"mean": entry}}, "static": {"0.3": {"mean": entry}},
+                "oracle": {"mean": entry}, "jumps": {"0.2": {"p95": 0.0}}, "runtime_s": 0.0}
+
+    monkeypatch.setattr(tune_mod, "run_loocv", run)
+    monkeypatch.setattr(tune_mod, "build_report", report)
+    best, rows = tune_mod.tune([], [], grid={"noise_floor": (0.01, 0.02, 0.04)},
+                               log=lambda _: None)
+    assert best.noise_floor == 0.04 and len(rows) == 3
+    fake[0.04] = 2.96                                 # within tol of the default 0.02
+    best, _ = tune_mod.tune([], [], grid={"noise_floor": (0.01, 0.02, 0.04)},
+                            log=lambda _: None)
+    assert best.noise_floor == 0.02
+    assert tune_mod.objective({"e_p": 0.05, "e_phi": 0.2, "recognition": 0.7}, 0.03) == \
+        pytest.approx(1 + 1 + 1 + 2)
