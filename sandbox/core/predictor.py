@@ -306,6 +306,8 @@ class _Predictor:
                                             np.clip(new_t / duration, 0.0, 1.0))
         if self.blend:
             fall, rise = sigmoid_activations(new_t, t + self.blend_delay, self.blend_rate)
+            fall[fall < 1e-12] = 0.0   # numerically irrelevant tails: skip their products
+            rise[rise < 1e-12] = 0.0
             mean, cov = blend_unchecked(np.stack([old_new[0], mean]),
                                         np.stack([old_new[1], cov]), np.stack([fall, rise]))
         jump = float(np.linalg.norm(mean[0] - old_new[0][0])) if new_t.size else 0.0
