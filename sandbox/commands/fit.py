@@ -23,7 +23,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="dataset folder <DIR>/<task>/<trial>.csv or synthetic:NAME")
     parser.add_argument("--out", required=True, metavar="PATH", help="model file to write (.npz)")
     parser.add_argument("--tasks", default=None, help="comma-separated subset of tasks")
-    parser.add_argument("--n-basis", type=int, default=31, help="basis functions per dim (31)")
+    parser.add_argument("--n-basis", type=int, default=None,
+                        help="basis functions per dim (default: IProMP's, 21)")
     parser.add_argument("--regularizer", type=float, default=None,
                         help="relative weight-covariance regulariser (core default)")
     parser.add_argument("--n-per-task", type=int, default=None,
@@ -68,7 +69,9 @@ def run(args: argparse.Namespace) -> int:
         demos = load_dataset(args.data, seed=args.seed, tasks=_split(args.tasks),
                              n_per_task=args.n_per_task, preprocess=args.preprocess, **options)
     kwargs = {} if args.regularizer is None else {"regularizer": args.regularizer}
-    model = IProMP(n_basis=args.n_basis, **kwargs).fit(demos)
+    if args.n_basis is not None:
+        kwargs["n_basis"] = args.n_basis
+    model = IProMP(**kwargs).fit(demos)
     model.save(out)
     summary = _summary(model, args, out, len(demos), [str(w.message) for w in caught])
     print(json.dumps(summary, indent=2) if args.json else _format(summary))

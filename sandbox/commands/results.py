@@ -18,8 +18,8 @@ START, END = "<!-- results:start -->", "<!-- results:end -->"
 def add_arguments(parser) -> None:
     parser.add_argument("--data", default=None,
                         help="recorded set folder (e.g. ../shared/data/birl-handover-20180329)")
-    parser.add_argument("--figures", default="notebooks/results",
-                        help="folder for reports and figures (default notebooks/results)")
+    parser.add_argument("--figures", default="notebooks/figures",
+                        help="folder for reports and figures (default notebooks/figures)")
     parser.add_argument("--readme", default="README.md", help="README to update")
     parser.add_argument("--workers", type=int, default=2, help="processes")
     parser.add_argument("--seed", type=int, default=0, help="seed of the synthetic sets")

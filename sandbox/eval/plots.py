@@ -1,5 +1,8 @@
 """The paper's evaluation figures from ``report.json`` files (the only matplotlib user).
 
+Figures are drawn with matplotlib's object API (no pyplot), so plotting from a
+notebook leaves its inline backend alone.
+
 * ``direct.png``: e_p, e_q, e_phi against dow_t, per task and mean (paper Fig. 5).
 * ``comparative.png``: static - dynamic differences against the observed ratio,
   one curve per window (paper Fig. 6).
@@ -15,17 +18,17 @@ from pathlib import Path
 
 import numpy as np
 
+UNITS = {"e_p": "m", "e_q": "rad", "e_phi": "s"}
 MEASURES = (("e_p", "goal position error e_p (m)"), ("e_q", "joint RMS error e_q (rad)"),
             ("e_phi", "phase error e_phi (s)"))
 
 
-def _plt():
-    import matplotlib
+def _figure(ncols: int, size):
+    """A figure and its axes without pyplot, so no global backend is touched."""
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+    fig = Figure(figsize=size)
+    return fig, fig.subplots(1, ncols)
 
 
 def plot_report(report: dict, out_dir, other: dict | None = None) -> list[Path]:
@@ -44,8 +47,7 @@ def _windows(report):
 
 
 def _direct(report, path):
-    plt = _plt()
-    fig, axes = plt.subplots(1, 3, figsize=(13, 3.8))
+    fig, axes = _figure(3, (13, 3.8))
     windows = _windows(report)
     x = [float(w) for w in windows]
     for ax, (key, label) in zip(axes, MEASURES):
@@ -66,8 +68,7 @@ def _direct(report, path):
 
 
 def _comparative(report, path):
-    plt = _plt()
-    fig, axes = plt.subplots(1, 3, figsize=(13, 3.8))
+    fig, axes = _figure(3, (13, 3.8))
     ratios = list(report["static"])
     x = [float(f) for f in ratios]
     for ax, (key, label) in zip(axes, MEASURES):
@@ -76,7 +77,7 @@ def _comparative(report, path):
             ax.plot(x, y, marker="o", label=f"dow_t = {w} s")
         ax.axhline(0.0, color="k", lw=0.8)
         ax.set_xlabel("static observed ratio f")
-        ax.set_ylabel(f"static - dynamic, {label.split(' (')[0].split()[-1]}")
+        ax.set_ylabel(f"static - dynamic {key} ({UNITS[key]})")
         ax.set_title(label, fontsize=9)
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=8)
@@ -85,8 +86,7 @@ def _comparative(report, path):
 
 
 def _average(report, other, path):
-    plt = _plt()
-    fig, axes = plt.subplots(1, 3, figsize=(13, 3.8))
+    fig, axes = _figure(3, (13, 3.8))
     for rep in (report, other):
         ratios = list(rep["static"])
         x = [float(f) for f in ratios]
@@ -95,7 +95,8 @@ def _average(report, other, path):
             ax.plot(x, y, marker="o", label=rep["dataset"])
             ax.axhline(0.0, color="k", lw=0.8)
             ax.set_xlabel("static observed ratio f")
-            ax.set_title(f"static - dynamic (mean over windows): {label}", fontsize=9)
+            ax.set_ylabel(f"static - dynamic {key} ({UNITS[key]})")
+            ax.set_title(f"mean over windows: {label}", fontsize=9)
             ax.grid(alpha=0.3)
     axes[0].legend(fontsize=8)
     fig.suptitle("Average comparison of two experiments")
@@ -103,8 +104,7 @@ def _average(report, other, path):
 
 
 def _recognition(report, path):
-    plt = _plt()
-    fig, axes = plt.subplots(1, 2, figsize=(11, 3.8))
+    fig, axes = _figure(2, (11, 3.8))
     curve = report["recognition_over_time"]
     for w in _windows(report):
         axes[0].plot(curve["fractions"], curve[w], marker="o", label=f"dynamic, dow_t = {w} s")
@@ -131,7 +131,4 @@ def _recognition(report, path):
 def _save(fig, path: Path) -> Path:
     fig.tight_layout()
     fig.savefig(path, dpi=110)
-    import matplotlib.pyplot as plt
-
-    plt.close(fig)
     return path
