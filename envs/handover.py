@@ -19,10 +19,14 @@ from sandbox.envs.pybullet import Simulation
 from sandbox.envs.robot import BaxterArm
 from sandbox.envs.sources import FAMILIES, family_tasks, recorded_motion, synthetic_motion
 from sandbox.envs.task import HandoverTask, RewardWeights, object_for
+from sandbox.envs.teleop import TeleopMotion
 
 FloatArray = NDArray[np.float64]
 #: Physics steps run before the initial state is saved (lets the parked objects settle).
 SETTLE_STEPS = 100
+#: Arguments of :class:`sandbox.viz.Viewer` accepted in ``viewer_options`` ("human" mode).
+VIEWER_KEYS = ("fps", "record", "resolution", "camera", "target", "fov", "floor_z", "realtime",
+               "open_browser")
 
 
 class BaxterHandoverEnv(gym.Env):
@@ -35,7 +39,8 @@ class BaxterHandoverEnv(gym.Env):
     front of it reaches toward it with an object in the left hand. The hand is
     kinematic: it replays a synthetic reach (seeded, family ``"objects"``: box,
     glasses case, tape; or ``"diverging"``: left, right, up, down, straight,
-    sharing their start) or a recorded trial. The robot sees the hand through
+    sharing their start), a recorded trial or a scripted motion, or it follows a
+    teleoperator (:class:`~sandbox.envs.teleop.TeleopMotion`). The robot sees the hand through
     the skeleton tracker (30 Hz frames, jumps). When the gripper closes within
     ``grasp_radius`` of the object's grasp point, the object is fixed to the
     gripper and the hand lets go: the handover succeeds. The policy (e.g.
@@ -89,11 +94,14 @@ class BaxterHandoverEnv(gym.Env):
     (or ``gym.make("sandbox.envs:sandbox/BaxterHandover-v0")``) with
 
     * ``family`` ("objects" or "diverging"): synthetic tasks (set by the id);
-    * ``render_mode`` (None or "rgb_array");
+    * ``render_mode`` (None, "human" or "rgb_array"): "human" shows the
+      episode live in the browser (meshcat, see Rendering);
     * ``control_hz`` (50): steps per second; ``substeps`` (5): physics steps
       per control step (physics at 250 Hz);
     * ``grasp_radius`` (0.05 m); ``reward_weights`` (RewardWeights);
-    * ``default_object`` ("box"): object of tasks without one (diverging tasks).
+    * ``default_object`` ("box"): object of tasks without one (diverging tasks);
+    * ``viewer_options`` (dict): arguments of :class:`sandbox.viz.Viewer` in
+      "human" mode (default ``{"realtime": True}``; e.g. ``open_browser=True``).
 
     ``reset(seed=..., options=...)`` options (all optional, validated):
     ``task``; ``object`` (box, glasses_case, tape, measuring_tape, screwdriver;
@@ -101,11 +109,26 @@ class BaxterHandoverEnv(gym.Env):
     measurement_tape -> measuring_tape, screw_driver -> screwdriver);
     ``source`` ("synthetic" or a folder ``<root>/<task>/<trial>.csv``);
     ``trial`` (recorded: index or file name); ``speed`` (human speed factor,
-    0.25-4); ``switch_to``, ``switch_phase`` (synthetic intent switch).
+    0.25-4); ``switch_to``, ``switch_phase`` (synthetic intent switch);
+    ``source="teleop"``: the hand follows velocity commands given to
+    ``env.unwrapped.motion`` (a :class:`~sandbox.envs.teleop.TeleopMotion`);
+    ``motion``: a scripted :class:`~sandbox.envs.human.HumanMotion` (e.g. from
+    :func:`~sandbox.envs.sources.waypoint_motion`).
+
+    Rendering
+    ---------
+    ``"rgb_array"``: :meth:`render` returns a PyBullet camera image.
+    ``"human"``: the first ``reset`` starts a meshcat server on localhost (no
+    display needed) and prints its URL; every ``reset`` and ``step`` then shows
+    the scene in the browser, paced to real time, and records it
+    (``env.unwrapped.viewer.save_html(path)`` writes the episode's replay; a
+    policy's predictions can be drawn with ``viewer.add_overlay``). The server
+    stops with :meth:`close`, and at the latest when this process ends.
 
     Version history
     ---------------
-    * v0: initial version.
+    * v0: initial version; ``render_mode="human"``, the ``teleop`` source and
+      the ``motion`` option added without changing any other behaviour.
 
     Attributes
     ----------
@@ -114,20 +137,32 @@ class BaxterHandoverEnv(gym.Env):
     robot : BaxterArm
     human : HumanHand
     task : HandoverTask
-    motion : HumanMotion or None
+    motion : HumanMotion or TeleopMotion or None
         The current episode's hand motion.
+    viewer : sandbox.viz.Viewer or None
+        The live viewer of ``render_mode="human"`` (made at the first reset).
     """
 
-    metadata = {"render_modes": ["rgb_array"], "render_fps": 50}
+    metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 50}
 
     def __init__(self, family: str = "objects", render_mode: str | None = None, *,
                  control_hz: float = 50.0, substeps: int = 5, grasp_radius: float = 0.05,
                  reward_weights: RewardWeights | None = None,
-                 default_object: str = "box") -> None:
+                 default_object: str = "box", viewer_options: Mapping | None = None) -> None:
         if family not in FAMILIES:
             raise ValueError(f"family: expected one of {list(FAMILIES)}, got {family!r}")
         if render_mode not in (None, *self.metadata["render_modes"]):
-            raise ValueError(f"render_mode: expected None or 'rgb_array', got {render_mode!r}")
+            raise ValueError(f"render_mode: expected None, 'human' or 'rgb_array', "
+                             f"got {render_mode!r}")
+        if viewer_options is not None and not isinstance(viewer_options, Mapping):
+            raise ValueError(f"viewer_options: expected a dict of Viewer arguments, "
+                             f"got {type(viewer_options).__name__}")
+        unknown = sorted(set(viewer_options or {}) - set(VIEWER_KEYS))
+        if unknown:
+            raise ValueError(f"viewer_options: expected keys among {list(VIEWER_KEYS)}, "
+                             f"got {unknown}")
+        self.viewer_options = {"realtime": True, **(viewer_options or {})}
+        self.viewer = None
         if isinstance(substeps, bool) or int(substeps) != substeps or substeps < 1:
             raise ValueError(f"substeps: expected an integer >= 1, got {substeps!r}")
         if default_object not in urdf.OBJECTS:
@@ -187,6 +222,8 @@ class BaxterHandoverEnv(gym.Env):
         self._handover_time: float | None = None
         info = {"task": motion.task, "object": object_name, "source": motion.source,
                 "speed": episode.speed, "duration": motion.duration}
+        if self.render_mode == "human":
+            self._show(new_episode=True)
         return self._observation(), info
 
     def step(self, action) -> tuple[dict, float, bool, bool, dict]:
@@ -211,21 +248,51 @@ class BaxterHandoverEnv(gym.Env):
         info = {**terms, "distance": distance, "is_success": self.task.handed_over,
                 "handover_time": self._handover_time, "time": self._t,
                 "task": self.motion.task, "object": self.task.object}
+        if self.render_mode == "human":
+            self._show()
         return self._observation(), reward, handed, False, info
 
     def render(self) -> NDArray[np.uint8] | None:
-        """RGB image (360, 480, 3) of the scene in ``"rgb_array"`` mode; None otherwise."""
+        """RGB image (360, 480, 3) of the scene in ``"rgb_array"`` mode; None otherwise.
+
+        In ``"human"`` mode the scene is shown in the browser (also done by every
+        ``reset`` and ``step``) and None is returned.
+        """
+        if self.render_mode == "human":
+            if self.motion is None:
+                raise RuntimeError("render: call reset() before render()")
+            self._show()
+            return None
         if self.render_mode != "rgb_array":
             return None
         return self.sim.render()
 
     def close(self) -> None:
-        """Disconnect the simulator (safe to call twice)."""
+        """Stop the live viewer's server, disconnect the simulator (safe to call twice)."""
+        if self.viewer is not None:
+            self.viewer.close()
         self.sim.close()
 
+    def _show(self, new_episode: bool = False) -> None:
+        """Send the scene at the current time to the live viewer (made on first use)."""
+        if self.viewer is None:
+            from sandbox.viz import Viewer
+
+            self.viewer = Viewer(live=True, **self.viewer_options)
+            self.viewer.add_simulation(self.sim)
+        elif new_episode:
+            self.viewer.restart_recording()
+            if self.viewer.overlay is not None:
+                self.viewer.overlay.reset()
+        self.viewer.update(self._t, force=new_episode)
+
     # ------------------------------------------------------------- internals
-    def _motion(self, episode: EpisodeOptions) -> HumanMotion:
-        if episode.source == "synthetic":
+    def _motion(self, episode: EpisodeOptions) -> HumanMotion | TeleopMotion:
+        if episode.motion is not None:
+            motion = episode.motion
+        elif episode.source == "teleop":
+            motion = TeleopMotion(self.np_random, task=episode.task or "teleop")
+        elif episode.source == "synthetic":
             task = episode.task or self._random_task()
             motion = synthetic_motion(self.family, task, self.np_random,
                                       switch_to=episode.switch_to,

@@ -10,10 +10,14 @@ from typing import Any
 import numpy as np
 
 from sandbox import urdf
+from sandbox.envs.human import HumanMotion
 from sandbox.envs.sources import family_tasks
 
 #: Keys accepted in ``options``.
-OPTION_KEYS = ("task", "object", "source", "trial", "speed", "switch_to", "switch_phase")
+OPTION_KEYS = ("task", "object", "source", "trial", "speed", "switch_to", "switch_phase",
+               "motion")
+#: Sources that are not a folder: the generator, the keyboard teleop.
+NAMED_SOURCES = ("synthetic", "teleop")
 #: Accepted range of the human speed factor.
 SPEED_RANGE = (0.25, 4.0)
 
@@ -29,7 +33,8 @@ class EpisodeOptions:
     object : str or None
         Object (None: the task's, see :data:`sandbox.envs.task.TASK_OBJECTS`).
     source : str
-        ``"synthetic"`` or the folder of a recorded set.
+        ``"synthetic"``, ``"teleop"`` (a :class:`~sandbox.envs.teleop.TeleopMotion`
+        driven by a controller) or the folder of a recorded set.
     trial : int or str or None
         Recorded trial: index among the task's (or all) trials, or file name.
     speed : float
@@ -38,6 +43,9 @@ class EpisodeOptions:
         Synthetic intent switch: the task the human changes to.
     switch_phase : float
         When the switch happens (fraction of the motion).
+    motion : HumanMotion or None
+        A scripted hand motion to play instead of drawing one (e.g.
+        :func:`~sandbox.envs.sources.waypoint_motion`).
     """
 
     task: str | None = None
@@ -47,6 +55,7 @@ class EpisodeOptions:
     speed: float = 1.0
     switch_to: str | None = None
     switch_phase: float = 0.5
+    motion: HumanMotion | None = None
 
 
 def parse_options(options: Mapping[str, Any] | None, family: str) -> EpisodeOptions:
@@ -63,8 +72,9 @@ def parse_options(options: Mapping[str, Any] | None, family: str) -> EpisodeOpti
     ------
     ValueError
         On an unknown key, a task or object that does not exist, a source that is
-        neither ``"synthetic"`` nor a folder, a bad speed, or an option that does not
-        apply to the source (``trial`` for synthetic, ``switch_to`` for recorded).
+        neither ``"synthetic"``, ``"teleop"`` nor a folder, a bad speed, or an option
+        that does not apply to the source (``trial`` for synthetic, ``switch_to`` for
+        recorded or teleop; ``motion`` with ``source``, ``task``, ``trial`` or ``switch_to``).
     """
     if options is None:
         return EpisodeOptions()
@@ -73,11 +83,12 @@ def parse_options(options: Mapping[str, Any] | None, family: str) -> EpisodeOpti
     unknown = sorted(set(options) - set(OPTION_KEYS))
     if unknown:
         raise ValueError(f"options: expected keys among {list(OPTION_KEYS)}, got {unknown}")
+    motion = _motion(options)
     source = _source(options.get("source", "synthetic"))
     task = options.get("task")
     if task is not None and not isinstance(task, str):
         raise ValueError(f"task: expected a task name, got {task!r}")
-    if source == "synthetic":
+    if source == "synthetic" and motion is None:
         tasks = family_tasks(family)
         for key in ("task", "switch_to"):
             if options.get(key) is not None and options[key] not in tasks:
@@ -88,21 +99,37 @@ def parse_options(options: Mapping[str, Any] | None, family: str) -> EpisodeOpti
                              "from the seed")
     elif options.get("switch_to") is not None:
         raise ValueError("switch_to: only for the synthetic source")
+    elif source == "teleop" and options.get("trial") is not None:
+        raise ValueError("trial: only for a recorded source, not for 'teleop'")
     obj = options.get("object")
     if obj is not None and obj not in urdf.OBJECTS:
         raise ValueError(f"object: expected one of {list(urdf.OBJECTS)}, got {obj!r}")
     return EpisodeOptions(task=task, object=obj, source=source, trial=options.get("trial"),
                           speed=_speed(options.get("speed", 1.0)),
                           switch_to=options.get("switch_to"),
-                          switch_phase=_phase(options.get("switch_phase", 0.5)))
+                          switch_phase=_phase(options.get("switch_phase", 0.5)), motion=motion)
+
+
+def _motion(options: Mapping[str, Any]) -> HumanMotion | None:
+    motion = options.get("motion")
+    if motion is None:
+        return None
+    if not isinstance(motion, HumanMotion):
+        raise ValueError(f"motion: expected a sandbox.envs.human.HumanMotion, "
+                         f"got {type(motion).__name__}")
+    clash = [k for k in ("source", "task", "trial", "switch_to") if options.get(k) is not None]
+    if clash:
+        raise ValueError(f"motion: a scripted motion replaces {clash}; expected none of them, "
+                         f"got {clash}")
+    return motion
 
 
 def _source(value: Any) -> str:
-    if value == "synthetic":
+    if value in NAMED_SOURCES:
         return value
     if isinstance(value, (str, Path)) and Path(value).is_dir():
         return str(value)
-    raise ValueError(f"source: expected 'synthetic' or the folder of a recorded set "
+    raise ValueError(f"source: expected 'synthetic', 'teleop' or the folder of a recorded set "
                      f"(<root>/<task>/<trial>.csv), got {value!r}")
 
 

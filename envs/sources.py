@@ -133,3 +133,65 @@ def _fill(t: np.ndarray, y: np.ndarray) -> np.ndarray:
     if not ok.any():
         raise ValueError("recorded trial: the smoothed hand track has no valid sample")
     return np.interp(t, t[ok], y[ok])
+
+
+def minimum_jerk(times: np.ndarray, waypoint_times: np.ndarray,
+                 waypoints: np.ndarray) -> np.ndarray:
+    """Positions (T, 3) m at ``times`` (s) of a path through ``waypoints`` (W, 3) m.
+
+    Between consecutive waypoints the hand follows a minimum-jerk segment
+    (zero velocity and acceleration at each waypoint,
+    s(u) = 10 u^3 - 15 u^4 + 6 u^5); it holds the first waypoint before
+    ``waypoint_times[0]`` and the last one after ``waypoint_times[-1]``.
+    """
+    i = np.clip(np.searchsorted(waypoint_times, times, side="right"), 1, len(waypoint_times) - 1)
+    t0, t1 = waypoint_times[i - 1], waypoint_times[i]
+    u = np.clip((times - t0) / (t1 - t0), 0.0, 1.0)[:, None]
+    s = u**3 * (10.0 - 15.0 * u + 6.0 * u**2)
+    return waypoints[i - 1] + s * (waypoints[i] - waypoints[i - 1])
+
+
+def waypoint_motion(waypoint_times, waypoints, rng: np.random.Generator, *,
+                    task: str = "scripted", tracker=None, rate_hz: float = 100.0,
+                    hold_s: float = 0.5) -> HumanMotion:
+    """A scripted hand motion through timed waypoints, observed through the tracker model.
+
+    Parameters
+    ----------
+    waypoint_times : array_like, shape (W,)
+        When the hand is at each waypoint (s), strictly increasing, the first >= 0
+        (the hand waits at the first waypoint until then).
+    waypoints : array_like, shape (W, 3)
+        Hand positions (m, Baxter's base frame); W >= 2.
+    rng : numpy.random.Generator
+        Draws the tracker's noise and frame timing.
+    task : str
+        The episode's task label.
+    tracker : TrackerModel, optional
+        Tracker artefacts (default: noise and 30 Hz frames, no jumps).
+    rate_hz : float
+        Sample rate of the motion (Hz).
+    hold_s : float
+        The motion goes on this long (s) after the last waypoint (the hand holds still).
+
+    Returns
+    -------
+    HumanMotion
+        ``meta["waypoints"]`` and ``meta["waypoint_times"]`` hold the script.
+    """
+    from sandbox.core.validation import check_array, check_positive, check_times
+    from sandbox.data.synthetic.tracker import TrackerModel, apply_tracker
+
+    waypoint_times = check_times(waypoint_times, "waypoint_times")
+    if waypoint_times[0] < 0:
+        raise ValueError(f"waypoint_times: expected times >= 0 (s), got {waypoint_times[0]:g}")
+    waypoints = check_array(waypoints, "waypoints", 2, shape=(waypoint_times.size, 3))
+    rate_hz = check_positive(rate_hz, "rate_hz")
+    end = waypoint_times[-1] + check_positive(hold_s, "hold_s", allow_zero=True)
+    times = np.arange(0.0, end + 0.5 / rate_hz, 1.0 / rate_hz)
+    true = minimum_jerk(times, waypoint_times, waypoints)
+    model = tracker if tracker is not None else TrackerModel(glitch_rate=0.0)
+    measured = apply_tracker(times, true, model, rng)
+    return HumanMotion(times=times, true=true, measured=measured, task=task,
+                       source=f"waypoints[{waypoint_times.size}]",
+                       meta={"waypoints": waypoints, "waypoint_times": waypoint_times})

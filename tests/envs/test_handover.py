@@ -158,7 +158,9 @@ def test_step_before_reset_is_refused():
 
 @pytest.mark.parametrize("kwargs, match", [
     ({"family": "kitchen"}, "family"),
-    ({"render_mode": "human"}, "render_mode"),
+    ({"render_mode": "ascii"}, "render_mode"),
+    ({"viewer_options": {"live": False}}, "viewer_options"),
+    ({"viewer_options": ["fps"]}, "viewer_options"),
     ({"substeps": 0}, "substeps"),
     ({"substeps": 2.5}, "substeps"),
     ({"control_hz": -50.0}, "control_hz"),
@@ -176,7 +178,7 @@ def test_render_rgb_array(objects_env, diverging_env):
     assert image.std() > 10  # not a blank frame
     diverging_env.reset(seed=0)
     assert diverging_env.render() is None
-    assert objects_env.metadata["render_modes"] == ["rgb_array"]
+    assert objects_env.metadata["render_modes"] == ["human", "rgb_array"]
 
 
 def test_viewer_hook_names_the_bodies(objects_env):

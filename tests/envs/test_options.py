@@ -27,7 +27,7 @@ def test_valid_options_are_kept(tmp_path):
     ({"task": "left"}, "task: expected one of .*objects"),
     ({"task": 3}, "task: expected a task name"),
     ({"object": "banana"}, "object: expected one of"),
-    ({"source": "/no/such/folder"}, "source: expected 'synthetic' or the folder"),
+    ({"source": "/no/such/folder"}, "source: expected 'synthetic', 'teleop' or the folder"),
     ({"source": 42}, "source"),
     ({"speed": 0.0}, "speed: expected a number in"),
     ({"speed": 10}, "speed"),
