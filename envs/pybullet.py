@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 from pybullet_utils.bullet_client import BulletClient
 
 from sandbox.core.validation import check_positive
-from sandbox.robot.bullet import BulletBaxter, load_baxter
+from sandbox.robot.bullet import BulletBaxter, _quiet, load_baxter
 
 FloatArray = NDArray[np.float64]
 IDENTITY = (0.0, 0.0, 0.0, 1.0)
@@ -46,7 +46,8 @@ class Simulation:
 
     def __init__(self, physics_hz: float = 250.0, gravity: float = -9.81) -> None:
         self.time_step = 1.0 / check_positive(physics_hz, "physics_hz")
-        self.client = BulletClient(connection_mode=pybullet.DIRECT)
+        with _quiet():  # PyBullet prints 'argv[0]=' on connecting
+            self.client = BulletClient(connection_mode=pybullet.DIRECT)
         self.client.setTimeStep(self.time_step)
         self.client.setGravity(0.0, 0.0, float(gravity))
         self.client.setPhysicsEngineParameter(deterministicOverlappingPairs=1)

@@ -1,9 +1,12 @@
 """``python -m sandbox demo``: the robot anticipates a human who changes their mind.
 
-Fits Dynamic Interaction ProMPs on synthetic diverging handovers, then streams a
-new motion that starts like one task and switches to another, and prints what
-the dynamic predictor believed over time next to the static baseline, and how
-close each put the robot's hand to where the handover really happens.
+Fits Dynamic Interaction ProMPs on synthetic diverging handovers, then runs an
+episode of the Baxter handover environment in which the human starts toward
+one task and switches to another (an intent switch). The dynamic policy
+re-predicts every ``dow_t`` seconds; the static baseline, on the same motion,
+predicts once after a fraction of it. Prints what each believed over time and
+the outcome of both episodes, and writes the dynamic episode's replay (meshcat
+scene with the predictions, a self-contained HTML file: no network needed).
 """
 
 from __future__ import annotations
@@ -13,7 +16,11 @@ HELP = "fit on synthetic diverging handovers and watch the robot anticipate an i
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("--seed", type=int, default=0, help="seed of the synthetic data")
+    parser.add_argument("--out", default="demo.html",
+                        help="replay of the dynamic episode (HTML; default: demo.html here)")
+    parser.add_argument("--no-html", action="store_true", help="do not write the replay")
+    parser.add_argument("--seed", type=int, default=0,
+                        help="seed of the training demos and of the episode")
     parser.add_argument("--from-task", default="up", help="task the human starts with")
     parser.add_argument("--to-task", default="right", help="task the human switches to")
     parser.add_argument("--switch", type=float, default=0.55,
@@ -24,44 +31,124 @@ def add_arguments(parser) -> None:
     parser.add_argument("--demos", type=int, default=20, help="training demos per task")
 
 
+def _check(args) -> None:
+    from pathlib import Path
+
+    from sandbox.core.validation import check_positive
+
+    if not args.no_html and Path(args.out).suffix.lower() not in (".html", ".htm"):
+        raise ValueError(f"--out: expected a file name ending in .html, got {args.out!r}")
+    if args.from_task == args.to_task:
+        raise ValueError(f"--to-task: expected a task other than --from-task, got "
+                         f"{args.to_task!r} twice")
+    if not 0.0 < args.switch < 1.0:
+        raise ValueError(f"--switch: expected a fraction in (0, 1), got {args.switch}")
+    if args.demos < 2:
+        raise ValueError(f"--demos: expected at least 2 demos per task, got {args.demos}")
+    check_positive(args.dow, "--dow")
+    if not 0.0 < args.ratio <= 1.0:
+        raise ValueError(f"--ratio: expected a fraction in (0, 1], got {args.ratio}")
+
+
+def _belief(record, t: float) -> str:
+    """'task (p=..)' the policy held at time ``t`` (the prior before its first update)."""
+    done = [b for b in record.updates if b.time <= t + 1e-9]
+    if not done:
+        return "prior mixture"
+    last = done[-1]
+    return f"{last.task} (p={last.posterior[last.task]:.2f})"
+
+
+def _table(dynamic, static, switch_time: float) -> None:
+    print(f"{'t (s)':>6}  {'human does':>10}  {'dynamic believes':>18}  {'T est (s)':>9}  "
+          f"{'jump (rad)':>10}  {'static believes':>18}")
+    truth = dict(dynamic.truth)
+    first_after = next((i for i, b in enumerate(dynamic.updates) if b.time >= switch_time), None)
+    for i, b in enumerate(dynamic.updates):
+        does = truth.get(min(truth, key=lambda t: abs(t - b.time))) if truth else "?"
+        mark = "  <- the human switched" if i == first_after else ""
+        believed = f"{b.task} (p={b.posterior[b.task]:.2f})"
+        print(f"{b.time:6.2f}  {does:>10}  {believed:>18}  {b.duration:9.2f}  {b.jump:10.4f}  "
+              f"{_belief(static, b.time):>18}{mark}")
+
+
+def _outcome(name: str, record, true_task: str) -> str:
+    if record.success:
+        end = f"handover at {record.handover_time:.2f} s"
+    else:
+        end = f"no handover within {record.end_time:.1f} s"
+    first = next((t for t, k in record.recognised if k == true_task), None)
+    settled = _settled(record, true_task)
+    recog = (f"recognised '{true_task}' from {settled:.2f} s" if settled is not None else
+             f"never settled on '{true_task}'" if first is None else
+             f"'{true_task}' only briefly (first at {first:.2f} s)")
+    jumps = max((b.jump for b in record.updates), default=0.0)
+    return (f"{name:>8}: {end}; gripper {100 * record.final_distance:4.1f} cm from the object "
+            f"at the end; final task '{record.recognised[-1][1]}', {recog}; "
+            f"{len(record.updates)} update(s), largest command jump {jumps:.3f} rad")
+
+
+def _settled(record, task: str) -> float | None:
+    """Earliest time from which the recognised task stays ``task`` to the end."""
+    out = None
+    for t, k in record.recognised:
+        if k != task:
+            out = None
+        elif out is None:
+            out = t
+    return out
+
+
 def run(args) -> int:
+    _check(args)
+    import time
+    from pathlib import Path
+
+    import gymnasium as gym
     import numpy as np
 
-    from sandbox.core import DynamicPredictor, IProMP, StaticPredictor
-    from sandbox.data.synthetic import make_dataset
-    from sandbox.data.synthetic.intent import intent_switch_demo
-    from sandbox.robot import BaxterKinematics
+    import sandbox.envs  # noqa: F401  (registers the environments)
+    from sandbox.policies import IProMPPolicy, StaticPolicy, fit_family_model
+    from sandbox.recording import record_episode
 
-    rng = np.random.default_rng(args.seed)
-    demos = make_dataset("diverging", args.demos, rng)
-    model = IProMP().fit(demos)
+    start = time.perf_counter()
+    model = fit_family_model("diverging", n_per_task=args.demos, seed=args.seed)
     for task in (args.from_task, args.to_task):
         model.task_index(task)
-    test, truth = intent_switch_demo(args.from_task, args.to_task, args.switch, rng)
-    times = test.times - test.times[0]
-    print(f"fitted {len(model.tasks)} tasks {list(model.tasks)} on {len(demos)} synthetic demos")
-    print(f"the human starts toward '{args.from_task}' and switches to '{args.to_task}' at "
-          f"t = {truth.switch_time:.2f} s of {test.duration:.2f} s\n")
-    dynamic = DynamicPredictor(model, dow_t=args.dow)
-    static = StaticPredictor(model, ratio=args.ratio)
-    print(f"{'t (s)':>6}  {'truth':>8}  {'dynamic believes':>22}  {'T est (s)':>9}  "
-          f"{'jump (rad)':>10}")
-    for t, y in zip(times, test.human):
-        static.observe(t, y)
-        upd = dynamic.observe(t, y)
-        if upd is not None and (len(dynamic.updates) % max(1, round(0.2 / args.dow)) == 0):
-            p = upd.task_posterior[model.task_index(upd.task)]
-            print(f"{t:6.2f}  {truth.task_at(t):>8}  {upd.task:>12} (p={p:5.3f})  "
-                  f"{upd.duration:9.2f}  {upd.jump:10.4f}")
-    kin = BaxterKinematics()
-    goal = kin.fk(test.robot[-1])
-    end = times[-1]
+    print(f"fitted {len(model.tasks)} tasks {list(model.tasks)} on {args.demos * len(model.tasks)}"
+          f" synthetic demos ({time.perf_counter() - start:.1f} s)")
+    env = gym.make("sandbox/BaxterHandoverDiverging-v0")
+    options = {"task": args.from_task, "switch_to": args.to_task, "switch_phase": args.switch}
+    viewer = overlay = None
+    try:
+        if not args.no_html:
+            from sandbox.viz import Viewer
+
+            viewer = Viewer(fps=30.0)
+            viewer.add_simulation(env.unwrapped.sim)
+            overlay = viewer.add_overlay(model.tasks, rng=np.random.default_rng(args.seed))
+        dynamic = record_episode(env, IProMPPolicy(model, dow_t=args.dow), seed=args.seed,
+                                 options=options, viewer=viewer, overlay=overlay,
+                                 policy_name=f"dynamic (dow_t={args.dow:g} s)")
+        truth = env.unwrapped.motion.meta["intent"]
+        duration = env.unwrapped.motion.duration
+        static = record_episode(env, StaticPolicy(model, ratio=args.ratio), seed=args.seed,
+                                options=options, policy_name=f"static (ratio={args.ratio:g})")
+    finally:
+        env.close()
+    print(f"episode (seed {args.seed}): the human starts toward '{args.from_task}' and "
+          f"switches to '{args.to_task}' at t = {truth.switch_time:.2f} s of a "
+          f"{duration:.2f} s reach; the robot sees the hand through the tracker\n")
+    _table(dynamic, static, truth.switch_time)
     print()
-    for name, pred in (("dynamic", dynamic), ("static", static)):
-        q_end, _ = pred.command(end)
-        err = float(np.linalg.norm(kin.fk(q_end) - goal))
-        q_hat = np.array([pred.command(t)[0] for t in times])
-        rms = float(np.sqrt(np.mean((q_hat - test.robot) ** 2)))
-        print(f"{name:>8}: final task '{pred.task}', hand {100 * err:5.1f} cm from the "
-              f"handover pose, joint RMS error {rms:.3f} rad, {len(pred.updates)} update(s)")
+    print(f"dynamic: re-predicts every {args.dow:g} s; static: predicts once after "
+          f"{100 * args.ratio:.0f} % of the expected duration")
+    for name, record in (("dynamic", dynamic), ("static", static)):
+        print(_outcome(name, record, args.to_task))
+    if viewer is not None:
+        path = viewer.save_html(Path(args.out))
+        size = path.stat().st_size / 1e6
+        print(f"\nreplay of the dynamic episode: {path} ({size:.1f} MB; open it in a browser, "
+              "drag to orbit, the animation controls are in the menu)")
+    print(f"wall time {time.perf_counter() - start:.1f} s")
     return 0

@@ -1,0 +1,97 @@
+"""Recorded episodes: beliefs, outcome and summary of an environment episode with a policy."""
+
+from __future__ import annotations
+
+import json
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import sandbox.envs  # noqa: F401  (registers the environments)
+from sandbox.policies import IProMPPolicy, StaticPolicy, fit_family_model
+from sandbox.recording import Belief, EpisodeRecord, record_episode
+
+SWITCH = {"task": "up", "switch_to": "right", "switch_phase": 0.55}
+
+
+@pytest.fixture(scope="module")
+def env():
+    env = gym.make("sandbox/BaxterHandoverDiverging-v0")
+    yield env
+    env.close()
+
+
+@pytest.fixture(scope="module")
+def model():
+    return fit_family_model("diverging")
+
+
+@pytest.fixture(scope="module")
+def switch_record(env, model):
+    policy = IProMPPolicy(model, dow_t=0.2)
+    seen = []
+    record = record_episode(env, policy, seed=0, options=SWITCH, policy_name="dynamic",
+                            on_update=seen.append)
+    return record, policy, seen
+
+
+def test_beliefs_are_the_predictor_updates(switch_record, model):
+    record, policy, seen = switch_record
+    assert len(record.updates) == len(policy.predictor.updates) >= 5
+    assert seen == record.updates  # reported as they happened
+    for belief, update in zip(record.updates, policy.predictor.updates):
+        assert belief.time == update.time and belief.task == update.task
+        assert list(belief.posterior) == list(model.tasks)
+        assert sum(belief.posterior.values()) == pytest.approx(1.0)
+        assert belief.jump == update.jump
+
+
+def test_outcome_matches_the_environment(switch_record):
+    record, _, _ = switch_record
+    assert record.task == "right" and record.object == "box"
+    assert record.success and record.handover_time == pytest.approx(record.end_time)
+    assert record.final_distance >= record.min_distance >= 0.0
+    assert record.steps == len(record.recognised) == len(record.truth)
+    assert record.truth[0][1] == "up" and record.truth[-1][1] == "right"  # the intent switch
+    assert record.recognised_at(record.end_time) == record.recognised[-1][1]
+    assert record.recognised_at(-1.0) == ""
+
+
+def test_summary_is_json_ready(switch_record):
+    record, _, _ = switch_record
+    summary = json.loads(json.dumps(record.summary()))
+    assert summary["success"] is True and summary["policy"] == "dynamic"
+    assert summary["n_updates"] == len(summary["updates"]) == len(record.updates)
+    assert summary["final_task"] == record.recognised[-1][1]
+    times = [r["time"] for r in summary["recognised"]]
+    assert times == sorted(times)
+    tasks = [r["task"] for r in summary["recognised"]]
+    assert all(a != b for a, b in zip(tasks, tasks[1:]))  # only the changes
+
+
+def test_static_policy_and_step_limit(env, model):
+    record = record_episode(env, StaticPolicy(model, ratio=0.3), seed=1, max_steps=40)
+    assert record.steps == 40 and record.end_time == pytest.approx(0.8)
+    assert len(record.updates) <= 1 and record.truth == []
+    assert record.summary()["handover_time_s"] is None
+
+
+def test_viewer_records_the_bodies_and_the_overlays(env, model):
+    from sandbox.viz import Viewer
+
+    viewer = Viewer(fps=10.0)
+    viewer.add_simulation(env.unwrapped.sim)
+    overlay = viewer.add_overlay(model.tasks, rng=np.random.default_rng(0))
+    record_episode(env, IProMPPolicy(model), seed=2, viewer=viewer, overlay=overlay,
+                   max_steps=30)
+    assert viewer.scene.timeline.n_frames == 7  # 0 .. 0.6 s at 10 fps
+    paths = list(viewer.scene.nodes)
+    assert any("overlays/human" in p for p in paths)
+    assert any("overlays/prediction" in p for p in paths)
+
+
+def test_belief_dict_turns_nan_into_none():
+    belief = Belief(time=0.1, task="a", posterior={"a": 1.0}, duration=float("nan"))
+    assert belief.as_dict()["duration"] is None
+    assert EpisodeRecord(task="a", object="box", source="x").summary()["final_task"] == ""
