@@ -254,6 +254,10 @@ class Viewer:
         if delay > 0:
             time.sleep(delay)
 
+    def restart_pacing(self) -> None:
+        """With ``realtime``: show the next frame now and pace from it (e.g. after a pause)."""
+        self._wall_start = None
+
     def restart_recording(self) -> None:
         """Start a new recording (e.g. at ``env.reset``): the next replay begins at the next
         :meth:`update`; objects that ended hidden are dropped from it."""

@@ -123,6 +123,22 @@ def test_realtime_pacing_sleeps_until_the_frame_is_due(monkeypatch):
     assert len(slept) == 1
 
 
+def test_restart_pacing_after_a_pause(monkeypatch):
+    import sandbox.viz.viewer as module
+
+    clock = {"now": 100.0}
+    slept = []
+    monkeypatch.setattr(module.time, "monotonic", lambda: clock["now"])
+    monkeypatch.setattr(module.time, "sleep", lambda s: slept.append(s))
+    viewer = Viewer(realtime=True, fps=10)
+    viewer.update(0.0)
+    clock["now"] += 10.0  # paused for 10 s: without a restart the next 10 s would not sleep
+    viewer.restart_pacing()
+    viewer.update(0.1)  # paced from here
+    viewer.update(0.5)
+    assert slept == [pytest.approx(0.4)]
+
+
 def test_restart_recording_begins_a_new_replay(baxter):
     viewer = Viewer(fps=10)
     viewer.vis["probe"].set_transform(np.eye(4))

@@ -1,0 +1,399 @@
+"""Scripted scenario files (JSON or YAML): who hands over what, how the human moves, which policy.
+
+A scenario file is one mapping (YAML needs PyYAML; paths are relative to the file)::
+
+    name: up, then right            # optional label
+    family: diverging               # synthetic tasks of the env and model: diverging | objects
+    seed: 0                         # reset seed (synthetic motion, tracker noise)
+    object: box                     # optional: box, glasses_case, tape, measuring_tape, screwdriver
+    speed: 1.0                      # human speed factor (0.25 - 4)
+    time_limit: 6.0                 # episode length limit (s)
+    human:                          # exactly one of the three forms below
+      task: up                      # 1. synthetic reach of a family task (random if omitted),
+      switch_to: right              #    optionally switching to another task
+      switch_phase: 0.55            #    at this fraction of the motion
+    # human:
+    #   waypoints:                  # 2. scripted: the hand passes these points (m, Baxter's
+    #     - {t: 0.0, position: [1.10, -0.12, 0.25]}   # base frame) at these times (s),
+    #     - {t: 1.5, position: [0.80, 0.00, 0.25]}    # minimum-jerk in between
+    #   task: scripted              #    label; tracker: {noise_m: ..., glitch_rate: ...}
+    # human:
+    #   recorded: ../data/birl-handover-20180329      # 3. a recorded trial replayed
+    #   task: pencil_box
+    #   trial: 3                    #    index among the task's trials or file name
+    policy:
+      type: dynamic                 # dynamic (dow_t) | static (ratio)
+      dow_t: 0.2
+      options: {blend_rate: 50}     # more predictor/policy options (optional)
+    model:                          # optional
+      demos: 20                     # synthetic demos per task (seed: model_seed)
+      seed: 0
+      file: model.npz               # or a saved model (IProMP.save)
+
+With a recorded human and no model file, the model is fitted on all the
+other trials of the recorded set (leave-one-out). :func:`load_scenario`
+validates a file and raises ``ValueError`` naming the file, the key, what was
+expected and what came; :func:`run_scenario_file` runs it.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+SUFFIXES = (".json", ".yaml", ".yml")
+FAMILIES = {"diverging": "sandbox/BaxterHandoverDiverging-v0",
+            "objects": "sandbox/BaxterHandover-v0"}
+TOP_KEYS = ("name", "family", "seed", "object", "speed", "time_limit", "human", "policy", "model")
+HUMAN_KEYS = {"synthetic": ("task", "switch_to", "switch_phase"),
+              "waypoints": ("waypoints", "task", "tracker"),
+              "recorded": ("recorded", "task", "trial")}
+POLICY_KEYS = {"dynamic": ("type", "dow_t", "options"), "static": ("type", "ratio", "options")}
+MODEL_KEYS = ("demos", "seed", "file")
+#: Folder of the example scenarios shipped with the package.
+EXAMPLES = Path(__file__).resolve().parent / "scenario_examples"
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A validated scenario file (see the module docstring for the meaning of each field)."""
+
+    path: Path
+    name: str
+    family: str
+    seed: int
+    human_kind: str
+    human: dict[str, Any]
+    policy: dict[str, Any]
+    model: dict[str, Any] = field(default_factory=dict)
+    object: str | None = None
+    speed: float = 1.0
+    time_limit: float = 6.0
+
+    @property
+    def env_id(self) -> str:
+        return FAMILIES[self.family]
+
+
+class _Checker:
+    """Raises ``ValueError("scenario <file>: <key>: expected ..., got ...")``."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+
+    def fail(self, key: str, expected: str, got: Any) -> None:
+        raise ValueError(f"scenario {self.path}: {key}: expected {expected}, got {got!r}")
+
+    def keys(self, data: Any, key: str, allowed) -> dict:
+        if not isinstance(data, Mapping):
+            self.fail(key, "a mapping", data)
+        unknown = sorted(str(k) for k in set(data) - set(allowed))
+        if unknown:
+            self.fail(key, f"keys among {list(allowed)}", unknown)
+        return dict(data)
+
+    def number(self, value: Any, key: str, lo: float, hi: float) -> float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not lo <= value <= hi:
+            self.fail(key, f"a number in [{lo:g}, {hi:g}]", value)
+        return float(value)
+
+    def integer(self, value: Any, key: str, lo: int = 0) -> int:
+        if isinstance(value, bool) or not isinstance(value, int) or value < lo:
+            self.fail(key, f"an integer >= {lo}", value)
+        return int(value)
+
+    def choice(self, value: Any, key: str, choices) -> str:
+        if value not in tuple(choices):
+            self.fail(key, f"one of {list(choices)}", value)
+        return str(value)
+
+    def text(self, value: Any, key: str) -> str:
+        if not isinstance(value, str) or not value:
+            self.fail(key, "a non-empty string", value)
+        return value
+
+
+def resolve(path: str | Path) -> Path:
+    """The scenario file ``path``, or the shipped example of that name (``intent_switch``)."""
+    path = Path(path)
+    if path.is_file():
+        return path
+    for suffix in ("", *SUFFIXES):
+        example = EXAMPLES / f"{path.name}{suffix}"
+        if example.is_file() and not path.parent.parts:
+            return example
+    names = sorted(p.stem for p in EXAMPLES.glob("*") if p.suffix in SUFFIXES)
+    raise ValueError(f"scenario: expected an existing .json/.yaml file or an example name "
+                     f"({', '.join(names)}), got {str(path)!r}")
+
+
+def read_mapping(path: Path) -> Any:
+    """Parse a JSON or YAML file (by suffix); syntax errors become ``ValueError``."""
+    if path.suffix.lower() not in SUFFIXES:
+        raise ValueError(f"scenario {path}: expected a .json, .yaml or .yml file, "
+                         f"got suffix {path.suffix!r}")
+    text = path.read_text(encoding="utf-8")
+    if path.suffix.lower() == ".json":
+        try:
+            return json.loads(text)
+        except json.JSONDecodeError as error:
+            raise ValueError(f"scenario {path}: invalid JSON at line {error.lineno}, column "
+                             f"{error.colno}: {error.msg}") from error
+    try:
+        import yaml
+    except ImportError as error:  # pragma: no cover - pyyaml is a dependency
+        raise ValueError(f"scenario {path}: YAML files need PyYAML (pip install pyyaml); "
+                         "or write the scenario as JSON") from error
+    try:
+        return yaml.safe_load(text)
+    except yaml.YAMLError as error:
+        mark = getattr(error, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        problem = getattr(error, "problem", None) or str(error)
+        raise ValueError(f"scenario {path}: invalid YAML{where}: {problem}") from error
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    """Read and validate a scenario file (or a shipped example by name)."""
+    path = resolve(path)
+    check = _Checker(path)
+    data = check.keys(read_mapping(path), "top level", TOP_KEYS)
+    for key in ("human", "policy"):
+        if key not in data:
+            check.fail(key, "this key (required)", "nothing")
+    family = check.choice(data.get("family", "diverging"), "family", FAMILIES)
+    obj = data.get("object")
+    if obj is not None:
+        from sandbox import urdf
+
+        obj = check.choice(obj, "object", urdf.OBJECTS)
+    seed = check.integer(data.get("seed", 0), "seed")
+    kind, human = _human(check, data["human"], family, path.parent, seed)
+    return Scenario(
+        path=path, name=str(data.get("name", path.stem)), family=family,
+        seed=seed, human_kind=kind, human=human,
+        policy=_policy(check, data["policy"]), model=_model(check, data.get("model"), path.parent),
+        object=obj, speed=check.number(data.get("speed", 1.0), "speed", 0.25, 4.0),
+        time_limit=check.number(data.get("time_limit", 6.0), "time_limit", 0.1, 600.0))
+
+
+def _human(check: _Checker, data: Any, family: str, folder: Path,
+           seed: int) -> tuple[str, dict]:
+    if not isinstance(data, Mapping):
+        check.fail("human", "a mapping (task..., waypoints: or recorded:)", data)
+    kind = "waypoints" if "waypoints" in data else "recorded" if "recorded" in data else "synthetic"
+    human = check.keys(data, f"human ({kind})", HUMAN_KEYS[kind])
+    if kind == "synthetic":
+        from sandbox.envs.sources import family_tasks
+
+        tasks = family_tasks(family)
+        for key in ("task", "switch_to"):
+            if human.get(key) is not None:
+                check.choice(human[key], f"human.{key}", tasks)
+        if "switch_phase" in human:
+            human["switch_phase"] = check.number(human["switch_phase"], "human.switch_phase",
+                                                 0.01, 1.0)
+        if human.get("switch_to") is not None and human.get("task") == human["switch_to"]:
+            check.fail("human.switch_to", "a task other than human.task", human["switch_to"])
+    elif kind == "waypoints":
+        human["times"], human["points"] = _waypoints(check, human.pop("waypoints"))
+        human["task"] = check.text(human.get("task", "scripted"), "human.task")
+        human["tracker"] = _tracker(check, human.get("tracker"))
+    else:
+        root = folder / check.text(str(human["recorded"]), "human.recorded")
+        if not root.is_dir():
+            check.fail("human.recorded", "the folder of a recorded set (<root>/<task>/<trial>.csv)",
+                       str(human["recorded"]))
+        human["recorded"] = str(root)
+        trial = human.get("trial")
+        if trial is not None and not isinstance(trial, (int, str)) or isinstance(trial, bool):
+            check.fail("human.trial", "an index or a file name", trial)
+        human.update(_pick_recorded(check, root, human.get("task"), trial, seed))
+    return kind, human
+
+
+def _pick_recorded(check: _Checker, root: Path, task, trial, seed: int) -> dict:
+    """The recorded trial the scenario replays: ``task``, ``trial`` (file name), ``file``."""
+    import numpy as np
+
+    from sandbox.envs.sources import pick_trial, recorded_trials
+
+    trials = recorded_trials(root, task)
+    if not trials:
+        check.fail("human.task", f"a task with trials in {root}", task)
+    try:
+        task, file = pick_trial(trials, trial, np.random.default_rng(seed))
+    except ValueError as error:
+        raise ValueError(f"scenario {check.path}: human.{error}") from error
+    return {"task": task, "trial": file.name, "file": str(file)}
+
+
+def _waypoints(check: _Checker, data: Any) -> tuple[list[float], list[list[float]]]:
+    if not isinstance(data, list) or len(data) < 2:
+        check.fail("human.waypoints", "a list of at least 2 waypoints {t, position}", data)
+    times, points = [], []
+    for i, item in enumerate(data):
+        key = f"human.waypoints[{i}]"
+        item = check.keys(item, key, ("t", "position"))
+        if "t" not in item or "position" not in item:
+            check.fail(key, "both t (s) and position [x, y, z] (m)", item)
+        t = check.number(item["t"], f"{key}.t", 0.0, 600.0)
+        if times and t <= times[-1]:
+            check.fail(f"{key}.t", f"a time after the previous waypoint's {times[-1]:g} s", t)
+        p = item["position"]
+        if (not isinstance(p, list) or len(p) != 3
+                or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in p)):
+            check.fail(f"{key}.position", "3 numbers [x, y, z] (m)", p)
+        for v, axis in zip(p, "xyz"):
+            check.number(v, f"{key}.position.{axis}", -3.0, 3.0)
+        times.append(t)
+        points.append([float(v) for v in p])
+    return times, points
+
+
+def _tracker(check: _Checker, data: Any):
+    from dataclasses import fields
+
+    from sandbox.data.synthetic.tracker import TrackerModel
+
+    if data is None:
+        return TrackerModel(glitch_rate=0.0)
+    allowed = [f.name for f in fields(TrackerModel)]
+    data = check.keys(data, "human.tracker", allowed)
+    try:
+        return TrackerModel(**{"glitch_rate": 0.0, **data})
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"scenario {check.path}: human.tracker: {error}") from error
+
+
+def _policy(check: _Checker, data: Any) -> dict:
+    if not isinstance(data, Mapping):
+        check.fail("policy", "a mapping with type: dynamic or static", data)
+    kind = check.choice(data.get("type", "dynamic"), "policy.type", POLICY_KEYS)
+    policy = check.keys(data, f"policy ({kind})", POLICY_KEYS[kind])
+    policy["type"] = kind
+    if kind == "dynamic":
+        policy["dow_t"] = check.number(policy.get("dow_t", 0.2), "policy.dow_t", 0.01, 10.0)
+    else:
+        policy["ratio"] = check.number(policy.get("ratio", 0.3), "policy.ratio", 0.01, 1.0)
+    options = policy.get("options", {})
+    if not isinstance(options, Mapping):
+        check.fail("policy.options", "a mapping of predictor options", options)
+    policy["options"] = dict(options)
+    return policy
+
+
+def _model(check: _Checker, data: Any, folder: Path) -> dict:
+    model = check.keys({} if data is None else data, "model", MODEL_KEYS)
+    if "file" in model:
+        file = folder / check.text(str(model["file"]), "model.file")
+        if not file.is_file():
+            check.fail("model.file", "an existing model file (.npz)", str(model["file"]))
+        model["file"] = str(file)
+    model["demos"] = check.integer(model.get("demos", 20), "model.demos", 2)
+    model["seed"] = check.integer(model.get("seed", 0), "model.seed")
+    return model
+
+
+def build_model(scenario: Scenario):
+    """The scenario's IProMP: a saved file, the recorded set minus the trial, or synthetic."""
+    from sandbox.core import IProMP
+
+    if "file" in scenario.model:
+        return IProMP.load(scenario.model["file"])
+    if scenario.human_kind == "recorded":
+        from sandbox.data.recorded import load_recorded
+
+        held_out = Path(scenario.human["file"]).resolve()
+        demos, _ = load_recorded(scenario.human["recorded"])
+        return IProMP().fit([d for d in demos if Path(d.source).resolve() != held_out])
+    from sandbox.policies import fit_family_model
+
+    return fit_family_model(scenario.family, n_per_task=scenario.model["demos"],
+                            seed=scenario.model["seed"])
+
+
+def make_policy(scenario: Scenario, model):
+    """The scenario's policy for ``model``; bad ``options`` become ``ValueError``."""
+    from sandbox.policies import IProMPPolicy, StaticPolicy
+
+    spec = scenario.policy
+    try:
+        if spec["type"] == "dynamic":
+            return IProMPPolicy(model, dow_t=spec["dow_t"], **spec["options"])
+        return StaticPolicy(model, ratio=spec["ratio"], **spec["options"])
+    except TypeError as error:
+        raise ValueError(f"scenario {scenario.path}: policy.options: {error}") from error
+
+
+def reset_options(scenario: Scenario) -> dict[str, Any]:
+    """``env.reset`` options of the scenario (the scripted motion built here)."""
+    opts: dict[str, Any] = {"speed": scenario.speed}
+    if scenario.object is not None:
+        opts["object"] = scenario.object
+    human = scenario.human
+    if scenario.human_kind == "synthetic":
+        opts.update({k: human[k] for k in HUMAN_KEYS["synthetic"] if human.get(k) is not None})
+    elif scenario.human_kind == "recorded":
+        opts.update(source=human["recorded"], task=human.get("task"), trial=human.get("trial"))
+    else:
+        import numpy as np
+
+        from sandbox.envs.sources import waypoint_motion
+
+        opts["motion"] = waypoint_motion(human["times"], human["points"],
+                                         np.random.default_rng(scenario.seed),
+                                         task=human["task"], tracker=human["tracker"])
+    return opts
+
+
+def run_scenario_file(scenario: Scenario, *, html: str | Path | None = None,
+                      on_update=None) -> dict[str, Any]:
+    """Run a scenario to the end; write the replay to ``html`` (if given); return the summary.
+
+    Returns
+    -------
+    dict
+        JSON-ready: the scenario (name, file, seed, policy), the outcome
+        (:meth:`~sandbox.recording.EpisodeRecord.summary`: success, handover
+        time, final gripper-to-object distance, recognised task over time,
+        updates), the intent switch when there is one, the replay's path.
+    """
+    import gymnasium as gym
+    import numpy as np
+
+    import sandbox.envs  # noqa: F401  (registers the environments)
+    from sandbox.recording import record_episode
+
+    if html is not None and Path(html).suffix.lower() not in (".html", ".htm"):
+        raise ValueError(f"html: expected a file name ending in .html, got {str(html)!r}")
+    model = build_model(scenario)
+    policy = make_policy(scenario, model)
+    options = reset_options(scenario)
+    env = gym.make(scenario.env_id, max_episode_steps=max(1, round(scenario.time_limit * 50)))
+    viewer = overlay = None
+    try:
+        if html is not None:
+            from sandbox.viz import Viewer
+
+            viewer = Viewer(fps=30.0)
+            viewer.add_simulation(env.unwrapped.sim)
+            overlay = viewer.add_overlay(model.tasks, rng=np.random.default_rng(scenario.seed))
+        record = record_episode(env, policy, seed=scenario.seed, options=options, viewer=viewer,
+                                overlay=overlay, policy_name=scenario.policy["type"],
+                                on_update=on_update)
+        intent = env.unwrapped.motion.meta.get("intent")
+    finally:
+        env.close()
+    summary = {"scenario": scenario.name, "file": str(scenario.path), "seed": scenario.seed,
+               "human": scenario.human_kind, "policy_spec": scenario.policy,
+               "model_tasks": list(model.tasks), **record.summary()}
+    if intent is not None:
+        summary["intent_switch"] = {"from": intent.tasks[0], "to": intent.tasks[1],
+                                    "time_s": round(float(intent.switch_time), 4)}
+    if viewer is not None:
+        summary["replay"] = str(viewer.save_html(html))
+    return summary
