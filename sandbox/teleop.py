@@ -152,13 +152,18 @@ class Keyboard:
         return split_keys(data.decode("utf-8", "replace"))
 
 
-def status_line(t: float, hand, predictor) -> str:
-    """``t=... hand=(x, y, z) task=... p[...] T=...`` for the terminal."""
+def status_line(t: float, hand, seen, predictor) -> str:
+    """``t=... hand=(x,y,z) seen=(x,y,z) m task=... p[...] T=...`` for the terminal.
+
+    ``hand`` is the true hand position (m), ``seen`` the tracker's measurement the
+    policy received (m), then the predictor's task, posterior and duration estimate.
+    """
     post = predictor.task_posterior
     probs = " ".join(f"{k}={v:.2f}" for k, v in post.items())
     x, y, z = (float(v) for v in hand)
-    return (f"t={t:5.2f}s hand=({x:+.3f},{y:+.3f},{z:+.3f}) m task={predictor.task} "
-            f"p[{probs}] T={predictor.duration:.2f}s")
+    a, b, c = (float(v) for v in seen)
+    return (f"t={t:5.2f}s hand=({x:+.3f},{y:+.3f},{z:+.3f}) seen=({a:+.3f},{b:+.3f},{c:+.3f}) "
+            f"m task={predictor.task} p[{probs}] T={predictor.duration:.2f}s")
 
 
 def _outcome(info: dict, t: float) -> str:
@@ -235,7 +240,7 @@ def run_teleop(env, policy, keyboard: Keyboard, *, seed: int = 0, running: bool 
             overlay.show(policy.predictor, t, executed_q=obs["q"])
         if len(policy.predictor.updates) > n_updates:
             n_updates = len(policy.predictor.updates)
-            out(status_line(t, env.unwrapped.motion.position(t), policy.predictor))
+            out(status_line(t, env.unwrapped.motion.position(t), obs["hand"], policy.predictor))
         if terminated or truncated:
             over = True
             out(f"episode over: {_outcome(info, t)}, gripper {100 * info['distance']:.1f} cm "
