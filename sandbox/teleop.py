@@ -179,7 +179,7 @@ def run_teleop(env, policy, keyboard: Keyboard, *, seed: int = 0, running: bool 
     Parameters
     ----------
     env : gymnasium.Env
-        A handover environment made with ``render_mode="human"`` (or None: no browser).
+        A handover environment made with ``render_mode="human"`` (its viewer is used).
     policy : IProMPPolicy
         Drives the robot; its predictor's overlays are drawn in the viewer.
     keyboard : Keyboard
