@@ -17,8 +17,10 @@ DIR}``); ``sandbox/BaxterHandoverDiverging-v0`` plays the diverging tasks
 
 Modules: ``pybullet`` (the only one importing PyBullet: :class:`Simulation`),
 ``robot`` (Baxter's arm and gripper), ``human`` (hand motion and body),
-``sources`` (synthetic and recorded motions), ``task`` (objects, handover,
-reward), ``options`` (``reset`` options), ``handover`` (the environment).
+``sources`` (synthetic, recorded and scripted waypoint motions), ``teleop`` (a
+hand driven by velocity commands), ``task`` (objects, handover, reward),
+``options`` (``reset`` options), ``handover`` (the environment; render modes
+``"human"``, a live meshcat viewer, and ``"rgb_array"``).
 """
 
 from __future__ import annotations
