@@ -146,9 +146,11 @@ def estimate_phase(scorer: Scorer, tasks, times: FloatArray, values: FloatArray,
     a_mean = np.array([t.alpha_mean for t in tasks])
     a_std = np.array([t.alpha_std for t in tasks])
     score = scorer.joint if mode == "joint" else scorer.marginal
-    if stats is not None and mode == "joint" and stats.lattice.spans(float(times[-1])) is not None:
-        durations = stats.lattice.durations
+    spans = None
+    if stats is not None and mode == "joint":
         spans = stats.lattice.spans(float(times[-1]))
+    if spans is not None:
+        durations = stats.durations
         scores = stats.scores(spans)
     else:
         lattice = Lattice.for_tasks(tasks, n_candidates, width)

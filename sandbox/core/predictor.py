@@ -306,10 +306,15 @@ class _Predictor:
                                             np.clip(new_t / duration, 0.0, 1.0))
         if self.blend:
             fall, rise = sigmoid_activations(new_t, t + self.blend_delay, self.blend_rate)
-            fall[fall < 1e-12] = 0.0   # numerically irrelevant tails: skip their products
+            # Past the falling sigmoid's numerically irrelevant tail (< 1e-12; it only
+            # falls) the product is the new distribution: blend only the steps before.
+            n = int(np.searchsorted(-fall, -1e-12))
             rise[rise < 1e-12] = 0.0
-            mean, cov = blend_unchecked(np.stack([old_new[0], mean]),
-                                        np.stack([old_new[1], cov]), np.stack([fall, rise]))
+            head = blend_unchecked(np.stack([old_new[0][:n], mean[:n]]),
+                                   np.stack([old_new[1][:n], cov[:n]]),
+                                   np.stack([fall[:n], rise[:n]]))
+            mean = np.concatenate([head[0], mean[n:]])
+            cov = np.concatenate([head[1], cov[n:] / rise[n:, None, None]])
         jump = float(np.linalg.norm(mean[0] - old_new[0][0])) if new_t.size else 0.0
         self._plan_t = np.concatenate([self._plan_t[keep], [t], new_t])
         self._plan_mean = np.concatenate([self._plan_mean[keep], old_now[0], mean])
