@@ -32,7 +32,7 @@ import numpy as np
 
 from sandbox.core import DynamicPredictor, IProMP
 from sandbox.core.blending import blend_unchecked, sigmoid_activations
-from sandbox.core.interaction import condition, log_marginal_likelihood
+from sandbox.core.interaction import condition, log_marginal_likelihood, observation_matrix
 from sandbox.core.phase import Lattice, log_alpha_prior
 from sandbox.core.recognition import task_posterior
 
@@ -108,7 +108,7 @@ def naive_update(model, times, values, lattice: Lattice, horizon: float = 2.0, d
         cov = task.weights.cov()
         scores = []
         for T in durations[spans[k, 0]:spans[k, 1]]:
-            H = _dense_h(model, times / T, P, Q, N)
+            H = observation_matrix(model.basis, times / T, P, Q)
             ll = log_marginal_likelihood(task.weights.mean, cov, H, obs, noise)
             lp = log_alpha_prior(np.array([T / task.nominal_duration]), task.alpha_mean,
                                  task.alpha_std)[0]
@@ -118,7 +118,7 @@ def naive_update(model, times, values, lattice: Lattice, horizon: float = 2.0, d
     k = int(np.argmax(post))
     task, T = model.task_models[k], best[k][2]
     mean, cov = condition(task.weights.mean, task.weights.cov(),
-                          _dense_h(model, times / T, P, Q, N), obs, noise)
+                          observation_matrix(model.basis, times / T, P, Q), obs, noise)
     steps = np.arange(t_last, t_last + horizon, dt)
     psi = model.basis(np.clip(steps / T, 0, 1))
     m_new = np.empty((steps.size, Q))
@@ -132,13 +132,7 @@ def naive_update(model, times, values, lattice: Lattice, horizon: float = 2.0, d
                            np.stack([fall, rise]))
 
 
-def _dense_h(model, z, P, Q, N):
-    from sandbox.core.interaction import observation_matrix
-
-    return observation_matrix(model.basis, z, P, Q)
-
-
-def movement_primitives_condition(model, demos_times, times, values, repeats: int):
+def movement_primitives_condition(model, times, values, repeats: int):
     """Median ms of 40 sequential ``condition_position`` calls of movement_primitives' ProMP."""
     try:
         from movement_primitives.promp import ProMP
@@ -205,7 +199,7 @@ def run_core_benchmarks(repeats: int = 200, seed: int = 0) -> dict:
             "naive_repeats": naive_reps, "recognised": upd.task,
         },
     }
-    mp = movement_primitives_condition(model, None, times, values, repeats)
+    mp = movement_primitives_condition(model, times, values, repeats)
     if mp is not None:
         out["movement_primitives_condition_ms"] = round(mp, 4)
         out["movement_primitives_note"] = (
