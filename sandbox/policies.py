@@ -147,11 +147,8 @@ class IProMPPolicy:
         self.predictor.observe(t, check_array(obs["hand"], "obs['hand']", 1, shape=(3,),
                                               allow_nan=True))
         self.history.append((t, self.predictor.task))
-        with np.errstate(divide="ignore", invalid="ignore"):  # repeated plan knots (core)
-            mean, _ = self.predictor.command(t + self.dt)
+        mean, _ = self.predictor.command(t + self.dt)
         previous = q if self._target is None else self._target
-        if not np.isfinite(mean).all():
-            mean = previous  # hold rather than pass a non-finite target on
         step = self.max_velocity * self.dt
         self._target = previous + np.clip(mean - previous, -step, step)
         tip = self.kinematics.fk(q, link="left_gripper")
