@@ -132,23 +132,20 @@ class Scorer:
                 loglik.append(np.empty(0))
                 factors.append(np.empty((0, self.R + 1, self.R + 1)))
                 continue
-            aug, logdet_b = self._augmented(k, a, b, per_group, T_all)
-            L = _cholesky(aug)
-            R = self.R
-            diag = np.diagonal(L, axis1=1, axis2=2)
-            logdet_k = 2.0 * np.log(diag[:, :R]).sum(axis=1)
-            maha = diag[:, R] ** 2
-            loglik.append(-0.5 * (s * P * LOG_2PI + log_sigma + logdet_b + logdet_k + maha))
+            Kt, eps, gamma_term, logdet_b = self._gram(k, a, b, per_group, T_all)
+            ll, L = factor_scores(Kt, eps, gamma_term, s * P * LOG_2PI + log_sigma + logdet_b)
+            loglik.append(ll)
             factors.append(L)
         return Scores(loglik, factors)
 
-    def _augmented(self, k, a, b, per_group, T_all):
+    def _gram(self, k, a, b, per_group, T_all):
+        """Task k's padded statistics (as :func:`factor_scores` takes them) for candidates a:b."""
         P, N, R, r = self.P, self.N, self.R, self.rank[k]
         C = b - a
         groups = self.group[k]
         Kt = np.zeros((C, r + 1, r + 1))
         eps = np.zeros((C, r + 1))
-        dbd = np.zeros(C)
+        gamma_term = np.zeros(C)
         logdet_b = np.zeros(C)
         V = self.V[k].reshape(N, P, r + 1)
         for g in np.unique(groups):
@@ -160,18 +157,14 @@ class Scorer:
             Kt += (Vg.T @ Tg).reshape(r + 1, C, r + 1).transpose(1, 0, 2)
             x = (ab[a:b][:, :, dims] / np.sqrt(self.sigma2[dims])).reshape(C, -1)
             eps += x @ Vg
-            dbd += (gamma[a:b][:, dims] / self.sigma2[dims]).sum(axis=1)
+            gamma_term += (gamma[a:b][:, dims] / self.sigma2[dims]).sum(axis=1)
             logdet_b += dims.size * ld_a[a:b]
-        dbd += Kt[:, r, r] - 2.0 * eps[:, r]
-        e = eps[:, :r] - Kt[:, :r, r]
-        aug = np.zeros((C, R + 1, R + 1))
-        aug[:, :r, :r] = Kt[:, :r, :r]
-        idx = np.arange(R)
-        aug[:, idx, idx] += 1.0
-        aug[:, R, :r] = e
-        aug[:, :r, R] = e
-        aug[:, R, R] = dbd
-        return aug, logdet_b
+        pos = np.r_[np.arange(r), R]          # U in [:r], mu at R, zeros in between
+        padded = np.zeros((C, R + 1, R + 1))
+        padded[:, pos[:, None], pos] = Kt
+        eps_padded = np.zeros((C, R + 1))
+        eps_padded[:, pos] = eps
+        return padded, eps_padded, gamma_term, logdet_b
 
     def joint_pairs(self, times: FloatArray, values: FloatArray, durations: FloatArray,
                     tasks: np.ndarray) -> tuple[FloatArray, FloatArray]:
@@ -206,20 +199,8 @@ class Scorer:
         Kt = Vf.transpose(0, 2, 1) @ WV
         x = (ab / np.sqrt(self.sigma2)).reshape(M, 1, N * P)
         eps = (x @ Vf)[:, 0]
-        R = self.R
-        aug = Kt
-        idx = np.arange(R)
-        aug[:, idx, idx] += 1.0
-        e = eps[:, :R] - Kt[:, :R, R]
-        dbd = (gamma / self.sigma2).sum(axis=1) - 2.0 * eps[:, R] + Kt[:, R, R]
-        aug[:, R, :R] = e
-        aug[:, :R, R] = e
-        aug[:, R, R] = dbd
-        L = _cholesky(aug)
-        diag = np.diagonal(L, axis1=1, axis2=2)
         const = s * P * LOG_2PI + s * np.log(self.sigma2).sum()
-        ll = -0.5 * (const + P * ld_a + 2.0 * np.log(diag[:, :R]).sum(axis=1) + diag[:, R] ** 2)
-        return ll, L
+        return factor_scores(Kt, eps, (gamma / self.sigma2).sum(axis=1), const + P * ld_a)
 
     def _one_span(self, k: int) -> np.ndarray:
         spans = np.zeros((self.K, 2), dtype=int)
@@ -293,6 +274,41 @@ def _b_part(G: FloatArray, beta: FloatArray, yy: FloatArray, kappa: float):
     ab = Li.transpose(0, 2, 1) @ Lb
     gamma = yy - kappa * (Lb**2).sum(axis=1)
     return ld, W, ab, gamma
+
+
+def factor_scores(Kt: FloatArray, eps: FloatArray, gamma_term: FloatArray,
+                  offset: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Log-likelihoods and augmented Cholesky factors from a pair's statistics.
+
+    Parameters
+    ----------
+    Kt : ndarray, shape (M, R+1, R+1)
+        :math:`\\tilde K` in the padded layout (U in the first r rows/columns,
+        zeros up to R, :math:`\\mu` at R). Overwritten with the augmented matrix.
+    eps : ndarray, shape (M, R+1)
+        :math:`\\epsilon`, same layout.
+    gamma_term : ndarray, shape (M,)
+        :math:`y^T B^{-1} y = \\sum_p \\gamma_p / \\sigma_p^2`.
+    offset : ndarray, shape (M,)
+        :math:`sP\\log 2\\pi + \\log|B|`.
+
+    Returns
+    -------
+    loglik : ndarray, shape (M,)
+    factors : ndarray, shape (M, R+1, R+1)
+    """
+    R = Kt.shape[1] - 1
+    e = eps[:, :R] - Kt[:, :R, R]                                  # U^T Phi^T B^-1 d
+    dbd = gamma_term - 2.0 * eps[:, R] + Kt[:, R, R]               # d^T B^-1 d
+    idx = np.arange(R)
+    Kt[:, idx, idx] += 1.0                                         # K = I + J
+    Kt[:, R, :R] = e
+    Kt[:, :R, R] = e
+    Kt[:, R, R] = dbd
+    L = _cholesky(Kt)
+    diag = np.diagonal(L, axis1=1, axis2=2)
+    logdet_k = 2.0 * np.log(diag[:, :R]).sum(axis=1)
+    return -0.5 * (offset + logdet_k + diag[:, R] ** 2), L
 
 
 def _cholesky(aug: FloatArray) -> FloatArray:

@@ -33,7 +33,7 @@ from __future__ import annotations
 import numpy as np
 
 from sandbox.core.interaction import LOG_2PI
-from sandbox.core.likelihood import Scorer, Scores, _cholesky
+from sandbox.core.likelihood import Scorer, Scores, factor_scores
 from sandbox.core.phase import Lattice
 
 
@@ -119,23 +119,13 @@ class StreamStatistics:
         """
         self._flush()
         sc, s = self.scorer, self.count
-        P, R = sc.P, sc.R
+        P = sc.P
         const = s * P * LOG_2PI + s * np.log(sc.sigma2).sum()
         gamma_term = (self.gamma / sc.sigma2).sum(axis=1)
         sizes = [int(b - a) for a, b in spans]
         Kt = np.concatenate([self.Kt[a:b, k] for k, (a, b) in enumerate(spans)])
         eps = np.concatenate([self.eps[a:b, k] for k, (a, b) in enumerate(spans)])
         cand = np.concatenate([np.arange(a, b) for a, b in spans])
-        aug = Kt
-        idx = np.arange(R)
-        aug[:, idx, idx] += 1.0
-        e = eps[:, :R] - Kt[:, :R, R]
-        aug[:, R, R] = gamma_term[cand] - 2.0 * eps[:, R] + Kt[:, R, R]
-        aug[:, R, :R] = e
-        aug[:, :R, R] = e
-        L = _cholesky(aug)
-        diag = np.diagonal(L, axis1=1, axis2=2)
-        logdet_k = 2.0 * np.log(diag[:, :R]).sum(axis=1)
-        ll = -0.5 * (const + P * self.logdet_a[cand] + logdet_k + diag[:, R] ** 2)
+        ll, L = factor_scores(Kt, eps, gamma_term[cand], const + P * self.logdet_a[cand])
         cuts = np.cumsum(sizes)[:-1]
         return Scores(np.split(ll, cuts), np.split(L, cuts))
