@@ -298,10 +298,10 @@ class IProMP:
         )
 
 
-def _check_demos(demos: Sequence[DemonstrationLike]):
+def _check_demos(demos: Sequence[DemonstrationLike]) -> None:
+    """Shapes, finiteness and consistent P, Q (the per-task count is checked by the fit)."""
     if demos is None or len(demos) == 0:
         raise ValueError("demos: expected at least two demonstrations per task, got none")
-    groups: dict[str, list] = {}
     P = Q = None
     for i, d in enumerate(demos):
         for attr in ("times", "human", "robot", "task"):
@@ -319,13 +319,6 @@ def _check_demos(demos: Sequence[DemonstrationLike]):
                 f"demos[{i}]: expected P={P}, Q={Q} like the first demo, "
                 f"got P={h.shape[1]}, Q={r.shape[1]}"
             )
-        groups.setdefault(str(d.task), []).append(d)
-    small = [k for k, v in groups.items() if len(v) < 2]
-    if small:
-        raise ValueError(
-            f"demos: expected at least two demonstrations per task, got one for {small}"
-        )
-    return groups, P, Q
 
 
 def _priors(tasks: Sequence[str], spec: Mapping[str, float] | None) -> FloatArray:
