@@ -79,7 +79,9 @@ class IProMPPolicy:
     Parameters
     ----------
     model : IProMP
-        A fitted model (human dims: hand x, y, z; robot dims: the 7 left-arm joints).
+        A fitted model with a ``hand`` modality (x, y, z; robot dims: the 7
+        left-arm joints). The environments observe the hand, so the predictor
+        observes that modality; others the model has are marginalised.
     dow_t : float
         Dynamic observation window (s).
     control_hz : float
@@ -116,7 +118,7 @@ class IProMPPolicy:
                  close_radius: float = 0.045, max_velocity=None, **options) -> None:
         self._setup(control_hz, close_radius, max_velocity)
         self.predictor = DynamicPredictor(model, dow_t=dow_t, subsample=self.subsample,
-                                          **options)
+                                          **_observe_hand(options))
         self.reset()
 
     def _setup(self, control_hz: float, close_radius: float, max_velocity) -> None:
@@ -183,5 +185,14 @@ class StaticPolicy(IProMPPolicy):
                  close_radius: float = 0.045, max_velocity=None, **options) -> None:
         self._setup(control_hz, close_radius, max_velocity)
         self.predictor = StaticPredictor(model, ratio=ratio, subsample=self.subsample,
-                                         **options)
+                                         **_observe_hand(options))
         self.reset()
+
+
+def _observe_hand(options: dict) -> dict:
+    """Predictor options observing the one modality the environments carry: the hand."""
+    observe = options.get("observe", ["hand"])
+    if list([observe] if isinstance(observe, str) else observe) != ["hand"]:
+        raise ValueError(f"observe: the environments observe the hand only, got {observe!r}")
+    return {**options, "observe": ["hand"]}
+

@@ -8,6 +8,8 @@ A scenario file is one mapping (YAML needs PyYAML; paths are relative to the fil
     object: box                     # optional: box, glasses_case, tape, measuring_tape, screwdriver
     speed: 1.0                      # human speed factor (0.25 - 4)
     time_limit: 6.0                 # episode length limit (s)
+    observe: [hand]                 # modalities the policy observes (the environments
+                                    # carry the hand; a recorded model is fitted on these)
     human:                          # exactly one of the three forms below
       task: up                      # 1. synthetic reach of a family task (random if omitted),
       switch_to: right              #    optionally switching to another task
@@ -47,7 +49,10 @@ from typing import Any
 SUFFIXES = (".json", ".yaml", ".yml")
 FAMILIES = {"diverging": "sandbox/BaxterHandoverDiverging-v0",
             "objects": "sandbox/BaxterHandover-v0"}
-TOP_KEYS = ("name", "family", "seed", "object", "speed", "time_limit", "human", "policy", "model")
+TOP_KEYS = ("name", "family", "seed", "object", "speed", "time_limit", "observe", "human",
+            "policy", "model")
+#: Modalities the environments' observations carry.
+ENV_MODALITIES = ("hand",)
 HUMAN_KEYS = {"synthetic": ("task", "switch_to", "switch_phase"),
               "waypoints": ("waypoints", "task", "tracker"),
               "recorded": ("recorded", "task", "trial")}
@@ -72,6 +77,7 @@ class Scenario:
     object: str | None = None
     speed: float = 1.0
     time_limit: float = 6.0
+    observe: tuple[str, ...] = ("hand",)
 
     @property
     def env_id(self) -> str:
@@ -177,7 +183,20 @@ def load_scenario(path: str | Path) -> Scenario:
         seed=seed, human_kind=kind, human=human,
         policy=_policy(check, data["policy"]), model=_model(check, data.get("model"), path.parent),
         object=obj, speed=check.number(data.get("speed", 1.0), "speed", 0.25, 4.0),
-        time_limit=check.number(data.get("time_limit", 6.0), "time_limit", 0.1, 600.0))
+        time_limit=check.number(data.get("time_limit", 6.0), "time_limit", 0.1, 600.0),
+        observe=_observe(check, data.get("observe", ["hand"])))
+
+
+def _observe(check: _Checker, data: Any) -> tuple[str, ...]:
+    names = [n.strip() for n in data.split(",")] if isinstance(data, str) else data
+    if (not isinstance(names, list) or not names
+            or not all(isinstance(n, str) and n for n in names)):
+        check.fail("observe", "a list of modality names", data)
+    unknown = [n for n in names if n not in ENV_MODALITIES]
+    if unknown:
+        check.fail("observe", f"modalities the environments observe {list(ENV_MODALITIES)}",
+                   names)
+    return tuple(names)
 
 
 def _human(check: _Checker, data: Any, family: str, folder: Path,
@@ -308,7 +327,7 @@ def build_model(scenario: Scenario):
         from sandbox.data.recorded import load_recorded
 
         held_out = Path(scenario.human["file"]).resolve()
-        demos, _ = load_recorded(scenario.human["recorded"])
+        demos, _ = load_recorded(scenario.human["recorded"], observe=scenario.observe)
         return IProMP().fit([d for d in demos if Path(d.source).resolve() != held_out])
     from sandbox.policies import fit_family_model
 
@@ -322,9 +341,10 @@ def make_policy(scenario: Scenario, model):
 
     spec = scenario.policy
     try:
+        options = {"observe": list(scenario.observe), **spec["options"]}
         if spec["type"] == "dynamic":
-            return IProMPPolicy(model, dow_t=spec["dow_t"], **spec["options"])
-        return StaticPolicy(model, ratio=spec["ratio"], **spec["options"])
+            return IProMPPolicy(model, dow_t=spec["dow_t"], **options)
+        return StaticPolicy(model, ratio=spec["ratio"], **options)
     except TypeError as error:
         raise ValueError(f"scenario {scenario.path}: policy.options: {error}") from error
 

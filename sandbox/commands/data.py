@@ -1,8 +1,9 @@
 """``python -m sandbox data summary|check-filter --data DIR``: what a recorded set contains.
 
 ``summary`` prints the tasks, trial counts, durations, sample rates (rows/s
-and distinct tracker frames/s, counted on the chosen human columns), the
-tracker glitches found (repeated time stamps, re-sent frames, jumps, zero
+and distinct tracker frames/s of the first observed position modality, the
+hand by default), the new samples per second of every observed modality
+(``--observe``), the tracker glitches found (repeated time stamps, re-sent frames, jumps, zero
 rows, missing values, frozen skeletons, gate rejections of the causal
 filter), the rows dropped and the trials skipped with their reasons, and,
 when the synthetic generator is available, how a synthetic set compares with
@@ -10,7 +11,8 @@ the recordings. ``--json`` prints the same as JSON.
 
 ``check-filter`` measures the hand filter's settings on the set: every third
 tracker frame of the first 60 % of each trial is hidden and predicted by the
-RTS smoother and by the causal filter from the others.
+RTS smoother and by the causal filter from the others (every 3-D point of the
+observed position modalities).
 """
 
 from __future__ import annotations
@@ -19,6 +21,8 @@ import argparse
 import json
 import sys
 from typing import Any
+
+from sandbox.commands import _observation
 
 NAME = "data"
 HELP = "inspect a recorded dataset: summary of trials and tracker glitches, filter check."
@@ -46,25 +50,10 @@ def _common(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--data", required=True, metavar="DIR",
                         help="dataset folder <DIR>/<task>/<trial>.csv")
     parser.add_argument("--tasks", default=None, help="comma-separated subset of tasks")
-    parser.add_argument("--human-columns", default=None, metavar="A,B,C",
-                        help="human columns (default human_left_hand_x,y,z)")
-    parser.add_argument("--robot-columns", default=None, metavar="A,B,...",
-                        help="robot columns (default left_s0 ... left_w2)")
+    _observation.add_arguments(parser)
 
 
-def _split(text: str | None) -> list[str] | None:
-    return None if text is None else [s.strip() for s in text.split(",") if s.strip()]
-
-
-def _columns(args: argparse.Namespace) -> Any:
-    from sandbox.data.recorded import Columns
-
-    kwargs = {}
-    if args.human_columns is not None:
-        kwargs["human"] = tuple(_split(args.human_columns))
-    if args.robot_columns is not None:
-        kwargs["robot"] = tuple(_split(args.robot_columns))
-    return Columns(**kwargs)
+_split = _observation.split
 
 
 def run(args: argparse.Namespace) -> int:
@@ -79,15 +68,16 @@ def _summary(args: argparse.Namespace) -> int:
     from sandbox.data.datasets import summarize
     from sandbox.data.recorded import SkippedTrialWarning, load_recorded
 
-    columns = _columns(args)
+    spec = _observation.data_spec(args)
+    observe = _observation.observe(args, spec)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SkippedTrialWarning)  # listed in the summary instead
-        demos, skipped = load_recorded(args.data, tasks=_split(args.tasks), columns=columns,
-                                       preprocess="causal")
+        demos, skipped = load_recorded(args.data, tasks=_split(args.tasks), spec=spec,
+                                       observe=observe, preprocess="causal")
     if not demos:
         raise ValueError(f"data: no usable trial in {args.data} ({len(skipped)} skipped)")
-    result = {"data": str(args.data), **summarize(demos, skipped)}
-    result["realism"] = _realism(args, columns)
+    result = {"data": str(args.data), "observe": list(observe), **summarize(demos, skipped)}
+    result["realism"] = _realism(args, spec) if "hand" in observe else None
     if args.json:
         print(json.dumps(result, indent=2))
     else:
@@ -95,9 +85,9 @@ def _summary(args: argparse.Namespace) -> int:
     return 0
 
 
-def _realism(args: argparse.Namespace, columns: Any) -> dict | None:
-    """Synthetic vs recorded statistics, if the synthetic package offers them."""
-    if args.synthetic == "none" or len(columns.human) != 3:
+def _realism(args: argparse.Namespace, spec: Any) -> dict | None:
+    """Synthetic vs recorded statistics of the hand, if the synthetic package offers them."""
+    if args.synthetic == "none" or spec.modalities["hand"].size != 3:
         return None
     try:
         import numpy as np
@@ -114,7 +104,7 @@ def _realism(args: argparse.Namespace, columns: Any) -> dict | None:
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        raw, _ = load_recorded(args.data, tasks=_split(args.tasks), columns=columns,
+        raw, _ = load_recorded(args.data, tasks=_split(args.tasks), spec=spec, observe="hand",
                                preprocess="none")
     synthetic = make_dataset(args.synthetic, 20, np.random.default_rng(0))
     return {"synthetic": f"synthetic:{args.synthetic}", "seed": 0, "n_per_task": 20,
@@ -164,6 +154,12 @@ def format_summary(result: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def _points(dims: tuple[str, ...]) -> list[tuple[str, ...]]:
+    """A position modality's 3-D points (one track if its size is not a multiple of 3)."""
+    width = 3 if len(dims) % 3 == 0 else len(dims)
+    return [dims[i:i + width] for i in range(0, len(dims), width)]
+
+
 def _check_filter(args: argparse.Namespace) -> int:
     import numpy as np
 
@@ -174,24 +170,34 @@ def _check_filter(args: argparse.Namespace) -> int:
     settings = {"accel_std": args.accel_std, "noise_std": args.noise_std,
                 "time_jitter_std": args.jitter_std, "gate_prob": args.gate_prob}
     config = FilterConfig(**{k: v for k, v in settings.items() if v is not None})
-    columns = _columns(args)
-    p = len(columns.human)
+    from sandbox.data.recorded import Columns
+
+    spec = _observation.data_spec(args)
+    points = [cols for m in spec.observed(_split(args.observe)) if m.kind == "position"
+              for cols in _points(m.dims)]
+    if not points:
+        raise ValueError("--observe: check-filter needs a position modality (hand, arm)")
+    columns = Columns(tuple(c for cols in points for c in cols), spec.robot, spec.time)
     smooth, causal, frames, rejected, trials = [], [], 0, 0, 0
     for _, path in find_trials(args.data, _split(args.tasks)):
         try:
             table, _ = read_trial_table(path, columns)
         except TrialError:
             continue
-        t, human = table[:, 0], table[:, 1 : 1 + p]
+        t = table[:, 0]
         ok = np.isfinite(t) & np.r_[True, np.diff(t) >= 0]
         if ok.sum() < 3 or not ok.all():
             continue
-        fresh = find_glitches(t, human).fresh
-        s, c, counts = holdout_errors(t, np.where(fresh[:, None], human, np.nan), config)
-        smooth.append(s)
-        causal.append(c)
-        frames += int(fresh.sum())
-        rejected += counts["rejected"] + counts["reset"]
+        start = 1
+        for cols in points:
+            human = table[:, start:start + len(cols)]
+            start += len(cols)
+            fresh = find_glitches(t, human).fresh
+            s, c, counts = holdout_errors(t, np.where(fresh[:, None], human, np.nan), config)
+            smooth.append(s)
+            causal.append(c)
+            frames += int(fresh.sum())
+            rejected += counts["rejected"] + counts["reset"]
         trials += 1
     if not trials:
         raise ValueError(f"data: no usable trial in {args.data}")

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from sandbox.commands import _observation
+
 NAME = "evaluate"
 HELP = "leave-one-out evaluation of the static and dynamic formulations (paper sec. 5)"
 
@@ -21,6 +23,7 @@ def add_arguments(parser) -> None:
                         help="a folder in the shared layout or synthetic:NAME "
                              "(diverging, objects, two_task)")
     parser.add_argument("--tasks", default=None, help="comma-separated subset of tasks")
+    _observation.add_arguments(parser)
     parser.add_argument("--windows", default="1,0.5,0.2,0.1", help="dynamic windows dow_t (s)")
     parser.add_argument("--ratios", default="0.1,0.2,0.3,0.4,0.5,0.6,0.7,0.8,0.9",
                         help="observed ratios of the static formulation")
@@ -42,12 +45,15 @@ def run(args) -> int:
     from sandbox.eval.loocv import EvalConfig, run_loocv
     from sandbox.eval.report import build_report, to_markdown
 
-    config = EvalConfig(ratios=_floats(args.ratios), windows=_floats(args.windows))
+    spec = _observation.data_spec(args)
+    observe = _observation.observe(args, spec)
+    config = EvalConfig(ratios=_floats(args.ratios), windows=_floats(args.windows),
+                        observe=observe)
     if any(r > 1 for r in config.ratios):
         raise ValueError(f"--ratios: expected fractions in (0, 1], got {args.ratios!r}")
-    tasks = [t.strip() for t in args.tasks.split(",")] if args.tasks else None
-    train, test, skipped = load_pair(args.data, seed=args.seed, tasks=tasks,
-                                     n_per_task=args.n_per_task)
+    train, test, skipped = load_pair(args.data, seed=args.seed,
+                                     tasks=_observation.split(args.tasks),
+                                     n_per_task=args.n_per_task, spec=spec, observe=observe)
     for reason in skipped:
         print(f"skipped: {reason}")
     trials, runtime = run_loocv(train, test, config, workers=max(1, args.workers),

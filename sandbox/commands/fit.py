@@ -1,11 +1,12 @@
 """``python -m sandbox fit --data DIR|synthetic:NAME --out model.npz``: fit and save task models.
 
 Loads the demonstrations with :func:`sandbox.data.datasets.load_dataset`
-(training demos are RTS-smoothed by default, ``--preprocess``), fits one
-Interaction ProMP per task (:class:`sandbox.core.IProMP`) and saves it in the
-core's format (``.npz`` + JSON metadata, no pickle). Prints what was fitted:
-tasks, demos per task, nominal durations, the speed prior, the estimated human
-observation noise.
+(training demos are RTS-smoothed by default, ``--preprocess``; ``--observe``
+and ``--spec`` choose the modalities), fits one Interaction ProMP per task
+(:class:`sandbox.core.IProMP`) and saves it in the core's format (``.npz`` +
+JSON metadata, no pickle). Prints what was fitted: tasks, demos per task,
+nominal durations, the speed prior, the estimated observation noise of every
+modality and the scale of signal modalities.
 """
 
 from __future__ import annotations
@@ -13,6 +14,8 @@ from __future__ import annotations
 import argparse
 import json
 from pathlib import Path
+
+from sandbox.commands import _observation
 
 NAME = "fit"
 HELP = "fit one Interaction ProMP per task on a dataset and save the model (.npz)."
@@ -32,16 +35,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=int, default=0, help="seed of a synthetic set (0)")
     parser.add_argument("--preprocess", choices=("none", "causal", "smooth"), default="smooth",
                         help="human-track preprocessing of the demos (smooth)")
-    parser.add_argument("--human-columns", default=None, metavar="A,B,C",
-                        help="human columns of a folder (default human_left_hand_x,y,z)")
-    parser.add_argument("--robot-columns", default=None, metavar="A,B,...",
-                        help="robot columns of a folder (default left_s0 ... left_w2)")
+    _observation.add_arguments(parser)
     parser.add_argument("--force", action="store_true", help="overwrite an existing --out file")
     parser.add_argument("--json", action="store_true", help="print the fit summary as JSON")
-
-
-def _split(text: str | None) -> list[str] | None:
-    return None if text is None else [s.strip() for s in text.split(",") if s.strip()]
 
 
 def run(args: argparse.Namespace) -> int:
@@ -49,25 +45,23 @@ def run(args: argparse.Namespace) -> int:
 
     from sandbox.core import IProMP
     from sandbox.data.datasets import load_dataset
-    from sandbox.data.recorded import Columns, SkippedTrialWarning
+    from sandbox.data.recorded import SkippedTrialWarning
 
     out = Path(args.out)
     if out.exists() and not args.force:
         raise ValueError(f"--out: {out} exists; pass --force to overwrite it")
     if not out.parent.is_dir():
         raise ValueError(f"--out: expected a file in an existing folder, got {str(out)!r}")
-    options = {}
-    if args.human_columns or args.robot_columns:
-        cols = {}
-        if args.human_columns:
-            cols["human"] = tuple(_split(args.human_columns))
-        if args.robot_columns:
-            cols["robot"] = tuple(_split(args.robot_columns))
-        options["columns"] = Columns(**cols)
+    spec = _observation.data_spec(args)
+    observe = _observation.observe(args, spec)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", SkippedTrialWarning)
-        demos = load_dataset(args.data, seed=args.seed, tasks=_split(args.tasks),
-                             n_per_task=args.n_per_task, preprocess=args.preprocess, **options)
+        demos = load_dataset(args.data, spec=spec, observe=observe, seed=args.seed,
+                             tasks=_observation.split(args.tasks), n_per_task=args.n_per_task,
+                             preprocess=args.preprocess)
+    if not demos:
+        raise ValueError(f"--data: no usable demonstration in {args.data} "
+                         f"({len(caught)} skipped)")
     kwargs = {} if args.regularizer is None else {"regularizer": args.regularizer}
     if args.n_basis is not None:
         kwargs["n_basis"] = args.n_basis
@@ -84,20 +78,37 @@ def _summary(model, args: argparse.Namespace, out: Path, n_demos: int, skipped: 
     return {
         "data": str(args.data), "out": str(out), "preprocess": args.preprocess,
         "n_basis": model.basis.n_basis, "demos": n_demos, "skipped": skipped,
-        "human_noise_std_m": [float(s) for s in np.sqrt(model.noise)],
+        "observe": [m.name for m in model.modalities],
+        "noise_std": {m.name: [float(s) for s in np.sqrt(model.noise[sl]) * model.scale[sl]]
+                      for m, sl in zip(model.modalities, _slices(model))},
+        "units": {m.name: m.units for m in model.modalities},
+        "signal_scale": {m.name: [float(v) for v in model.scale[sl]]
+                         for m, sl in zip(model.modalities, _slices(model))
+                         if m.kind == "signal"},
         "tasks": {t.name: {"demos": t.n_demos, "nominal_duration_s": t.nominal_duration,
                            "alpha_std": t.alpha_std} for t in model.task_models},
     }
 
 
+def _slices(model) -> list[slice]:
+    from sandbox.core.modality import slices
+
+    return list(slices(model.modalities).values())
+
+
 def _format(s: dict) -> str:
     lines = [f"Fitted {len(s['tasks'])} task models (N={s['n_basis']}) on {s['demos']} demos "
-             f"from {s['data']} (preprocess={s['preprocess']})"]
+             f"from {s['data']} (observe={','.join(s['observe'])}, "
+             f"preprocess={s['preprocess']})"]
     for name, t in s["tasks"].items():
         lines.append(f"  {name:<20}{t['demos']:>4} demos  T_nom {t['nominal_duration_s']:.2f} s"
                      f"  sigma_alpha {t['alpha_std']:.3f}")
-    noise = ", ".join(f"{1e3 * v:.1f}" for v in s["human_noise_std_m"])
-    lines.append(f"  human observation noise (mm): {noise}")
+    for name, noise in s["noise_std"].items():
+        if s["units"][name] == "m":
+            values, unit = ", ".join(f"{1e3 * v:.1f}" for v in noise), "mm"
+        else:
+            values, unit = ", ".join(f"{v:.3g}" for v in noise), s["units"][name]
+        lines.append(f"  {name} observation noise ({unit}): {values}")
     lines += [f"  {w}" for w in s["skipped"]]
     lines.append(f"Saved {s['out']}")
     return "\n".join(lines)

@@ -2,14 +2,18 @@
 
 from __future__ import annotations
 
+from sandbox.commands import _observation
+
 NAME = "tune"
-HELP = "cross-validate likelihood, window mode, regulariser, noise scale and basis size"
+HELP = ("cross-validate likelihood, window mode, regulariser, noise floors, motion end and "
+        "basis size")
 
 
 def add_arguments(parser) -> None:
     parser.add_argument("--data", required=True, help="a folder in the shared layout or "
                                                       "synthetic:NAME")
     parser.add_argument("--window", type=float, default=0.2, help="dynamic window scored (s)")
+    _observation.add_arguments(parser)
     parser.add_argument("--workers", type=int, default=2, help="processes (default 2)")
     parser.add_argument("--seed", type=int, default=0, help="seed of synthetic data")
     parser.add_argument("--out", default=None, help="write the table (Markdown) here too")
@@ -21,15 +25,20 @@ def run(args) -> int:
     from pathlib import Path
 
     from sandbox.eval.datasets import load_pair
-    from sandbox.eval.tune import HEADER, table, tune
+    from sandbox.eval.tune import HEADER, grid_for, table, tune
 
     if args.window <= 0:
         raise ValueError(f"--window: expected a positive number of seconds, got {args.window}")
-    train, test, _ = load_pair(args.data, seed=args.seed)
+    spec = _observation.data_spec(args)
+    observe = _observation.observe(args, spec)
+    train, test, _ = load_pair(args.data, seed=args.seed, spec=spec, observe=observe)
     print("| " + " | ".join(HEADER) + " |")
-    best, rows = tune(train, test, window=args.window, workers=max(1, args.workers))
-    chosen = {k: getattr(best, k) for k in ("noise_floor", "regularizer", "likelihood",
-                                            "window_mode", "n_basis", "blend_rate")}
+    from sandbox.eval.loocv import EvalConfig
+
+    grid = grid_for(spec.observed(observe))
+    best, rows = tune(train, test, base=EvalConfig(observe=observe), window=args.window,
+                      workers=max(1, args.workers), grid=grid)
+    chosen = {k: getattr(best, k) for k in grid}
     print(f"\nchosen: {chosen}")
     if args.out:
         Path(args.out).write_text(table(rows) + f"\nchosen: {chosen}\n")

@@ -10,12 +10,12 @@ the evaluation calls it for static predictions and the oracle.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from sandbox.core.likelihood import Scorer, condition_robot
-from sandbox.core.phase import estimate_phase
+from sandbox.core.likelihood import Scorer, condition_low_rank, condition_robot
+from sandbox.core.phase import ended_probability, estimate_phase
 from sandbox.core.promp import WeightDistribution, trajectory_distribution
 from sandbox.core.recognition import task_posterior
 from sandbox.core.statistics import StreamStatistics
@@ -35,6 +35,14 @@ class Prediction:
         Conditioned robot weights of the chosen task (eq. 9).
     duration : float
         Its duration :math:`T^*` (s).
+    factors : ndarray or None, shape (K, R+1, R+1)
+        Every task's augmented Cholesky factor at its MAP duration (joint
+        likelihood only): what :meth:`for_task` conditions another task with.
+    grid : list or None
+        Each task's posterior over its grid of durations
+        (:attr:`~sandbox.core.phase.PhaseEstimate.grid`).
+    last : tuple of (float, ndarray) or None
+        The last observation it used: time (s) and values (P,), normalised.
     """
 
     task_index: int
@@ -44,11 +52,59 @@ class Prediction:
     log_likelihood: FloatArray
     robot: WeightDistribution
     duration: float
+    factors: FloatArray | None = None
+    grid: list | None = None
+    last: tuple | None = None
 
     def trajectory(self, basis, times) -> tuple[FloatArray, FloatArray]:
         """Robot mean (T, Q) and covariance (T, Q, Q) at ``times`` (s); holds after the end."""
         z = np.clip(np.asarray(times, dtype=np.float64) / self.duration, 0.0, 1.0)
         return trajectory_distribution(self.robot, basis, z)
+
+    def for_task(self, model, k: int, posterior: FloatArray | None = None) -> Prediction:
+        """The same estimate with task ``k`` chosen: its robot at its MAP duration.
+
+        ``posterior`` replaces the task posterior (e.g. one held since the motion
+        ended). Needs :attr:`factors` (joint likelihood).
+        """
+        if self.factors is None:
+            raise ValueError("for_task: this prediction kept no factors (marginal likelihood)")
+        robot = condition_robot(model.task_models[k].weights, self.factors[k], model.n_human,
+                                model.task_models[k].weights.factor.shape[1])
+        return replace(self, task_index=int(k), robot=robot, duration=float(self.durations[k]),
+                       task_posterior=self.task_posterior if posterior is None else posterior)
+
+    def end_distance(self, model) -> tuple[float, int]:
+        """How far the hand has left where the chosen task's motion ends.
+
+        Squared Mahalanobis distance of the last observation of the first position
+        modality (the hand) from its prediction at phase 1 (conditioned on the
+        observations), and the number of dims it has; ``(nan, 0)`` without factors
+        or if that modality is not in the last observation.
+        """
+        hand = next((i for i, m in enumerate(model.modalities) if m.kind == "position"), None)
+        if self.factors is None or self.last is None or hand is None:
+            return float("nan"), 0
+        k, P = self.task_index, model.n_human
+        weights = model.task_models[k].weights
+        human = condition_low_rank(weights, self.factors[k], slice(0, P),
+                                   weights.factor.shape[1])
+        mean, cov = trajectory_distribution(human, model.basis, np.ones(1))
+        start = sum(m.size for m in model.modalities[:hand])
+        seen = np.zeros(P, dtype=bool)
+        seen[start:start + model.modalities[hand].size] = True
+        seen &= np.isfinite(self.last[1])
+        if not seen.any():
+            return float("nan"), 0
+        r = self.last[1][seen] - mean[0, seen]
+        S = cov[0][np.ix_(seen, seen)] + np.diag(model.noise[seen])
+        return float(r @ np.linalg.solve(S, r)), int(seen.sum())
+
+    def ended_probability(self, t: float) -> float:
+        """Probability that the chosen task's motion had ended by ``t`` (s)."""
+        if self.grid is None:
+            return float(self.duration <= t)
+        return float(ended_probability(self.grid[self.task_index:self.task_index + 1], t)[0])
 
 
 def predict(model, scorer: Scorer, times: FloatArray, values: FloatArray, *,
@@ -65,7 +121,7 @@ def predict(model, scorer: Scorer, times: FloatArray, values: FloatArray, *,
     times : ndarray, shape (s,)
         Observation times since the motion started (s), s >= 1.
     values : ndarray, shape (s, P)
-        Observed human dims, without NaN.
+        Observed human dims (normalised units), NaN where a modality is not observed.
     likelihood, n_candidates, width, refine_steps
         As for :class:`DynamicPredictor`.
     stats : StreamStatistics, optional
@@ -85,4 +141,5 @@ def predict(model, scorer: Scorer, times: FloatArray, values: FloatArray, *,
         factor = scorer.joint_pairs(times, values, np.array([T]), np.array([k]))[1][0]
     robot = condition_robot(model.task_models[k].weights, factor, model.n_human,
                             scorer.rank[k])
-    return Prediction(k, post, est.alphas, est.durations, est.log_likelihood, robot, T)
+    return Prediction(k, post, est.alphas, est.durations, est.log_likelihood, robot, T,
+                      est.factors, est.grid, (float(times[-1]), values[-1]))

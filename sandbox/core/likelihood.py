@@ -1,6 +1,7 @@
 """Fast exact likelihoods of partial human observations for many speeds and tasks.
 
-For task k and a candidate duration T (phase :math:`z_j = t_j / T`), the human
+For task k and a candidate duration T (phase :math:`z_j = \\min(t_j / T, 1)`: past
+its end a motion holds its final state), the human
 observations :math:`y \\in \\mathbb{R}^{sP}` have the marginal (eq. 12, 16)
 
 .. math::  y \\sim \\mathcal{N}(\\Phi\\mu_h, \\; \\Phi(\\Lambda_h + U_hU_h^T)\\Phi^T + R),
@@ -9,11 +10,15 @@ observations :math:`y \\in \\mathbb{R}^{sP}` have the marginal (eq. 12, 16)
 Computed densely this is an sP x sP Cholesky per (candidate, task) pair. Here:
 
 1. :math:`B = \\Phi\\Lambda_h\\Phi^T + R` is block diagonal with blocks
-   :math:`\\sigma_p^2 (I + \\kappa\\Psi\\Psi^T)`; with the model's shared
-   :math:`\\kappa = \\lambda_p/\\sigma_p^2`, one N x N Cholesky of
-   :math:`A = I + \\kappa G`, :math:`G = \\Psi^T\\Psi`, per candidate serves every
-   human dim and every task (push-through identity:
-   :math:`\\Psi^T B_p^{-1}\\Psi = (G - \\kappa G A^{-1} G)/\\sigma_p^2`).
+   :math:`\\sigma_p^2 (I + \\kappa_m\\Psi_m\\Psi_m^T)`, where :math:`\\Psi_m` holds the
+   rows at which dim p's modality m is observed (a modality missing from a row
+   has no rows there: the masked rows of H, eq. 9, never a filled-in value).
+   With the model's :math:`\\kappa_m = \\lambda_p/\\sigma_p^2` shared by a modality's
+   dims, one N x N Cholesky of :math:`A_m = I + \\kappa_m G_m`,
+   :math:`G_m = \\Psi_m^T\\Psi_m`, per candidate and modality serves every dim of
+   the modality and every task (push-through identity:
+   :math:`\\Psi_m^T B_p^{-1}\\Psi_m = (G_m - \\kappa_m G_m A_m^{-1} G_m)/\\sigma_p^2`).
+   The cost grows with N and the number of modalities, not with s or P.
 2. The low-rank part :math:`U_h` (rank r = n_demos - 1) enters through the
    r x r matrix :math:`K = I + U_h^T\\Phi^T B^{-1}\\Phi U_h` (Woodbury and the
    determinant lemma); its entries for all candidates of a task come out of two
@@ -62,8 +67,39 @@ class Scores:
     factors: list | None
 
 
+@dataclass(frozen=True, eq=False)
+class Group:
+    """Human dims that share an observation mask and a regulariser ratio.
+
+    Attributes
+    ----------
+    dims : ndarray of int
+        Human dims of the group (all of one modality).
+    modality : int
+        Index of that modality; its rows are present where all its dims are finite.
+    kappa : float
+        :math:`\\kappa = \\lambda_p/\\sigma_p^2` of the group's dims.
+    member : ndarray of bool, shape (K, |dims|)
+        Whether task k's dim has this kappa (all True for a fitted model).
+    blocks : ndarray, shape (K, N, |dims|, R+1)
+        Every task's :math:`[U_{kp}, \\mu_{kp}]/\\sigma_p` of the group's dims, in the
+        padded layout (U in the first r_k columns, zeros up to R, mean at R).
+    """
+
+    dims: np.ndarray
+    modality: int
+    kappa: float
+    member: np.ndarray
+    blocks: FloatArray
+
+
 class Scorer:
     """Precomputed, per fitted model, everything the likelihood needs.
+
+    The human dims are split into :class:`Group` s: dims of one modality (so
+    they are observed together) with one :math:`\\kappa` (one per modality for
+    every model :meth:`~sandbox.core.model.IProMP.fit` makes). Each group needs
+    its own N x N factorisation per candidate; the r x r part is shared.
 
     Parameters
     ----------
@@ -77,27 +113,58 @@ class Scorer:
         P, N = model.n_human, model.basis.n_basis
         self.P, self.N, self.K = P, N, len(model.task_models)
         self.sigma2 = np.asarray(model.noise, dtype=np.float64)
-        kappa = np.array([t.weights.reg[:P] / self.sigma2 for t in model.task_models])
-        self.kappas, self.group = _groups(kappa)
+        self.log_sigma2 = np.log(self.sigma2)
         self.rank = [t.weights.factor.shape[1] for t in model.task_models]
         self.R = max(self.rank)
         self.reg_h = np.array([t.weights.reg[:P] for t in model.task_models])  # (K, P)
-        blocks, raw, self.cols = [], [], []
-        start = 0
-        for t in model.task_models:
+        sizes = [m.size for m in model.modalities]
+        self.modality_dims = np.split(np.arange(P), np.cumsum(sizes)[:-1])
+        pad = np.zeros((self.K, N, P, self.R + 1))
+        raw = []
+        for k, t in enumerate(model.task_models):
             ut = _human_block(t.weights, P, N)                    # (P, N, r+1): [U_h, mu_h]
-            raw.append(ut.transpose(1, 0, 2).reshape(N, -1))
-            blocks.append((ut / np.sqrt(self.sigma2)[:, None, None]).transpose(1, 0, 2))
-            self.cols.append(slice(start, start + P * ut.shape[2]))
-            start += P * ut.shape[2]
-        self.V = [b.reshape(N * P, -1) for b in blocks]          # (N*P, r+1) per task
-        pad = np.zeros((N, self.K, P, self.R + 1))
-        for k, b in enumerate(blocks):                             # U in [:r], mu at R
-            pad[:, k, :, : self.rank[k]] = b[..., :-1]
-            pad[:, k, :, self.R] = b[..., -1]
-        self.V_pad = pad.reshape(N, -1)                           # (N, K*P*(R+1))
-        self.V_all = np.hstack([b.reshape(N, -1) for b in blocks])  # (N, sum P(r+1))
-        self.U_raw = np.hstack(raw)
+            raw.append(ut)
+            scaled = (ut / np.sqrt(self.sigma2)[:, None, None]).transpose(1, 0, 2)
+            pad[k, :, :, : self.rank[k]] = scaled[..., :-1]
+            pad[k, :, :, self.R] = scaled[..., -1]
+        self._raw = raw
+        kappa = self.reg_h / self.sigma2                          # (K, P)
+        self.groups = _make_groups(kappa, self.modality_dims, pad)
+
+    @property
+    def kappas(self) -> list[float]:
+        """:math:`\\kappa` of every group."""
+        return [g.kappa for g in self.groups]
+
+    def present(self, values: FloatArray) -> np.ndarray:
+        """Which modalities each row observes, shape (n_modalities, s): all dims finite."""
+        ok = np.isfinite(values)
+        return np.stack([ok[:, d].all(axis=1) for d in self.modality_dims])
+
+    def phases(self, times: FloatArray, durations: FloatArray) -> FloatArray:
+        """Basis at :math:`z = \\min(t/T, 1)` for every candidate, shape (C, s, N).
+
+        Past its end (t > T) a motion holds its final state.
+        """
+        return self.basis.evaluate(np.minimum(times[None, :] / durations[:, None], 1.0))
+
+    def _group_parts(self, psi: FloatArray, values: FloatArray):
+        """Per group: :func:`_b_part` of the rows observing it and the likelihood's
+        constant per dim."""
+        present = self.present(values)
+        out = []
+        for g in self.groups:
+            rows = present[g.modality]
+            s_g = int(rows.sum())
+            if s_g == 0:
+                out.append(None)
+                continue
+            ps = psi[:, rows]
+            y = values[rows][:, g.dims]
+            ps_t = ps.transpose(0, 2, 1)
+            parts = _b_part(ps_t @ ps, ps_t @ y, np.einsum("sp,sp->p", y, y), g.kappa)
+            out.append((parts, s_g * (LOG_2PI + self.log_sigma2[g.dims])))
+        return out
 
     # --------------------------------------------------------------- joint
     def joint(self, times: FloatArray, values: FloatArray, durations: FloatArray,
@@ -109,22 +176,14 @@ class Scorer:
         times : ndarray, shape (s,)
             Observation times (s) since the motion started.
         values : ndarray, shape (s, P)
-            Observed human dims (no NaN).
+            Observed human dims (normalised units); NaN where a modality is not
+            observed (a row observes a modality if all its dims are finite).
         durations : ndarray, shape (C,)
-            Candidate durations T (s), each >= ``times[-1]``.
+            Candidate durations T (s); observations past T see the motion's end.
         spans : ndarray of int, shape (K, 2)
             Task k scores candidates ``durations[spans[k,0]:spans[k,1]]``.
         """
-        s, P, N = times.size, self.P, self.N
-        psi = self.basis.evaluate(times[None, :] / durations[:, None])      # (C, s, N)
-        psi_t = psi.transpose(0, 2, 1)
-        G = psi_t @ psi                                                      # (C, N, N)
-        beta = psi_t @ values                                                # (C, N, P)
-        yy = np.einsum("sp,sp->p", values, values)
-        per_group = [_b_part(G, beta, yy, kap) for kap in self.kappas]
-        C = durations.size
-        T_all = [(g[1].reshape(C * N, N) @ self.V_all).reshape(C, N, -1) for g in per_group]
-        log_sigma = s * np.log(self.sigma2).sum()
+        parts = self._group_parts(self.phases(times, durations), values)
         loglik, factors = [], []
         for k in range(self.K):
             a, b = int(spans[k, 0]), int(spans[k, 1])
@@ -132,39 +191,11 @@ class Scorer:
                 loglik.append(np.empty(0))
                 factors.append(np.empty((0, self.R + 1, self.R + 1)))
                 continue
-            Kt, eps, gamma_term, logdet_b = self._gram(k, a, b, per_group, T_all)
-            ll, L = factor_scores(Kt, eps, gamma_term, s * P * LOG_2PI + log_sigma + logdet_b)
+            Kt, eps, gamma_term, offset = self._stats(parts, k, slice(a, b), b - a)
+            ll, L = factor_scores(Kt, eps, gamma_term, offset)
             loglik.append(ll)
             factors.append(L)
         return Scores(loglik, factors)
-
-    def _gram(self, k, a, b, per_group, T_all):
-        """Task k's padded statistics (as :func:`factor_scores` takes them) for candidates a:b."""
-        P, N, R, r = self.P, self.N, self.R, self.rank[k]
-        C = b - a
-        groups = self.group[k]
-        Kt = np.zeros((C, r + 1, r + 1))
-        eps = np.zeros((C, r + 1))
-        gamma_term = np.zeros(C)
-        logdet_b = np.zeros(C)
-        V = self.V[k].reshape(N, P, r + 1)
-        for g in np.unique(groups):
-            dims = np.flatnonzero(groups == g)
-            ld_a, _, ab, gamma = per_group[g]
-            T = T_all[g][a:b, :, self.cols[k]].reshape(C, N, P, r + 1)[:, :, dims]
-            Vg = V[:, dims].reshape(-1, r + 1)                                  # (N*Pg, r+1)
-            Tg = T.transpose(1, 2, 0, 3).reshape(Vg.shape[0], C * (r + 1))
-            Kt += (Vg.T @ Tg).reshape(r + 1, C, r + 1).transpose(1, 0, 2)
-            x = (ab[a:b][:, :, dims] / np.sqrt(self.sigma2[dims])).reshape(C, -1)
-            eps += x @ Vg
-            gamma_term += (gamma[a:b][:, dims] / self.sigma2[dims]).sum(axis=1)
-            logdet_b += dims.size * ld_a[a:b]
-        pos = np.r_[np.arange(r), R]          # U in [:r], mu at R, zeros in between
-        padded = np.zeros((C, R + 1, R + 1))
-        padded[:, pos[:, None], pos] = Kt
-        eps_padded = np.zeros((C, R + 1))
-        eps_padded[:, pos] = eps
-        return padded, eps_padded, gamma_term, logdet_b
 
     def joint_pairs(self, times: FloatArray, values: FloatArray, durations: FloatArray,
                     tasks: np.ndarray) -> tuple[FloatArray, FloatArray]:
@@ -182,58 +213,78 @@ class Scorer:
         factors : ndarray, shape (M, R+1, R+1)
             Augmented Cholesky factors (same layout as :meth:`joint`).
         """
-        if len(self.kappas) != 1:
-            out = [self.joint(times, values, durations[i:i + 1], self._one_span(k))
-                   for i, k in enumerate(tasks)]
-            return (np.array([o.loglik[k][0] for o, k in zip(out, tasks)]),
-                    np.array([o.factors[k][0] for o, k in zip(out, tasks)]))
-        s, P, N, R1, M = times.size, self.P, self.N, self.R + 1, durations.size
-        psi = self.basis.evaluate(times[None, :] / durations[:, None])
-        psi_t = psi.transpose(0, 2, 1)
-        G, beta = psi_t @ psi, psi_t @ values
-        ld_a, W, ab, gamma = _b_part(G, beta, np.einsum("sp,sp->p", values, values),
-                                     self.kappas[0])
-        V = self.V_pad.reshape(N, self.K, P, R1).transpose(1, 0, 2, 3)[tasks]   # (M, N, P, R1)
-        WV = (W @ V.reshape(M, N, P * R1)).reshape(M, N * P, R1)
-        Vf = V.reshape(M, N * P, R1)
-        Kt = Vf.transpose(0, 2, 1) @ WV
-        x = (ab / np.sqrt(self.sigma2)).reshape(M, 1, N * P)
-        eps = (x @ Vf)[:, 0]
-        const = s * P * LOG_2PI + s * np.log(self.sigma2).sum()
-        return factor_scores(Kt, eps, (gamma / self.sigma2).sum(axis=1), const + P * ld_a)
+        parts = self._group_parts(self.phases(times, durations), values)
+        Kt, eps, gamma_term, offset = self._stats(parts, np.asarray(tasks), slice(None),
+                                                     len(tasks))
+        return factor_scores(Kt, eps, gamma_term, offset)
 
-    def _one_span(self, k: int) -> np.ndarray:
-        spans = np.zeros((self.K, 2), dtype=int)
-        spans[k] = (0, 1)
-        return spans
+    def _stats(self, parts, tasks, cand: slice, M: int):
+        """Padded statistics of pairs: candidates ``cand`` of the parts with task ``tasks``.
+
+        ``tasks`` is one task index (every candidate of one task: shared blocks, 2-D
+        products) or an array with one task per candidate.
+        """
+        N, R1 = self.N, self.R + 1
+        one = np.ndim(tasks) == 0
+        Kt = np.zeros((M, R1, R1))
+        eps = np.zeros((M, R1))
+        gamma_term = np.zeros(M)
+        offset = np.zeros(M)
+        for g, part in zip(self.groups, parts):
+            if part is None:
+                continue
+            (ld_a, W, ab, gamma), const = part
+            W = W[cand]
+            if one:
+                Vf = g.blocks[tasks].reshape(-1, R1)                      # (N*Pg, R1)
+                WV = (W.reshape(-1, N) @ Vf.reshape(N, -1)).reshape(M, -1, R1)
+                member = np.broadcast_to(g.member[tasks], (M, g.dims.size))
+            else:
+                Vf = g.blocks[tasks].reshape(M, -1, R1)                   # (M, N*Pg, R1)
+                WV = (W @ Vf.reshape(M, N, -1)).reshape(M, -1, R1)
+                member = g.member[tasks]
+            Kt += np.swapaxes(Vf, -1, -2) @ WV
+            x = (ab[cand] / np.sqrt(self.sigma2[g.dims])).reshape(M, -1)
+            eps += x @ Vf if one else (x[:, None, :] @ Vf)[:, 0]
+            gamma_term += (member * gamma[cand] / self.sigma2[g.dims]).sum(axis=1)
+            offset += member @ const + member.sum(axis=1) * ld_a[cand]
+        return Kt, eps, gamma_term, offset
 
     # ------------------------------------------------------------ marginal
     def marginal(self, times: FloatArray, values: FloatArray, durations: FloatArray,
                  spans: np.ndarray) -> Scores:
         """Sum over observations of per-step marginal log-likelihoods.
 
-        Arguments as for :meth:`joint`.
+        Arguments as for :meth:`joint`; each row is scored on the dims it observes.
         """
-        P = self.P
-        psi = self.basis.evaluate(times[None, :] / durations[:, None])      # (C, s, N)
-        sq = (psi**2).sum(axis=2)                                           # (C, s)
-        proj = psi @ self.U_raw                                             # (C, s, cols)
-        loglik = []
-        for k in range(self.K):
-            a, b = int(spans[k, 0]), int(spans[k, 1])
-            r = self.rank[k]
-            blk = proj[a:b, :, self.cols[k]].reshape(b - a, times.size, P, r + 1)
-            low, mean = blk[..., :r], blk[..., r]
-            S = low @ low.transpose(0, 1, 3, 2)
-            idx = np.arange(P)
-            S[..., idx, idx] += self.sigma2 + self.reg_h[k] * sq[a:b, :, None]
-            L = np.linalg.cholesky(S)
-            d = (values - mean)[..., None]
-            w = np.linalg.solve(L, d)[..., 0]
-            logdet = 2.0 * np.log(np.diagonal(L, axis1=2, axis2=3)).sum(axis=2)
-            ll = -0.5 * (P * LOG_2PI + logdet + (w**2).sum(axis=2))
-            loglik.append(ll.sum(axis=1))
+        psi = self.phases(times, durations)                              # (C, s, N)
+        sq = (psi**2).sum(axis=2)                                        # (C, s)
+        present = self.present(values)
+        loglik = [np.zeros(int(b - a)) for a, b in spans]
+        for pattern in np.unique(present.T, axis=0):
+            rows = (present.T == pattern).all(axis=1)
+            dims = np.concatenate([self.modality_dims[m] for m in np.flatnonzero(pattern)]
+                                  + [np.zeros(0, int)])
+            if dims.size == 0:
+                continue
+            for k in range(self.K):
+                a, b = int(spans[k, 0]), int(spans[k, 1])
+                loglik[k] += self._marginal_rows(k, psi[a:b, rows], sq[a:b, rows],
+                                                 values[rows][:, dims], dims)
         return Scores(loglik, None)
+
+    def _marginal_rows(self, k, psi, sq, y, dims):
+        ut = self._raw[k][dims]                                          # (Pd, N, r+1)
+        r = self.rank[k]
+        blk = np.einsum("csn,pnj->cspj", psi, ut)
+        low, mean = blk[..., :r], blk[..., r]
+        S = low @ low.transpose(0, 1, 3, 2)
+        idx = np.arange(dims.size)
+        S[..., idx, idx] += self.sigma2[dims] + self.reg_h[k, dims] * sq[..., None]
+        L = np.linalg.cholesky(S)
+        w = np.linalg.solve(L, (y - mean)[..., None])[..., 0]
+        logdet = 2.0 * np.log(np.diagonal(L, axis1=2, axis2=3)).sum(axis=2)
+        return (-0.5 * (dims.size * LOG_2PI + logdet + (w**2).sum(axis=2))).sum(axis=1)
 
 
 def _human_block(weights: WeightDistribution, P: int, N: int) -> FloatArray:
@@ -242,20 +293,26 @@ def _human_block(weights: WeightDistribution, P: int, N: int) -> FloatArray:
     return np.concatenate([U, mu], axis=2)
 
 
-def _groups(kappa: FloatArray):
-    """Distinct values of kappa (K, P) up to 1e-9 relative, and each entry's group."""
-    flat = kappa.ravel()
-    values: list[float] = []
-    group = np.empty(flat.size, dtype=int)
-    for i, v in enumerate(flat):
-        for j, u in enumerate(values):
-            if abs(v - u) <= 1e-9 * max(abs(u), 1e-300):
-                group[i] = j
-                break
-        else:
-            values.append(float(v))
-            group[i] = len(values) - 1
-    return values, group.reshape(kappa.shape)
+def _make_groups(kappa: FloatArray, modality_dims, pad: FloatArray) -> list[Group]:
+    """One group per modality and distinct kappa (equal up to 1e-9 relative).
+
+    A fitted model has one kappa per modality, shared by all tasks; a hand-made
+    one may differ by task, and a task then belongs to a group only through the
+    dims whose kappa it has (``member``).
+    """
+    groups = []
+    for m, dims in enumerate(modality_dims):
+        values: list[float] = []
+        for v in kappa[:, dims].ravel():
+            if not any(abs(v - u) <= 1e-9 * max(abs(u), 1e-300) for u in values):
+                values.append(float(v))
+        for v in values:
+            same = np.abs(kappa[:, dims] - v) <= 1e-9 * max(abs(v), 1e-300)   # (K, |dims|)
+            used = same.any(axis=0)
+            member = same[:, used]
+            blocks = pad[:, :, dims[used]] * member[:, None, :, None]
+            groups.append(Group(dims[used], m, v, member, np.ascontiguousarray(blocks)))
+    return groups
 
 
 def _b_part(G: FloatArray, beta: FloatArray, yy: FloatArray, kappa: float):
@@ -354,12 +411,22 @@ def condition_robot(weights: WeightDistribution, factor: FloatArray, n_human: in
         :math:`U_r L_K^{-T}`, regulariser :math:`\\Lambda_r` (eq. 9 restricted to the
         robot block).
     """
+    return condition_low_rank(weights, factor, slice(n_human, None), rank)
+
+
+def condition_low_rank(weights: WeightDistribution, factor: FloatArray, dims: slice,
+                       rank: int) -> WeightDistribution:
+    """The low-rank part of the posterior of some dims' weights (see :func:`condition_robot`).
+
+    Exact for unobserved dims (the robot's). For observed human dims it leaves out
+    the regulariser's own share of the update (:math:`\\Lambda_h` is ~1e-3 of the
+    weight variance): good enough to ask where the model expects the hand.
+    """
     N = weights.n_basis
     R = factor.shape[0] - 1
     LK = factor[:rank, :rank]
     g = factor[R, :rank]
-    U_r = weights.factor[n_human * N:]
+    block = weights.dims(dims)
     kinv_e = scipy.linalg.solve_triangular(LK, g, lower=True, trans="T")
-    new_factor = scipy.linalg.solve_triangular(LK, U_r.T, lower=True).T
-    mean = weights.mean[n_human * N:] + U_r @ kinv_e
-    return WeightDistribution(mean, new_factor, weights.reg[n_human:], N)
+    new_factor = scipy.linalg.solve_triangular(LK, block.factor.T, lower=True).T
+    return WeightDistribution(block.mean + block.factor @ kinv_e, new_factor, block.reg, N)

@@ -1,31 +1,55 @@
-"""The fitted interaction model: one IProMP per task plus shared observation noise.
+"""The fitted interaction model: one IProMP per task plus per-modality observation noise.
 
 :class:`IProMP` is what users fit and save. For every task k it holds the
 weight distribution over P human + Q robot dims (:mod:`sandbox.core.promp`), the
 nominal duration :math:`T_{nom,k}` and the Gaussian prior of the speed factor
 :math:`\\alpha = T / T_{nom,k}` (paper eq. 11); shared by all tasks are the
-basis, the human observation noise :math:`\\Sigma_y` and the task priors p(k).
+basis, the observation modalities (:mod:`sandbox.core.modality`), their
+observation noise :math:`\\Sigma_y`, the scale of signal modalities and the
+task priors p(k).
 
 Choices this project makes (DESIGN.md section 3):
 
-* :math:`T_{nom,k}` is the mean demo duration of task k, so :math:`\\mu_\\alpha = 1`
+* **A demonstration's motion ends when both partners have arrived**: the robot
+  stays within ``settle_tol`` (rad) of its final configuration and the hand has
+  come within ``arrive_tol`` (m) of its farthest reach (:func:`motion_end`).
+  Recordings run on after the handover (0.6 +/- 0.3 s in the recorded set:
+  the hand idles, retracts or is occluded); that idle tail is not part of the
+  motion's phase.
+  Past its end a motion holds its final state (the phase is clipped at 1), for
+  the robot and the human alike; :mod:`sandbox.core.phase` scores observations
+  past a candidate's end that way instead of excluding short candidates.
+  ``settle_tol=None, arrive_tol=None`` keeps whole recordings (the paper's
+  convention).
+* :math:`T_{nom,k}` is the mean motion duration of task k, so :math:`\\mu_\\alpha = 1`
   and :math:`\\sigma_\\alpha` is the spread of :math:`T_i / T_{nom,k}` (ddof 1,
   floored at ``min_alpha_std``).
+* **Signal modalities are normalised** (e.g. EMG envelopes): each signal dim is
+  divided by its standard deviation over all samples of the training demos
+  (:attr:`IProMP.scale`; 1 for positions). Only the training demos reach it
+  (:meth:`IProMP.fit_demo_fits` pools per-demo moments), and it is stored with
+  the model; predictors divide incoming signal values by it.
 * :math:`\\Sigma_y` is diagonal and estimated from the data: the residuals of each
-  training demo's own basis fit of the human dims, pooled over demos and tasks,
-  divided by the residual degrees of freedom (sum of valid samples minus N per
-  demo and dim), scaled by ``noise_scale`` and floored at ``noise_floor``.
-  The residuals measure how far a hand track departs from a smooth N-basis
-  curve (sensor noise, 30 Hz steps, jitter); the floor (2 cm by default,
-  chosen by cross-validation) stands for what a live track departs from the
-  model by, which smoothed training demos cannot show.
+  training demo's own basis fit of the human dims (normalised units), pooled
+  over demos and tasks, divided by the residual degrees of freedom (sum of
+  valid samples minus N per demo and dim), scaled by ``noise_scale`` and
+  floored per modality: ``noise_floor`` (m) for positions, ``signal_floor``
+  (normalised units) for signals, or ``noise_floors[name]``. The residuals
+  measure how far a track departs from a smooth N-basis curve (sensor noise,
+  30 Hz steps, jitter); the floor stands for what a live track departs from
+  the model by, which smoothed training demos cannot show. Both defaults were
+  chosen by leave-one-out on the recorded handovers.
 * The regulariser :math:`\\Lambda` (see :mod:`sandbox.core.promp`) is relative:
   for a robot dim, ``regularizer`` x the mean variance of its weights across
-  the task's demos; for the human dims the same overall size (``regularizer`` x
-  the mean human weight variance pooled over tasks) split across dims in
-  proportion to :math:`\\Sigma_y`. That keeps :math:`\\lambda_p/\\sigma_p^2`
-  equal for every human dim and task, which lets the likelihood share one
-  factorisation per speed candidate across dims and tasks.
+  the task's demos; for the human dims of modality m the same overall size
+  (``regularizer`` x the mean weight variance of m's dims pooled over tasks)
+  split across m's dims in proportion to :math:`\\Sigma_y`. That keeps
+  :math:`\\kappa_m = \\lambda_p/\\sigma_p^2` equal for every dim of a modality and
+  every task, which lets the likelihood share one factorisation per speed
+  candidate and modality across dims and tasks; a modality's :math:`\\kappa_m`
+  does not depend on the other modalities, so a model fitted on several
+  modalities and observed through some of them equals the model fitted on
+  those alone.
 """
 
 from __future__ import annotations
@@ -37,12 +61,21 @@ from typing import Any, Protocol
 import numpy as np
 
 from sandbox.core.basis import GaussianBasis
+from sandbox.core.modality import Modality, check_modalities, default_modalities
 from sandbox.core.promp import WeightDistribution, fit_weights
 from sandbox.core.validation import FloatArray, check_array, check_positive
 
+#: Default noise floor of signal modalities, in their normalised units (see IProMP).
+SIGNAL_FLOOR = 0.1
+
 
 class DemonstrationLike(Protocol):
-    """What :meth:`IProMP.fit` needs of a demonstration (see ``sandbox.data.Demonstration``)."""
+    """What :meth:`IProMP.fit` needs of a demonstration (see ``sandbox.data.Demonstration``).
+
+    ``modalities`` (a sequence of :class:`~sandbox.core.modality.Modality`) and
+    ``human_names`` are optional: without them the human dims are one position
+    modality ``"hand"``.
+    """
 
     times: Any
     human: Any
@@ -58,7 +91,7 @@ class TaskModel:
     ----------
     name : str
     weights : WeightDistribution
-        Over the P human dims followed by the Q robot dims.
+        Over the P human dims (normalised units) followed by the Q robot dims.
     nominal_duration : float
         :math:`T_{nom}` (s).
     alpha_mean, alpha_std : float
@@ -81,18 +114,22 @@ class TaskModel:
 
 @dataclass(frozen=True, eq=False)
 class DemoFit:
-    """What :meth:`IProMP.demo_fit` keeps of one demonstration.
+    """What :meth:`IProMP.demo_fit` keeps of one demonstration (raw units).
 
     Attributes
     ----------
     task : str
     weights : ndarray, shape ((P+Q)*N,)
+        Of the motion (up to its end, see :func:`motion_end`).
     residual : ndarray, shape (P,)
         Sum of squared residuals of the human dims' basis fit.
     dof : ndarray, shape (P,)
         Their degrees of freedom (valid samples - N).
     duration : float
-        (s)
+        Of the motion (s).
+    moments : ndarray, shape (3, P)
+        Count, sum and sum of squares of each human dim's valid samples (for
+        the scale of signal modalities).
     """
 
     task: str
@@ -100,6 +137,48 @@ class DemoFit:
     residual: FloatArray
     dof: FloatArray
     duration: float
+    moments: FloatArray
+
+
+def motion_end(times, robot, settle_tol: float | None, human=None,
+               arrive_tol: float | None = None) -> int:
+    """Index of the last sample of a demonstration's motion.
+
+    The motion is over once both partners have arrived:
+
+    * the robot, at the first sample after which it stays within ``settle_tol``
+      (rad, Euclidean norm over joints) of its final configuration;
+    * the human (if ``human`` and ``arrive_tol`` are given), at the first sample
+      where the hand (the first three human dims) comes within ``arrive_tol`` (m)
+      of its farthest distance from where it started.
+
+    ``None`` for a tolerance skips that partner; with neither, the last sample.
+    At least the first two samples are kept.
+
+    Parameters
+    ----------
+    times : ndarray, shape (T,)
+    robot : ndarray, shape (T, Q)
+    settle_tol : float or None
+    human : ndarray, shape (T, P), optional
+        NaN where missing.
+    arrive_tol : float or None
+    """
+    last = len(times) - 1
+    ends = []
+    if settle_tol is not None:
+        robot = np.asarray(robot, dtype=np.float64)
+        away = np.flatnonzero(np.linalg.norm(robot - robot[-1], axis=1) > settle_tol)
+        ends.append(away[-1] + 1 if away.size else last)
+    if arrive_tol is not None and human is not None and np.shape(human)[1] >= 3:
+        hand = np.asarray(human, dtype=np.float64)[:, :3]
+        ok = np.isfinite(hand).all(axis=1)
+        if ok.any():
+            reach = np.where(ok, np.linalg.norm(hand - hand[np.argmax(ok)], axis=1), -np.inf)
+            ends.append(int(np.argmax(reach >= reach.max() - arrive_tol)))
+    if not ends:
+        return last
+    return int(min(max(max(ends), 1), last))
 
 
 class IProMP:
@@ -125,12 +204,23 @@ class IProMP:
     noise_scale : float
         Multiplies the estimated observation noise :math:`\\Sigma_y`.
     noise_floor : float
-        Lower bound of every :math:`\\sigma_p` (m). Default 2 cm, chosen by
-        leave-one-out on the recorded handovers: smoothed training demos leave
-        ~1 mm residuals, but a live, causally filtered track departs from what
-        the model can explain by ~2 cm (tracker jumps and occlusions, motion the
-        demos do not span); trusting observations more made every prediction
-        worse, including the oracle's.
+        Lower bound of :math:`\\sigma_p` of position modalities (m). Default 2 cm,
+        chosen by leave-one-out on the recorded handovers: smoothed training
+        demos leave ~1 mm residuals, but a live, causally filtered track departs
+        from what the model can explain by ~2 cm (tracker jumps and occlusions,
+        motion the demos do not span); trusting observations more made every
+        prediction worse, including the oracle's.
+    signal_floor : float
+        Lower bound of :math:`\\sigma_p` of signal modalities, in normalised units
+        (fractions of the training demos' standard deviation).
+    noise_floors : mapping of str to float, optional
+        Per-modality floors (in the modality's normalised units) overriding the two above.
+    settle_tol : float or None
+        A demonstration's motion ends once the robot stays within this distance
+        (rad) of its final configuration (:func:`motion_end`) ...
+    arrive_tol : float or None
+        ... and the hand has come within this distance (m) of its farthest
+        reach; None for both: whole recordings.
     min_alpha_std : float
         Lower bound of :math:`\\sigma_\\alpha`.
     ridge : float
@@ -145,6 +235,8 @@ class IProMP:
     >>> model = IProMP(n_basis=15).fit(two_task_demos(5, np.random.default_rng(0)))
     >>> model.tasks
     ('left', 'right')
+    >>> [m.name for m in model.modalities]
+    ['hand']
     """
 
     def __init__(
@@ -157,6 +249,10 @@ class IProMP:
         regularizer: float = 1e-3,
         noise_scale: float = 1.0,
         noise_floor: float = 0.02,
+        signal_floor: float = SIGNAL_FLOOR,
+        noise_floors: Mapping[str, float] | None = None,
+        settle_tol: float | None = 0.02,
+        arrive_tol: float | None = 0.03,
         min_alpha_std: float = 0.02,
         ridge: float = 1e-8,
         priors: Mapping[str, float] | None = None,
@@ -165,6 +261,13 @@ class IProMP:
         self.regularizer = check_positive(regularizer, "regularizer")
         self.noise_scale = check_positive(noise_scale, "noise_scale")
         self.noise_floor = check_positive(noise_floor, "noise_floor")
+        self.signal_floor = check_positive(signal_floor, "signal_floor")
+        self.noise_floors = {str(k): check_positive(v, f"noise_floors[{k!r}]")
+                             for k, v in dict(noise_floors or {}).items()}
+        self.settle_tol = (None if settle_tol is None
+                           else check_positive(settle_tol, "settle_tol"))
+        self.arrive_tol = (None if arrive_tol is None
+                           else check_positive(arrive_tol, "arrive_tol"))
         self.min_alpha_std = check_positive(min_alpha_std, "min_alpha_std")
         self.ridge = check_positive(ridge, "ridge", allow_zero=True)
         self._prior_spec = dict(priors) if priors is not None else None
@@ -177,28 +280,43 @@ class IProMP:
         Parameters
         ----------
         demos : sequence of Demonstration
-            At least two per task, all with the same P, Q (and dim names).
+            At least two per task, all with the same P, Q and modalities.
         """
         _check_demos(demos)
         return self.fit_demo_fits([self.demo_fit(d) for d in demos], demos[0])
 
     def demo_fit(self, demo: DemonstrationLike) -> DemoFit:
-        """Per-demo part of the fit: weights, residuals of the human dims, duration."""
+        """Per-demo part of the fit: weights, residuals and moments of the human dims, duration.
+
+        Only the motion is used: the samples up to :func:`motion_end`.
+        """
         P, n = np.shape(demo.human)[1], self.basis.n_basis
         times = np.asarray(demo.times, dtype=np.float64)
+        end = self.motion_end(times, demo.robot, demo.human) + 1
+        times = times[:end]
         z = (times - times[0]) / (times[-1] - times[0])
-        human = np.asarray(demo.human, dtype=np.float64)
-        wd = fit_weights(z, np.hstack([human, demo.robot]), self.basis, self.ridge)
+        human = np.asarray(demo.human, dtype=np.float64)[:end]
+        robot = np.asarray(demo.robot, dtype=np.float64)[:end]
+        wd = fit_weights(z, np.hstack([human, robot]), self.basis, self.ridge)
         err = human - self.basis.evaluate(z) @ wd[:P].T
         ok = np.isfinite(err)
+        clean = np.where(np.isfinite(human), human, 0.0)
+        moments = np.stack([np.isfinite(human).sum(axis=0), clean.sum(axis=0),
+                            (clean**2).sum(axis=0)]).astype(float)
         return DemoFit(str(demo.task), wd.ravel(), (np.where(ok, err, 0.0) ** 2).sum(axis=0),
                        np.maximum(ok.sum(axis=0) - n, 1).astype(float),
-                       float(times[-1] - times[0]))
+                       float(times[-1] - times[0]), moments)
+
+    def motion_end(self, times, robot, human) -> int:
+        """:func:`motion_end` with this model's tolerances."""
+        return motion_end(times, robot, self.settle_tol, human, self.arrive_tol)
 
     def fit_demo_fits(self, fits: Sequence[DemoFit], names_from=None) -> IProMP:
         """Fit from per-demo parts (:meth:`demo_fit`); cheap, e.g. for leave-one-out.
 
-        ``names_from`` is a demonstration whose dim names the model keeps.
+        ``names_from`` is a demonstration whose dim names and modalities the
+        model keeps. Everything the model learns, the scale of signal
+        modalities included, comes from ``fits`` alone.
         """
         weights: dict[str, list] = {}
         durations: dict[str, list] = {}
@@ -209,22 +327,40 @@ class IProMP:
         if small:
             raise ValueError(f"demos: expected at least two demonstrations per task, "
                              f"got one for {small}")
-        residual = np.sum([f.residual for f in fits], axis=0)
-        dof = np.sum([f.dof for f in fits], axis=0)
-        P = residual.size
+        P = fits[0].residual.size
         Q = fits[0].weights.size // self.basis.n_basis - P
-        sigma2 = np.maximum(self.noise_scale * residual / dof, self.noise_floor**2)
-        self._set_fit({k: np.array(v) for k, v in weights.items()},
-                      {k: np.array(v) for k, v in durations.items()}, sigma2, P, Q, names_from)
+        modalities = _modalities_of(names_from, P)
+        scale = _scale(modalities, np.sum([f.moments for f in fits], axis=0))
+        residual = np.sum([f.residual for f in fits], axis=0) / scale**2
+        dof = np.sum([f.dof for f in fits], axis=0)
+        floors = self.floors(modalities)
+        sigma2 = np.maximum(self.noise_scale * residual / dof, floors**2)
+        divide = np.r_[scale, np.ones(Q)].repeat(self.basis.n_basis)
+        self._set_fit({k: np.array(v) / divide for k, v in weights.items()},
+                      {k: np.array(v) for k, v in durations.items()}, sigma2, P, Q,
+                      names_from, modalities, scale)
         return self
 
-    def _set_fit(self, weights, durations, sigma2, P, Q, first) -> None:
+    def floors(self, modalities: Sequence[Modality]) -> FloatArray:
+        """Noise floor of every human dim (normalised units), shape (P,)."""
+        out = []
+        for m in modalities:
+            default = self.noise_floor if m.kind == "position" else self.signal_floor
+            out += [self.noise_floors.get(m.name, default)] * m.size
+        return np.array(out)
+
+    def _set_fit(self, weights, durations, sigma2, P, Q, first, modalities, scale) -> None:
         n = self.basis.n_basis
         dists = {
             k: WeightDistribution.from_weights(w, self.regularizer, n) for k, w in weights.items()
         }
-        human_var = np.mean([d.reg[:P] / self.regularizer for d in dists.values()])
-        kappa = self.regularizer * human_var / sigma2.mean()
+        kappa = np.empty(P)
+        start = 0
+        for m in modalities:       # one kappa per modality, from its own dims only
+            dims = slice(start, start + m.size)
+            var = np.mean([d.reg[dims] / self.regularizer for d in dists.values()])
+            kappa[dims] = self.regularizer * var / sigma2[dims].mean()
+            start += m.size
         tasks = []
         for k, dist in dists.items():
             reg = dist.reg.copy()
@@ -238,8 +374,10 @@ class IProMP:
             )
         self.task_models = tuple(tasks)
         self.noise = sigma2
+        self.scale = np.asarray(scale, dtype=np.float64)
+        self.modalities = tuple(modalities)
         self.n_human, self.n_robot = P, Q
-        self.human_names = tuple(getattr(first, "human_names", ()) or ())
+        self.human_names = tuple(d for m in self.modalities for d in m.dims)
         self.robot_names = tuple(getattr(first, "robot_names", ()) or ())
         self.priors = _priors([t.name for t in tasks], self._prior_spec)
         self._fitted = True
@@ -261,6 +399,12 @@ class IProMP:
         """Task names in model order."""
         self._require_fit()
         return tuple(t.name for t in self.task_models)
+
+    @property
+    def modality_names(self) -> tuple[str, ...]:
+        """Names of the modalities the model was fitted on, in order."""
+        self._require_fit()
+        return tuple(m.name for m in self.modalities)
 
     def task_index(self, task: str) -> int:
         """Index of a task by name."""
@@ -293,13 +437,43 @@ class IProMP:
         if not self._fitted:
             return f"IProMP(n_basis={self.basis.n_basis}, unfitted)"
         return (
-            f"IProMP(tasks={list(self.tasks)}, P={self.n_human}, Q={self.n_robot}, "
-            f"n_basis={self.basis.n_basis})"
+            f"IProMP(tasks={list(self.tasks)}, observe={list(self.modality_names)}, "
+            f"P={self.n_human}, Q={self.n_robot}, n_basis={self.basis.n_basis})"
         )
 
 
+def _modalities_of(demo, P: int) -> tuple[Modality, ...]:
+    mods = tuple(getattr(demo, "modalities", ()) or ())
+    if mods:
+        return check_modalities(mods, P)
+    names = tuple(getattr(demo, "human_names", ()) or ()) or tuple(f"human_{i}" for i in range(P))
+    return check_modalities(default_modalities(names), P)
+
+
+def _scale(modalities: Sequence[Modality], moments: FloatArray) -> FloatArray:
+    """Standard deviation of each signal dim over the pooled samples; 1 for positions."""
+    count, total, squares = moments
+    scale = np.ones(count.size)
+    start = 0
+    for m in modalities:
+        dims = np.arange(start, start + m.size)
+        start += m.size
+        if m.kind != "signal":
+            continue
+        n = np.maximum(count[dims], 1.0)
+        var = squares[dims] / n - (total[dims] / n) ** 2
+        std = np.sqrt(np.maximum(var, 0.0))
+        bad = (count[dims] < 2) | ~(std > 1e-12 * np.maximum(np.abs(total[dims] / n), 1.0))
+        if bad.any():
+            names = [m.dims[i] for i in np.flatnonzero(bad)]
+            raise ValueError(f"modality {m.name!r}: signal dims {names} are constant or missing "
+                             f"in every training demonstration; nothing to normalise by")
+        scale[dims] = std
+    return scale
+
+
 def _check_demos(demos: Sequence[DemonstrationLike]) -> None:
-    """Shapes, finiteness and consistent P, Q (the per-task count is checked by the fit)."""
+    """Shapes, finiteness, consistent P, Q and modalities (per-task counts: the fit)."""
     if demos is None or len(demos) == 0:
         raise ValueError("demos: expected at least two demonstrations per task, got none")
     P = Q = None
@@ -319,6 +493,10 @@ def _check_demos(demos: Sequence[DemonstrationLike]) -> None:
                 f"demos[{i}]: expected P={P}, Q={Q} like the first demo, "
                 f"got P={h.shape[1]}, Q={r.shape[1]}"
             )
+        if _modalities_of(d, P) != _modalities_of(demos[0], P):
+            raise ValueError(f"demos[{i}]: expected the modalities of the first demo "
+                             f"{[m.name for m in _modalities_of(demos[0], P)]}, got "
+                             f"{[m.name for m in _modalities_of(d, P)]}")
 
 
 def _priors(tasks: Sequence[str], spec: Mapping[str, float] | None) -> FloatArray:

@@ -12,9 +12,14 @@ parabolic steps inside the bracket around the best grid point (a bounded 1-D
 search). Candidates share one duration lattice across tasks, so each
 candidate's factorisation serves all tasks (:mod:`sandbox.core.likelihood`).
 
-A candidate whose motion would end before the last observation is impossible
-and is excluded; if no candidate of a task is long enough, the motion is
-ending now and :math:`T = t_{last}` is that task's only candidate.
+A candidate shorter than the observations so far is not impossible: past its
+end a motion holds its final state (:meth:`~sandbox.core.likelihood.Scorer.phases`),
+so observations after T are scored against the motion's end. Earlier versions
+excluded such candidates and, when no candidate was long enough, declared
+the motion "ending now" at the last observation; on the recorded handovers,
+whose recordings run on after the handover, that stretched every estimate
+over the idle tail, misaligned the approach (where the tasks differ) and made
+recognition fall in the last third of the motion (README, "late motion").
 """
 
 from __future__ import annotations
@@ -45,6 +50,10 @@ class PhaseEstimate:
         Augmented Cholesky factors at the MAP (joint mode), for conditioning.
     n_candidates : ndarray of int, shape (K,)
         Grid candidates each task evaluated (before refinement).
+    grid : list of (ndarray, ndarray), optional
+        Per task, its grid durations (s) and their posterior probabilities
+        (normalised over the grid, prior included): what
+        :func:`ended_probability` reads.
     """
 
     durations: FloatArray
@@ -53,6 +62,7 @@ class PhaseEstimate:
     log_prior: FloatArray
     factors: FloatArray | None
     n_candidates: np.ndarray
+    grid: list | None = None
 
 
 @dataclass(frozen=True)
@@ -86,32 +96,10 @@ class Lattice:
         """Every lattice duration any task uses, shape (C,)."""
         return np.arange(self.j_lo.min(), self.j_hi.max() + 1) * self.step
 
-    def spans(self, t_last: float) -> np.ndarray | None:
-        """Each task's candidates in :attr:`durations` that last at least ``t_last``.
-
-        Returns ``None`` if some task has none left (the motion is ending now).
-        """
+    def spans(self) -> np.ndarray:
+        """Each task's candidates in :attr:`durations`, shape (K, 2): ``[start, stop)``."""
         base = self.j_lo.min()
-        first = np.maximum(self.j_lo, np.ceil(t_last / self.step - 1e-9).astype(np.int64))
-        if np.any(first > self.j_hi):
-            return None
-        return np.stack([first - base, self.j_hi - base + 1], axis=1)
-
-    def grid(self, t_last: float) -> tuple[FloatArray, np.ndarray]:
-        """Sorted unique candidates lasting at least ``t_last`` and each task's span.
-
-        A task with no such candidate gets the single candidate ``t_last``.
-        """
-        spans = self.spans(t_last)
-        if spans is not None:
-            return self.durations, spans
-        first = np.maximum(self.j_lo, np.ceil(t_last / self.step - 1e-9).astype(np.int64))
-        lattice = [np.arange(a, b + 1) * self.step if a <= b else np.array([t_last])
-                   for a, b in zip(first, self.j_hi)]
-        durations = np.unique(np.concatenate(lattice))
-        spans = np.array([[np.searchsorted(durations, g[0]),
-                           np.searchsorted(durations, g[-1]) + 1] for g in lattice])
-        return durations, spans
+        return np.stack([self.j_lo - base, self.j_hi - base + 1], axis=1)
 
 
 def log_alpha_prior(alpha: FloatArray, mean: float, std: float) -> FloatArray:
@@ -132,7 +120,7 @@ def estimate_phase(scorer: Scorer, tasks, times: FloatArray, values: FloatArray,
     times : ndarray, shape (s,)
         Observation times since the motion started (s), s >= 1.
     values : ndarray, shape (s, P)
-        Observations without NaN.
+        Observations (normalised units); NaN where a modality is not observed.
     n_candidates, width : see :func:`Lattice`.
     refine_steps : int
         Parabolic refinement steps after the grid (0: grid only).
@@ -146,25 +134,26 @@ def estimate_phase(scorer: Scorer, tasks, times: FloatArray, values: FloatArray,
     a_mean = np.array([t.alpha_mean for t in tasks])
     a_std = np.array([t.alpha_std for t in tasks])
     score = scorer.joint if mode == "joint" else scorer.marginal
-    spans = None
     if stats is not None and mode == "joint":
-        spans = stats.lattice.spans(float(times[-1]))
-    if spans is not None:
-        durations = stats.durations
+        lattice = stats.lattice
+        durations, spans = stats.durations, lattice.spans()
         scores = stats.scores(spans)
     else:
         lattice = Lattice.for_tasks(tasks, n_candidates, width)
-        durations, spans = lattice.grid(float(times[-1]))
+        durations, spans = lattice.durations, lattice.spans()
         scores = score(times, values, durations, spans)
     K = len(tasks)
     best_T, best_ll, best_lp = np.empty(K), np.empty(K), np.empty(K)
     factors = np.empty((K, scorer.R + 1, scorer.R + 1)) if mode == "joint" else None
     brackets = []
+    grid = []
     for k in range(K):
         T = durations[spans[k, 0]:spans[k, 1]]
         lp = log_alpha_prior(T / nominal[k], a_mean[k], a_std[k])
         f = scores.loglik[k] + lp
         i = int(np.argmax(f))
+        w = np.exp(f - f[i])
+        grid.append((T, w / w.sum()))
         best_T[k], best_ll[k], best_lp[k] = T[i], scores.loglik[k][i], lp[i]
         if factors is not None:
             factors[k] = scores.factors[k][i]
@@ -174,7 +163,15 @@ def estimate_phase(scorer: Scorer, tasks, times: FloatArray, values: FloatArray,
         brackets = _refine(pairs, times, values, tasks, brackets, nominal, a_mean, a_std,
                            best_T, best_ll, best_lp, factors)
     return PhaseEstimate(best_T, best_T / nominal, best_ll, best_lp, factors,
-                         spans[:, 1] - spans[:, 0])
+                         spans[:, 1] - spans[:, 0], grid)
+
+
+def ended_probability(grid, t: float) -> FloatArray:
+    """Each task's posterior probability that its motion had ended by ``t`` (s), shape (K,).
+
+    ``grid`` is :attr:`PhaseEstimate.grid` (the mass of the candidate durations <= t).
+    """
+    return np.array([w[T <= t].sum() for T, w in grid])
 
 
 def _bracket(T: FloatArray, f: FloatArray, i: int):

@@ -16,9 +16,10 @@ task priors (each at its mean duration, weighted by p(k)).
   fraction ``ratio`` of the expected duration.
 
 The plan before an update's time is never rewritten, so what was executed
-stays executed; each update records the jump it caused in the command.
-Observations are subsampled (1 kept out of ``subsample`` valid ones, as in the
-paper) and rows with NaN (tracker dropouts) are skipped.
+stays executed; each update records the jump it caused in the command. Once
+an update finds that the motion has ended (``until_end``), the task is held:
+after the handover the human's motion is no longer evidence about which task
+it was, and later updates only refine that task's timing and robot motion.
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ import time as _time
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.stats import chi2
 
 from sandbox.core.blending import blend_unchecked, sigmoid_activations
 from sandbox.core.inference import Prediction, predict
@@ -34,6 +36,7 @@ from sandbox.core.likelihood import Scorer
 from sandbox.core.phase import Lattice
 from sandbox.core.promp import WeightDistribution, trajectory_distribution
 from sandbox.core.statistics import StreamStatistics
+from sandbox.core.stream import ObservationStream
 from sandbox.core.validation import (
     FloatArray,
     check_array,
@@ -68,6 +71,9 @@ class Update:
         the update.
     seconds : float
         Wall time the update took.
+    after_end : bool
+        Made after the motion had ended (``until_end``): the task and its
+        posterior are those held since the end; the speeds and the robot are new.
     """
 
     time: float
@@ -81,24 +87,26 @@ class Update:
     duration: float
     jump: float
     seconds: float
+    after_end: bool = False
 
 
 class _Predictor:
     """Shared machinery of the two predictors (see the module docstring)."""
 
-    def __init__(self, model, *, subsample: int = 5, likelihood: str = "joint",
+    def __init__(self, model, *, observe=None, subsample: int = 5, likelihood: str = "joint",
                  n_candidates: int = 50, width: float = 3.0, refine_steps: int = 1,
                  dt: float = 0.01, blend_rate: float = 50.0, blend_delay: float = 0.1,
-                 blend: bool = True, horizon: float = 0.0, incremental: bool = True) -> None:
+                 blend: bool = True, horizon: float = 0.0, incremental: bool = True,
+                 until_end: bool = True, end_prob: float = 0.9,
+                 end_margin: float = 0.0, end_gate: float = 0.999) -> None:
         if not getattr(model, "is_fitted", False):
             raise RuntimeError("the model is not fitted: fit it (or load it) before predicting")
-        if int(subsample) != subsample or subsample < 1:
-            raise ValueError(f"subsample: expected an integer >= 1, got {subsample!r}")
         if int(n_candidates) != n_candidates or n_candidates < 3:
             raise ValueError(f"n_candidates: expected an integer >= 3, got {n_candidates!r}")
         self.model = model
+        self.stream = ObservationStream(model, observe, subsample)
         self.scorer = Scorer(model)
-        self.subsample = int(subsample)
+        self.subsample = self.stream.subsample
         self.likelihood = check_choice(likelihood, "likelihood", LIKELIHOODS)
         self.n_candidates = int(n_candidates)
         self.width = check_positive(width, "width")
@@ -108,18 +116,19 @@ class _Predictor:
         self.blend_delay = check_positive(blend_delay, "blend_delay", allow_zero=True)
         self.blend = bool(blend)
         self.horizon = check_positive(horizon, "horizon", allow_zero=True)
+        self.until_end = bool(until_end)
+        self.end_prob = check_fraction(end_prob, "end_prob")
+        self.end_margin = check_positive(end_margin, "end_margin", allow_zero=True)
+        self.end_gate = check_fraction(end_gate, "end_gate")
         self._lattice = Lattice.for_tasks(model.task_models, self.n_candidates, self.width)
-        self._incremental = (bool(incremental) and self.likelihood == "joint"
-                             and len(self.scorer.kappas) == 1)
+        self._incremental = bool(incremental) and self.likelihood == "joint"
         self.reset()
 
     # -------------------------------------------------------------- public
     def reset(self) -> None:
         """Forget all observations and updates; the plan is the prior mixture again."""
-        self._t: list[float] = []
-        self._y: list[FloatArray] = []
-        self._n_valid = 0
-        self.n_skipped = 0
+        self.stream.reset()
+        self.ended = False
         self._last_time = -np.inf
         self.updates: list[Update] = []
         self._prediction: Prediction | None = None
@@ -133,8 +142,11 @@ class _Predictor:
         ----------
         t : float
             Time since the motion started (s); non-decreasing across calls.
-        y : array_like, shape (P,)
-            Human dims (m); a row with NaN is skipped (counted in ``n_skipped``).
+        y : array_like, shape (P_obs,), or mapping of str to array_like
+            The observed modalities' dims in order (m for positions, raw units
+            for signals), or a mapping from modality names to their values. A
+            modality with a NaN is masked in this row; a row with no valid
+            modality is skipped (counted in ``n_skipped``).
 
         Returns
         -------
@@ -145,17 +157,10 @@ class _Predictor:
         if not np.isfinite(t) or t < self._last_time:
             raise ValueError(f"t: expected a finite time >= the previous one "
                              f"({self._last_time:g}), got {t!r}")
-        y = check_array(y, "y", 1, shape=(self.model.n_human,), allow_nan=True)
+        row = self.stream.accept(t, y)
         self._last_time = t
-        if np.isnan(y).any():
-            self.n_skipped += 1
-        else:
-            if self._n_valid % self.subsample == 0:
-                self._t.append(t)
-                self._y.append(y)
-                if self._stats is not None:
-                    self._stats.add(t, y)
-            self._n_valid += 1
+        if row is not None and self._stats is not None:
+            self._stats.add(t, row)
         return self._maybe_update(t)
 
     def command(self, t: float) -> tuple[FloatArray, FloatArray]:
@@ -201,8 +206,14 @@ class _Predictor:
         return self._prediction
 
     def observations(self) -> tuple[FloatArray, FloatArray]:
-        """Kept (subsampled, valid) observations: times (s,), values (s, P)."""
-        return np.array(self._t), np.array(self._y).reshape(-1, self.model.n_human)
+        """Kept observations: times (s,), values (s, P) in the model's human layout
+        (signals normalised; NaN where a modality was not kept)."""
+        return self.stream.observations()
+
+    @property
+    def n_skipped(self) -> int:
+        """Rows skipped because no modality was valid in them."""
+        return self.stream.n_skipped
 
     @property
     def task_posterior(self) -> dict[str, float]:
@@ -231,7 +242,9 @@ class _Predictor:
         return float(np.dot(self.model.priors, [t.mean_duration for t in self.model.task_models]))
 
     def update(self, t: float | None = None) -> Update | None:
-        """Update now (at ``t``, default: the last observation time) with the observations kept."""
+        """Update now (at ``t``, default: the last observation time) with the observations kept.
+
+        Returns None if there is nothing to update from."""
         t = self._last_time if t is None else float(t)
         if not np.isfinite(t):
             raise ValueError("update: no observation yet and no time given")
@@ -246,24 +259,46 @@ class _Predictor:
         return self.apply(t, pred, n_observations=int(times.size), started=start)
 
     def apply(self, t: float, prediction: Prediction, *, n_observations: int = 0,
-              started: float | None = None) -> Update:
+              started: float | None = None) -> Update | None:
         """Blend a prediction made elsewhere (:func:`~sandbox.core.inference.predict`) into
         the plan at time ``t``, exactly as an update does; returns the recorded update.
 
         Lets several predictors that differ only in how they blend share one
         estimate (e.g. windows of an evaluation fed the same observations).
+        With ``until_end``, once a prediction's motion ended before ``t`` (see
+        :attr:`ended`), the task is held: this and later predictions condition
+        the task chosen before the end (marginal likelihood: they are dropped
+        and None is returned).
         """
         start = _time.perf_counter() if started is None else started
+        held = self.ended
+        if held:
+            if prediction.factors is None:
+                return None                      # marginal likelihood: the plan just holds
+            last = self.updates[-1]
+            prediction = prediction.for_task(self.model, self.model.task_index(last.task),
+                                             last.task_posterior)
+        elif self.until_end and self._has_ended(prediction, t):
+            self.ended = True                    # this update decides; later ones hold it
         k = prediction.task_index
         jump = self._blend_in(float(t), prediction.robot, prediction.duration)
         self._prediction = prediction
         upd = Update(float(t), int(n_observations), self.model.tasks[k],
                      prediction.task_posterior, prediction.alphas, prediction.durations,
                      prediction.log_likelihood, float(prediction.alphas[k]),
-                     prediction.duration, jump, _time.perf_counter() - start)
+                     prediction.duration, jump, _time.perf_counter() - start, held)
         self.updates.append(upd)
         self._after_update()
         return upd
+
+    def _has_ended(self, prediction: Prediction, t: float) -> bool:
+        """Whether the handover is over: the chosen task's motion ended before ``t``
+        (probability >= ``end_prob``) and the hand has left where it ended (the last
+        observation beyond the ``end_gate`` quantile of a chi-square)."""
+        if prediction.ended_probability(t - self.end_margin) < self.end_prob:
+            return False
+        d2, dims = prediction.end_distance(self.model)
+        return bool(dims and d2 > chi2.ppf(self.end_gate, dims))
 
     def _after_update(self) -> None:
         """Hook: what to forget after an update (nothing by default)."""
@@ -296,7 +331,7 @@ class _Predictor:
 
     def _blend_in(self, t: float, robot: WeightDistribution, duration: float) -> float:
         keep = self._plan_t < t                       # knot t is added below: no duplicate
-        end = max(duration, self._plan_t[-1], t + self.horizon)
+        end = max(duration, self._plan_t[-1], t + max(self.horizon, self.dt))
         first = (np.floor(t / self.dt + 1e-9) + 1.0) * self.dt
         new_t = np.arange(first, end + self.dt, self.dt)
         new_t = new_t[new_t > t + 1e-9]
@@ -343,6 +378,10 @@ class DynamicPredictor(_Predictor):
     dow_t : float
         Dynamic observation window (s): an update every ``dow_t`` seconds of
         observation (the paper tests 1, 0.5, 0.2, 0.1).
+    observe : sequence of str or str, optional
+        Modalities the incoming rows carry (default: all the model's); any
+        subset predicts, the others are marginalised. A name the model was not
+        fitted with is a ``ValueError`` listing what it has.
     subsample : int
         Keep 1 of every ``subsample`` valid observations.
     window : {"all", "latest"}
@@ -365,6 +404,16 @@ class DynamicPredictor(_Predictor):
     horizon : float
         The plan reaches at least this far (s) past each update (holding the
         predicted end), e.g. for a controller that looks ahead.
+    until_end : bool
+        Hold the task once the motion has ended: when an update finds the
+        chosen task's motion over before the update's time (its duration
+        shorter than the time elapsed), the human's further motion (releasing,
+        retracting, occluded by the robot) is no longer evidence about which
+        task it was. :attr:`ended` turns True; that update and every later one
+        keep the task and posterior chosen before the end and only re-estimate
+        its timing and condition its robot motion on the hand. ``False``
+        re-chooses the task through the whole stream (on the recorded handovers
+        recognition then falls after the handover).
     incremental : bool
         Grow the likelihood's sufficient statistics with each observation
         (:mod:`sandbox.core.statistics`) so an update only factors small
@@ -407,6 +456,15 @@ class DynamicPredictor(_Predictor):
     def next_boundary(self, t: float) -> float:
         """The first window boundary after an update at ``t``."""
         return float((np.floor(t / self.dow_t + 1e-9) + 1) * self.dow_t)
+
+    def _has_ended(self, prediction: Prediction, t: float) -> bool:
+        """Whether the handover is over: the chosen task's motion ended before ``t``
+        (probability >= ``end_prob``) and the hand has left where it ended (the last
+        observation beyond the ``end_gate`` quantile of a chi-square)."""
+        if prediction.ended_probability(t - self.end_margin) < self.end_prob:
+            return False
+        d2, dims = prediction.end_distance(self.model)
+        return bool(dims and d2 > chi2.ppf(self.end_gate, dims))
 
     def _after_update(self) -> None:
         if self.window == "latest" and self._stats is not None:

@@ -1,8 +1,10 @@
 """One entry point for demonstrations: a recorded folder or a named synthetic set.
 
-``spec`` is either a folder in the per-trial CSV layout ``<root>/<task>/<trial>.csv``
-(:mod:`sandbox.data.recorded`) or ``synthetic:NAME`` with NAME one of
-:data:`sandbox.data.synthetic.DATASETS` (generated, seeded, needs nothing on disk).
+``data`` is either a folder in the per-trial CSV layout ``<root>/<task>/<trial>.csv``
+(:mod:`sandbox.data.recorded`; a :class:`~sandbox.data.spec.DataSpec` says what
+its columns are, ``observe`` which modalities to load) or ``synthetic:NAME``
+with NAME one of :data:`sandbox.data.synthetic.DATASETS` (generated, seeded,
+needs nothing on disk; it observes the hand).
 
 Preprocessing defaults: ``"smooth"`` (RTS-smoothed human track, short gaps
 filled) because datasets are mostly used to *train*. Streams a predictor is
@@ -21,6 +23,7 @@ import numpy as np
 
 from sandbox.core.validation import check_array, check_choice, check_positive
 from sandbox.data.demonstration import Demonstration, stack_tasks
+from sandbox.data.spec import DataSpec, resolve
 
 SYNTHETIC_PREFIX = "synthetic:"
 #: Demonstrations per task of a synthetic set when ``n_per_task`` is not given.
@@ -43,8 +46,10 @@ def _spec_options() -> str:
 
 
 def load_dataset(
-    spec: str | Path,
+    data: str | Path,
     *,
+    spec: DataSpec | str | Path | None = None,
+    observe: Sequence[str] | str | None = None,
     seed: int = 0,
     tasks: Sequence[str] | None = None,
     n_per_task: int | None = None,
@@ -56,8 +61,13 @@ def load_dataset(
 
     Parameters
     ----------
-    spec : str or Path
+    data : str or Path
         A dataset folder, or ``"synthetic:NAME"``.
+    spec : DataSpec or path, optional
+        What a folder's columns are (a :class:`~sandbox.data.spec.DataSpec` or a
+        spec file); default the built-in layout of the recorded Baxter set.
+    observe : sequence of str or str, optional
+        Modalities to load (default the spec's: ``hand``).
     seed : int
         Seed of the synthetic generator (``np.random.default_rng(seed)``);
         unused for folders.
@@ -76,7 +86,7 @@ def load_dataset(
         (:func:`resample_uniform`); default: keep the sample times.
     **options
         Passed to the loader / preprocessing: ``columns`` (folders only),
-        ``config``, ``freeze_s``, ``max_fill_s``, ``jump_m``.
+        and those of :data:`sandbox.data.preprocess.DEFAULTS`.
 
     Returns
     -------
@@ -87,13 +97,22 @@ def load_dataset(
     check_choice(preprocess, "preprocess", PREPROCESS)
     if n_per_task is not None and (int(n_per_task) != n_per_task or n_per_task < 1):
         raise ValueError(f"n_per_task: expected an integer >= 1, got {n_per_task!r}")
-    if isinstance(spec, str) and spec.startswith(SYNTHETIC_PREFIX):
-        demos = _synthetic(spec[len(SYNTHETIC_PREFIX):], seed, tasks, n_per_task, preprocess,
+    layout = resolve(spec)
+    if isinstance(data, str) and data.startswith(SYNTHETIC_PREFIX):
+        observed = [m.name for m in layout.observed(observe)]
+        if observed != ["hand"]:
+            raise ValueError(f"observe: synthetic sets carry the hand only, got {observed}")
+        demos = _synthetic(data[len(SYNTHETIC_PREFIX):], seed, tasks, n_per_task, preprocess,
                            options)
-    elif isinstance(spec, (str, Path)) and Path(spec).is_dir():
-        demos = _recorded(Path(spec), tasks, n_per_task, preprocess, options)
+    elif isinstance(data, (str, Path)) and Path(data).is_dir():
+        given = {"observe": observe, **options}
+        if "columns" not in options:          # columns= is shorthand for a hand-only spec
+            given["spec"] = layout
+        elif spec is not None:
+            raise ValueError("spec and columns: expected one of them, got both")
+        demos = _recorded(Path(data), tasks, n_per_task, preprocess, given)
     else:
-        raise ValueError(f"data: expected {_spec_options()}, got {str(spec)!r}")
+        raise ValueError(f"data: expected {_spec_options()}, got {str(data)!r}")
     if rate_hz is not None:
         demos = [resample_uniform(d, rate_hz) for d in demos]
     return demos
@@ -125,7 +144,7 @@ def _synthetic(name, seed, tasks, n_per_task, preprocess, options) -> list[Demon
         demos = [d for d in demos if d.task in set(tasks)]
     if preprocess == "none":
         return demos
-    from sandbox.data.recorded import preprocess_demonstration
+    from sandbox.data.preprocess import preprocess_demonstration
 
     return [preprocess_demonstration(d, preprocess, **options) for d in demos]
 

@@ -8,6 +8,13 @@ from typing import Any
 
 import numpy as np
 
+from sandbox.core.modality import (
+    Modality,
+    check_modalities,
+    default_modalities,
+    select,
+    slices,
+)
 from sandbox.core.validation import FloatArray, check_array, check_times
 
 
@@ -24,14 +31,19 @@ class Demonstration:
     times : array_like, shape (T,)
         Sample times (s), strictly increasing. The motion starts at ``times[0]``.
     human : array_like, shape (T, P)
-        Observed human dims (m), e.g. the left hand x, y, z in Baxter's base frame.
-        NaN marks a missing sample (tracker dropout).
+        Observed human dims, the modalities' columns one after the other (e.g.
+        the left hand x, y, z in Baxter's base frame, m). NaN marks a missing
+        sample (tracker dropout).
     robot : array_like, shape (T, Q)
         Robot dims (rad), e.g. Baxter's seven left-arm joints. Must be finite.
     task : str
         Task label.
     human_names, robot_names : sequence of str, optional
-        Names of the dims (defaults ``human_0 ...``, ``robot_0 ...``).
+        Names of the dims (defaults ``human_0 ...``, ``robot_0 ...``, or the
+        modalities' dims).
+    modalities : sequence of Modality, optional
+        What the human dims are (:mod:`sandbox.core.modality`); default one
+        position modality ``"hand"`` over all of them.
     source : str, optional
         Where it came from (file path, generator and seed).
     meta : mapping, optional
@@ -47,6 +59,7 @@ class Demonstration:
     task: str
     human_names: tuple[str, ...] = ()
     robot_names: tuple[str, ...] = ()
+    modalities: tuple[Modality, ...] = ()
     source: str = ""
     meta: Mapping[str, Any] = field(default_factory=dict)
 
@@ -62,13 +75,21 @@ class Demonstration:
             )
         if not isinstance(self.task, str) or not self.task:
             raise ValueError(f"task: expected a non-empty string, got {self.task!r}")
-        hn = tuple(self.human_names) or _default_names("human", human.shape[1])
+        mods = tuple(self.modalities)
+        if mods:
+            check_modalities(mods, human.shape[1])
+        hn = tuple(self.human_names) or (tuple(d for m in mods for d in m.dims) if mods else
+                                         _default_names("human", human.shape[1]))
         rn = tuple(self.robot_names) or _default_names("robot", robot.shape[1])
         if len(hn) != human.shape[1] or len(rn) != robot.shape[1]:
             raise ValueError(
                 f"expected {human.shape[1]} human and {robot.shape[1]} robot names, "
                 f"got {len(hn)} and {len(rn)}"
             )
+        mods = check_modalities(mods or default_modalities(hn), human.shape[1])
+        if tuple(d for m in mods for d in m.dims) != hn:
+            raise ValueError(f"human_names {list(hn)} differ from the modalities' dims "
+                             f"{[d for m in mods for d in m.dims]}")
         for arr in (times, human, robot):
             arr.setflags(write=False)
         object.__setattr__(self, "times", times)
@@ -76,6 +97,7 @@ class Demonstration:
         object.__setattr__(self, "robot", robot)
         object.__setattr__(self, "human_names", hn)
         object.__setattr__(self, "robot_names", rn)
+        object.__setattr__(self, "modalities", mods)
         object.__setattr__(self, "meta", dict(self.meta))
 
     @property
@@ -117,16 +139,37 @@ class Demonstration:
             "task": self.task,
             "human_names": self.human_names,
             "robot_names": self.robot_names,
+            "modalities": self.modalities,
             "source": self.source,
             "meta": self.meta,
         }
         fields.update(changes)
         return Demonstration(**fields)
 
+    def select(self, observe) -> Demonstration:
+        """The demonstration with only the named modalities (a list or ``"a,b"``), in that order.
+
+        An unknown name is a ``ValueError`` listing the modalities there are.
+        """
+        mods = select(self.modalities, observe,
+                      f"observe (this demonstration has {[m.name for m in self.modalities]})")
+        where = slices(self.modalities)
+        cols = np.concatenate([np.arange(where[m.name].start, where[m.name].stop) for m in mods])
+        meta = dict(self.meta)
+        if np.ndim(meta.get("modality_measured")) == 2:
+            index = [m.name for m in self.modalities]
+            measured = meta["modality_measured"][:, [index.index(m.name) for m in mods]]
+            meta["modality_measured"] = measured
+            meta["human_measured"] = measured.any(axis=1)
+        return self.replace(human=self.human[:, cols], modalities=mods, human_names=(),
+                            meta=meta)
+
     def __repr__(self) -> str:
+        observe = ",".join(m.name for m in self.modalities)
         return (
             f"Demonstration(task={self.task!r}, T={self.n_steps}, duration={self.duration:.2f} s, "
-            f"P={self.human.shape[1]}, Q={self.robot.shape[1]}, source={self.source!r})"
+            f"observe={observe}, P={self.human.shape[1]}, Q={self.robot.shape[1]}, "
+            f"source={self.source!r})"
         )
 
 

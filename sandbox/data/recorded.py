@@ -1,9 +1,12 @@
 """Recorded handovers in the per-trial CSV layout ``<root>/<task>/<trial>.csv``.
 
 One file per demonstration, one row per sample, a header row naming the
-columns (see ``data/README.md`` of the shared recordings). The user chooses the
-time, human and robot columns; the defaults are the paper's: the human left
-hand ``human_left_hand_x/y/z`` (m) and Baxter's seven left-arm joints (rad).
+columns (see ``data/README.md`` of the shared recordings). A
+:class:`~sandbox.data.spec.DataSpec` says which columns are the time, the
+robot (rad) and each observation modality; ``observe`` chooses the
+modalities to load (default: the hand ``human_left_hand_x/y/z``, m, as in
+the paper; the built-ins add ``arm``, the same side's elbow and shoulder, and
+``emg``, the 8 Myo channels).
 
 What the loader does with a trial (everything it does is counted in
 ``demo.meta["report"]``, see :func:`load_trial`):
@@ -14,32 +17,16 @@ What the loader does with a trial (everything it does is counted in
    recorded rows) are collapsed to the last row of each time stamp, so times
    are strictly increasing. The first and last time stamps are kept: the
    ground-truth duration is the recorded span.
-3. Human samples are classified (:func:`sandbox.data.glitches.find_glitches`): (0, 0, 0) rows
-   (tracker lost the person), stale rows (a frame received before, sent again:
-   the tracker runs at about 30 Hz, rows at about 100 Hz), frozen stretches (no
-   new frame for longer than ``freeze_s``), jumps between consecutive frames.
-4. ``preprocess`` decides what the human array holds:
+3. Each modality is preprocessed by its kind (:mod:`sandbox.data.preprocess`):
+   tracked positions are classified (zero rows, re-sent frames, freezes,
+   jumps) and filtered (``"causal"`` for test streams, ``"smooth"`` for
+   training); signals are rectified and low-pass filtered into an envelope.
+4. A trial in which an observed modality has fewer than two valid samples,
+   or a signal that never changes, is skipped with the reason.
 
-   ``"none"``
-       the recorded values at the kept rows, untouched (stale and zero rows included).
-   ``"causal"``
-       the output of the gated Kalman filter (:mod:`sandbox.data.filtering`)
-       at rows where a new frame was accepted, NaN elsewhere (stale, zero,
-       missing and gated-out rows are marked, not invented). Each value only
-       depends on earlier rows: use it for test streams.
-   ``"smooth"`` (default)
-       first, frames farther than ``excursion_m`` from the running median of the
-       frames within +/- 0.25 s are set aside (the tracker's occlusion jumps,
-       :func:`sandbox.data.glitches.excursions`; this looks at later frames);
-       then the gated filter and the RTS smoother run on the remaining frames,
-       and the smoothed track is given at every row that lies in a gap of at
-       most ``max_fill_s`` (default 1 s) between accepted frames or at most
-       0.1 s after the last one, NaN elsewhere. For training demos: a long
-       gap left NaN makes a basis-function fit of the demo ill-posed there
-       (weights of metres), a bridged one does not.
-
-``demo.meta["human_measured"]`` (bool, shape (T,)) marks the rows that carry a
-new, accepted tracker frame.
+``demo.meta["modality_measured"]`` (bool, shape (T, n_modalities)) marks the
+rows that carry a new, accepted sample of each modality; ``meta["human_measured"]``
+(T,) those of any.
 """
 
 from __future__ import annotations
@@ -54,19 +41,21 @@ from typing import Any
 
 import numpy as np
 
-from sandbox.core.validation import FloatArray, check_choice, check_positive
+from sandbox.core.modality import Modality
+from sandbox.core.validation import FloatArray
 from sandbox.data.demonstration import Demonstration
-from sandbox.data.filtering import FilterConfig, filter_track, smooth_track
-from sandbox.data.glitches import excursions, find_glitches
+from sandbox.data.preprocess import (  # noqa: F401 - preprocess_rows/_demonstration re-exported
+    PREPROCESS,
+    check_options,
+    measured_meta,
+    preprocess_demonstration,
+    preprocess_human,
+    preprocess_rows,
+    summary_counts,
+)
+from sandbox.data.spec import HAND, ROBOT_COLUMNS, TIME_COLUMN, DataSpec  # noqa: F401
 
-HUMAN_COLUMNS = ("human_left_hand_x", "human_left_hand_y", "human_left_hand_z")
-ROBOT_COLUMNS = ("left_s0", "left_s1", "left_e0", "left_e1", "left_w0", "left_w1", "left_w2")
-TIME_COLUMN = "t"
-PREPROCESS = ("none", "causal", "smooth")
-#: Width (s) of the running-median window used to find excursions ("smooth").
-EXCURSION_WINDOW_S = 0.5
-#: "smooth" extrapolates past the last accepted frame by at most this (s).
-MAX_EXTRAPOLATE_S = 0.1
+HUMAN_COLUMNS = HAND.dims
 
 
 class TrialError(ValueError):
@@ -79,7 +68,10 @@ class SkippedTrialWarning(UserWarning):
 
 @dataclass(frozen=True)
 class Columns:
-    """Which CSV columns to read.
+    """Which CSV columns to read (the physical columns; see :meth:`from_spec`).
+
+    As a loader argument it is shorthand for a spec whose ``hand`` modality is
+    ``human`` (:meth:`~sandbox.data.spec.DataSpec.with_columns`).
 
     Parameters
     ----------
@@ -110,12 +102,21 @@ class Columns:
     def all(self) -> tuple[str, ...]:
         return (self.time, *self.human, *self.robot)
 
+    @classmethod
+    def from_spec(cls, spec: DataSpec, modalities: Sequence[Modality]) -> Columns:
+        """The columns to read for these modalities of a spec."""
+        return cls(tuple(c for m in modalities for c in m.dims), spec.robot, spec.time)
+
+    def as_spec(self) -> DataSpec:
+        """The hand-only spec these columns stand for."""
+        return DataSpec().with_columns(human=self.human, robot=self.robot, time=self.time)
+
 
 def _clean_name(name: str) -> str:
     return name.replace("\ufeff", "").strip().strip("\"'").strip()
 
 
-def _column_index(header: list[str], columns: Columns) -> list[int]:
+def _column_index(header: list[str], columns: Columns, owners: dict | None = None) -> list[int]:
     names = [_clean_name(h) for h in header]
     index = []
     for col in columns.all:
@@ -127,9 +128,22 @@ def _column_index(header: list[str], columns: Columns) -> list[int]:
             close = [lower[c] for c in difflib.get_close_matches(col.lower(), list(lower), n=2,
                                                                  cutoff=0.75)]
             hint = f" (did you mean {' or '.join(map(repr, close))}?)" if close else ""
-            raise TrialError(f"missing column {col!r}{hint}")
+            raise TrialError(f"missing column {col!r}{hint}{_fix(col, columns, owners)}")
         index.append(hits[0])
     return index
+
+
+def _fix(col: str, columns: Columns, owners: dict | None) -> str:
+    """What fixes a missing column: the option that names it."""
+    owner = (owners or {}).get(col)
+    if owner is not None:
+        return (f"; it is a column of modality {owner!r}: name the file's columns in a spec "
+                f"(--spec FILE) or leave {owner!r} out of --observe")
+    if col == columns.time:
+        return "; name the time column in a spec (--spec FILE, key 'time')"
+    if col in columns.robot:
+        return "; name the robot columns with --robot-columns or a spec (--spec FILE, key 'robot')"
+    return "; name the human columns with --human-columns or a spec (--spec FILE)"
 
 
 def _to_float(cells: list[list[str]], names: Sequence[str], first_row: int) -> FloatArray:
@@ -148,7 +162,8 @@ def _to_float(cells: list[list[str]], names: Sequence[str], first_row: int) -> F
     return out
 
 
-def read_trial_table(path: str | Path, columns: Columns = Columns()) -> tuple[FloatArray, dict]:
+def read_trial_table(path: str | Path, columns: Columns = Columns(),
+                     owners: dict | None = None) -> tuple[FloatArray, dict]:
     """Read the chosen columns of one trial file as floats.
 
     Returns
@@ -157,6 +172,9 @@ def read_trial_table(path: str | Path, columns: Columns = Columns()) -> tuple[Fl
         Time, human and robot columns in that order; NaN for empty cells.
     notes : dict
         ``{"truncated_last_row": bool}``.
+
+    ``owners`` maps human columns to their modality's name, for the message
+    of a missing column.
 
     Raises
     ------
@@ -172,7 +190,7 @@ def read_trial_table(path: str | Path, columns: Columns = Columns()) -> tuple[Fl
     if not rows:
         raise TrialError("empty file")
     header, body = rows[0], rows[1:]
-    index = _column_index(header, columns)
+    index = _column_index(header, columns, owners)
     if not body:
         raise TrialError("no data rows (only a header)")
     truncated = len(body[-1]) < len(header)
@@ -200,120 +218,15 @@ def _usable_rows(table: FloatArray, n_human: int) -> tuple[np.ndarray, dict[str,
     return keep, {k: v for k, v in dropped.items() if v}
 
 
-def _human_track(
-    times: FloatArray, values: FloatArray, preprocess: str, config: Any, max_fill_s: float
-) -> tuple[FloatArray, np.ndarray, dict[str, int]]:
-    """Per-row human output, the rows whose frame was used, and filter counts."""
-    run = filter_track(times, values, config)
-    used = run.used
-    counts = run.counts()
-    stats = {"gate_rejected": counts["rejected"], "filter_resets": counts["reset"]}
-    if preprocess == "causal":
-        return run.filtered, used, stats
-    smoothed = smooth_track(run)
-    t_used = times[used]
-    if t_used.size == 0:
-        return smoothed, used, stats
-    k = np.searchsorted(t_used, times, side="right")  # next used frame index
-    prev = t_used[np.maximum(k - 1, 0)]
-    inside = (k > 0) & (k < t_used.size)
-    nxt = t_used[np.minimum(k, t_used.size - 1)]
-    fill = inside & (nxt - prev <= max_fill_s)  # a gap bridged by the smoother
-    fill |= (k == t_used.size) & (times - prev <= min(max_fill_s, MAX_EXTRAPOLATE_S))
-    fill |= used
-    return np.where(fill[:, None], smoothed, np.nan), used, stats
-
-
-def preprocess_rows(
-    times: FloatArray,
-    human: FloatArray,
-    preprocess: str,
-    *,
-    config: FilterConfig | None = None,
-    freeze_s: float = 0.25,
-    max_fill_s: float = 1.0,
-    jump_m: float = 0.05,
-    excursion_m: float = 0.04,
-) -> tuple[FloatArray, np.ndarray, dict[str, int | float]]:
-    """Classify and preprocess human rows, then keep one row per time stamp.
-
-    Parameters
-    ----------
-    times : ndarray, shape (T,)
-        Row times (s), non-decreasing; rows sharing a time stamp are collapsed
-        to the last of them.
-    human : ndarray, shape (T, P)
-        Human values (m), NaN where missing.
-    preprocess, config, freeze_s, max_fill_s, jump_m, excursion_m
-        As in :func:`load_trial`.
-
-    Returns
-    -------
-    human : ndarray, shape (T', P)
-        One row per distinct time stamp (see the module docstring for each mode).
-    measured : ndarray of bool, shape (T',)
-        Time stamps at which a new tracker frame was received (and, when
-        filtering, accepted by the gate).
-    counts : dict
-        Glitch and filter counts (JSON-ready).
-    """
-    _check_options(preprocess, config=config, freeze_s=freeze_s, max_fill_s=max_fill_s,
-                   jump_m=jump_m, excursion_m=excursion_m)
-    glitches = find_glitches(times, human, freeze_s=freeze_s, jump_m=jump_m)
-    measurement = np.where(glitches.fresh[:, None], human, np.nan)
-    away = np.zeros(times.size, dtype=bool)
-    if excursion_m > 0:
-        away = excursions(times, measurement, window_s=EXCURSION_WINDOW_S, threshold_m=excursion_m)
-    stats = {"excursions": int(away.sum()), "gate_rejected": 0, "filter_resets": 0}
-    if preprocess == "none":
-        out_rows, used = human, glitches.fresh
-    else:
-        if preprocess == "smooth":
-            measurement[away] = np.nan  # set aside: offline only (the median sees ahead)
-        out_rows, used, counts = _human_track(times, measurement, preprocess, config, max_fill_s)
-        stats.update(counts)
-    last = np.flatnonzero(np.r_[np.diff(times) > 0, True])
-    group = np.cumsum(np.r_[True, np.diff(times) > 0]) - 1
-    measured = np.bincount(group, weights=used.astype(float), minlength=last.size) > 0
-    out = out_rows[last]
-    if preprocess == "causal":
-        out = np.where(measured[:, None], out, np.nan)
-    unfilled = int(np.isnan(out).any(axis=1).sum())
-    return out, measured, {**glitches.counts(), **stats, "unfilled_samples": unfilled}
-
-
-def preprocess_demonstration(
-    demo: Demonstration, preprocess: str = "smooth", **options: Any
-) -> Demonstration:
-    """Apply the loader's human preprocessing to any demonstration (e.g. synthetic).
-
-    ``options`` are those of :func:`load_trial` (``config``, ``freeze_s``,
-    ``max_fill_s``, ``jump_m``, ``excursion_m``). The robot and the times are unchanged;
-    ``meta["report"]`` gets the glitch and filter counts and
-    ``meta["human_measured"]`` the rows with an accepted new sample.
-    ``preprocess="none"`` returns ``demo`` itself.
-    """
-    check_choice(preprocess, "preprocess", PREPROCESS)
-    if preprocess == "none":
-        return demo
-    human, measured, counts = preprocess_rows(demo.times, demo.human, preprocess, **options)
-    measured.setflags(write=False)
-    report = {**dict(demo.meta.get("report", {})), "preprocess": preprocess, **counts}
-    meta = {**demo.meta, "report": report, "human_measured": measured}
-    return demo.replace(human=human, meta=meta)
-
-
 def load_trial(
     path: str | Path,
     *,
     task: str | None = None,
-    columns: Columns = Columns(),
+    spec: DataSpec | None = None,
+    observe: Sequence[str] | str | None = None,
+    columns: Columns | None = None,
     preprocess: str = "smooth",
-    config: FilterConfig | None = None,
-    freeze_s: float = 0.25,
-    max_fill_s: float = 1.0,
-    jump_m: float = 0.05,
-    excursion_m: float = 0.04,
+    **options: Any,
 ) -> Demonstration:
     """Load one trial file as a :class:`Demonstration`.
 
@@ -323,69 +236,69 @@ def load_trial(
         The CSV file.
     task : str, optional
         Task label; defaults to the name of the file's folder.
-    columns : Columns
-        Time, human and robot columns to read.
+    spec : DataSpec, optional
+        What the columns are (default: the built-in layout of the recorded set).
+    observe : sequence of str or str, optional
+        Modalities to load, e.g. ``["hand", "arm", "emg"]`` or ``"hand,arm"``
+        (default: the spec's, ``hand``).
+    columns : Columns, optional
+        Shorthand for a hand-only spec with these columns (instead of ``spec``).
     preprocess : {"none", "causal", "smooth"}
-        What to do with the human samples (see the module docstring).
-    config : FilterConfig, optional
-        Filter settings for "causal" and "smooth".
-    freeze_s : float
-        A stretch without a new tracker frame longer than this (s) is a frozen skeleton.
-    max_fill_s : float
-        "smooth" bridges gaps between accepted frames up to this long (s);
-        longer ones stay NaN. ``meta["human_measured"]`` tells bridged rows apart.
-    jump_m : float
-        A step between consecutive tracker frames of at least this (m) counts as a jump.
-    excursion_m : float
-        "smooth" sets aside frames farther than this (m) from their running
-        median (0 disables). On the recorded handovers 4 cm sets aside 4.9 % of
-        the frames; on synthetic tracks with known truth it finds 67 % of the
-        frames more than 3 cm off, with 96 % precision.
+        What to do with the human samples (:mod:`sandbox.data.preprocess`).
+    **options
+        Preprocessing options (:data:`sandbox.data.preprocess.DEFAULTS`):
+        ``config`` (:class:`FilterConfig`), ``freeze_s`` (a stretch without a
+        new tracker frame longer than this, s, is a frozen skeleton),
+        ``max_fill_s`` ("smooth" bridges gaps between accepted frames up to
+        this long, s), ``jump_m`` (a step between consecutive frames of at
+        least this, m, is a jump), ``excursion_m`` ("smooth" sets aside frames
+        farther than this, m, from their running median; 0 disables; on the
+        recorded handovers 4 cm sets aside 4.9 % of the frames; on synthetic
+        tracks with known truth it finds 67 % of the frames more than 3 cm off,
+        with 96 % precision), ``signal_cutoff_hz`` and ``signal_rate_hz``
+        (the envelope of signals, :mod:`sandbox.data.signals`).
 
     Returns
     -------
     Demonstration
-        ``source`` is the file path; ``meta["report"]`` is a JSON-ready dict of
-        what was found and done; ``meta["human_measured"]`` marks the rows
-        carrying an accepted new frame.
+        ``source`` is the file path, ``modalities`` the observed ones;
+        ``meta["report"]`` is a JSON-ready dict of what was found and done;
+        ``meta["modality_measured"]`` and ``meta["human_measured"]`` mark the
+        rows carrying an accepted new sample.
 
     Raises
     ------
     ValueError
-        (:class:`TrialError`) the file cannot be used; the message says why.
+        (:class:`TrialError`) the file cannot be used; the message says why and
+        names the file (a missing column: also the option that fixes it).
     """
-    options = {"config": config, "freeze_s": freeze_s, "max_fill_s": max_fill_s,
-               "jump_m": jump_m, "excursion_m": excursion_m}
-    _check_options(preprocess, **options)
+    check_options(preprocess, **options)
+    spec = _spec(spec, columns)
+    modalities = spec.observed(observe)
     path = Path(path)
     try:
-        return _load_trial(path, task or path.parent.name, columns, preprocess, options)
+        return _load_trial(path, task or path.parent.name, spec, modalities, preprocess, options)
     except TrialError as error:
         raise TrialError(f"{path}: {error}") from None
 
 
-def _check_options(
-    preprocess: str,
-    *,
-    config: Any,
-    freeze_s: float,
-    max_fill_s: float,
-    jump_m: float,
-    excursion_m: float,
-) -> None:
-    check_choice(preprocess, "preprocess", PREPROCESS)
-    check_positive(freeze_s, "freeze_s")
-    check_positive(max_fill_s, "max_fill_s", allow_zero=True)
-    check_positive(jump_m, "jump_m")
-    check_positive(excursion_m, "excursion_m", allow_zero=True)
-    if config is not None and not isinstance(config, FilterConfig):
-        raise ValueError(f"config: expected a FilterConfig, got {type(config).__name__}")
+def _spec(spec: DataSpec | None, columns: Columns | None) -> DataSpec:
+    if spec is not None and columns is not None:
+        raise ValueError("spec and columns: expected one of them, got both")
+    if columns is not None:
+        if not isinstance(columns, Columns):
+            raise ValueError(f"columns: expected a Columns, got {type(columns).__name__}")
+        return columns.as_spec()
+    if spec is not None and not isinstance(spec, DataSpec):
+        raise ValueError(f"spec: expected a DataSpec, got {type(spec).__name__}")
+    return spec or DataSpec()
 
 
-def _load_trial(
-    path: Path, task: str, columns: Columns, preprocess: str, options: dict[str, Any]
-) -> Demonstration:
-    table, notes = read_trial_table(path, columns)
+def _load_trial(path: Path, task: str, spec: DataSpec, modalities: Sequence[Modality],
+                preprocess: str, options: dict[str, Any]) -> Demonstration:
+    columns = Columns.from_spec(spec, modalities)
+    owners = {c: m.name for m in modalities for c in m.dims}
+    table, notes = read_trial_table(path, columns, owners)
     n_rows = table.shape[0]
     p = len(columns.human)
     keep, dropped = _usable_rows(table, p)
@@ -400,23 +313,34 @@ def _load_trial(
             f"only {last.size} usable time stamp(s) out of {n_rows} rows, need at least 2"
             + (f" ({why})" if why else "")
         )
-    out, measured, counts = preprocess_rows(times, human, preprocess, **options)
-    if counts["new_frames"] < 2:
-        raise TrialError(
-            f"fewer than 2 valid human samples ({counts['missing_rows']} rows missing, "
-            f"{counts['zero_rows']} rows (0, 0, 0), {counts['stale_rows']} repeated)"
-        )
+    out, measured, counts = preprocess_human(times, human, modalities, preprocess, **options)
+    _check_usable(modalities, measured, counts)
     report = {
         "file": str(path), "task": task, "preprocess": preprocess, "rows": n_rows,
         "rows_dropped": dropped, "repeated_timestamps": int(times.size - last.size),
-        "samples": int(last.size), "duration_s": float(times[-1] - times[0]), **counts,
+        "samples": int(last.size), "duration_s": float(times[-1] - times[0]),
+        **summary_counts(counts, modalities),
     }
-    measured.setflags(write=False)
     return Demonstration(
-        times=times[last], human=out, robot=robot[last], task=task,
-        human_names=columns.human, robot_names=columns.robot, source=str(path),
-        meta={"report": report, "human_measured": measured},
+        times=times[last], human=out, robot=robot[last], task=task, modalities=modalities,
+        robot_names=columns.robot, source=str(path),
+        meta={"report": report, **measured_meta(measured)},
     )
+
+
+def _check_usable(modalities, measured, counts) -> None:
+    """Every observed modality needs two valid samples; a signal must change."""
+    for i, m in enumerate(modalities):
+        c = counts[m.name]
+        if m.kind == "signal" and c.get("signal_constant"):
+            raise TrialError(f"modality {m.name!r} is constant or missing in this trial "
+                             f"({c['signal_fresh_rows']} new samples): no signal to use")
+        if measured[:, i].sum() < 2:
+            if m.kind == "position":
+                raise TrialError(
+                    f"fewer than 2 valid samples of {m.name!r} ({c['missing_rows']} rows "
+                    f"missing, {c['zero_rows']} rows (0, 0, 0), {c['stale_rows']} repeated)")
+            raise TrialError(f"fewer than 2 valid samples of {m.name!r}")
 
 
 def find_trials(root: str | Path, tasks: Sequence[str] | None = None) -> list[tuple[str, Path]]:
@@ -445,10 +369,11 @@ def load_recorded(
     root: str | Path,
     *,
     tasks: Sequence[str] | None = None,
-    columns: Columns = Columns(),
+    spec: DataSpec | None = None,
+    observe: Sequence[str] | str | None = None,
+    columns: Columns | None = None,
     preprocess: str = "smooth",
-    config: FilterConfig | None = None,
-    **options: float,
+    **options: Any,
 ) -> tuple[list[Demonstration], list[tuple[str, str]]]:
     """Load every trial of ``<root>/<task>/<trial>.csv`` (optionally only ``tasks``).
 
@@ -458,9 +383,8 @@ def load_recorded(
         The dataset folder.
     tasks : sequence of str, optional
         Tasks to load (folder names); default all.
-    columns, preprocess, config, **options
-        As in :func:`load_trial` (``freeze_s``, ``max_fill_s``, ``jump_m``,
-        ``excursion_m``).
+    spec, observe, columns, preprocess, **options
+        As in :func:`load_trial`.
 
     Returns
     -------
@@ -470,12 +394,14 @@ def load_recorded(
         ``(file, reason)`` of every trial that could not be used; each also
         raises a :class:`SkippedTrialWarning`.
     """
-    check_choice(preprocess, "preprocess", PREPROCESS)
+    check_options(preprocess, **options)
+    spec = _spec(spec, columns)
+    spec.observed(observe)
     demos, skipped = [], []
     for task, path in find_trials(root, tasks):
         try:
-            demos.append(load_trial(path, task=task, columns=columns, preprocess=preprocess,
-                                    config=config, **options))
+            demos.append(load_trial(path, task=task, spec=spec, observe=observe,
+                                    preprocess=preprocess, **options))
         except TrialError as error:
             reason = str(error).removeprefix(f"{path}: ")
             skipped.append((str(path), reason))

@@ -1,10 +1,16 @@
 """Leave-one-out cross-validation of the static and dynamic formulations (paper sec. 4).
 
 Every trial is predicted by models of all tasks fitted on all other trials
-(multi-task recognition). Training demos use the smoothing preprocessing, the
-test stream the causal one (only samples received so far), as DESIGN.md asks.
+(multi-task recognition); everything a model learns, the normaliser of
+signal modalities included, comes from those other trials. Training demos use
+the smoothing preprocessing, the test stream the causal one (only samples
+received so far), as DESIGN.md asks. The models observe the modalities the
+demonstrations carry (``EvalConfig.observe`` selects some of them). The true
+duration of a trial is its motion's (:func:`~sandbox.core.model.motion_end`,
+the same rule the models are fitted with); recognition over time is reported
+at fractions of the whole recording, idle tail included.
 For each trial this module computes, on the same kept observations
-(valid tracker frames, 1 kept in ``subsample``):
+(valid samples of each modality, 1 kept in ``subsample``):
 
 * the oracle: all observations, the true task at the true duration;
 * the static formulation at each observed ratio f of the true duration (one
@@ -24,8 +30,10 @@ import numpy as np
 
 from sandbox.core import DynamicPredictor, IProMP, predict
 from sandbox.core.likelihood import Scorer
+from sandbox.core.model import SIGNAL_FLOOR
 from sandbox.core.phase import Lattice
 from sandbox.core.statistics import StreamStatistics
+from sandbox.core.stream import ObservationStream
 from sandbox.eval import metrics
 
 RATIOS = tuple(round(0.1 * i, 1) for i in range(1, 10))
@@ -42,9 +50,11 @@ class EvalConfig:
     ratios : observed fractions of the static formulation.
     windows : dynamic observation windows dow_t (s).
     subsample : keep 1 of this many valid tracker frames (~30 Hz -> ~15 Hz).
-    likelihood, window_mode, n_candidates, refine_steps, blend_rate, blend_delay :
+    likelihood, window_mode, n_candidates, refine_steps, blend_rate, blend_delay, until_end :
         predictor options (:class:`~sandbox.core.DynamicPredictor`).
-    n_basis, regularizer, noise_scale, noise_floor : model options (:class:`~sandbox.core.IProMP`).
+    n_basis, regularizer, noise_scale, noise_floor, signal_floor, noise_floors, settle_tol :
+        model options (:class:`~sandbox.core.IProMP`).
+    observe : modalities the models observe (None: all the demonstrations carry).
     goal_tol : distance (m) for time-to-correct.
     curve : fractions of the motion at which recognition over time is reported.
     """
@@ -58,41 +68,63 @@ class EvalConfig:
     refine_steps: int = 1
     blend_rate: float = 50.0
     blend_delay: float = 0.1
+    until_end: bool = True
+    end_prob: float = 0.9
+    end_margin: float = 0.0
+    end_gate: float = 0.999
     n_basis: int = 21
     regularizer: float = 1e-3
     noise_scale: float = 1.0
     noise_floor: float = 0.02
+    signal_floor: float = SIGNAL_FLOOR
+    noise_floors: tuple[tuple[str, float], ...] = ()
+    settle_tol: float | None = 0.02
+    arrive_tol: float | None = 0.03
+    observe: tuple[str, ...] | None = None
     goal_tol: float = 0.05
     curve: tuple[float, ...] = field(default=CURVE)
 
     def model(self) -> IProMP:
         """An unfitted model with these options."""
         return IProMP(n_basis=self.n_basis, regularizer=self.regularizer,
-                      noise_scale=self.noise_scale, noise_floor=self.noise_floor)
+                      noise_scale=self.noise_scale, noise_floor=self.noise_floor,
+                      signal_floor=self.signal_floor, noise_floors=dict(self.noise_floors),
+                      settle_tol=self.settle_tol, arrive_tol=self.arrive_tol)
 
     def predictor_options(self) -> dict:
         return {"subsample": self.subsample, "likelihood": self.likelihood,
                 "n_candidates": self.n_candidates, "refine_steps": self.refine_steps,
-                "blend_rate": self.blend_rate, "blend_delay": self.blend_delay}
+                "blend_rate": self.blend_rate, "blend_delay": self.blend_delay,
+                "until_end": self.until_end, "end_prob": self.end_prob,
+                "end_margin": self.end_margin, "end_gate": self.end_gate}
 
     def to_dict(self) -> dict:
         return asdict(self)
 
 
-def kept_observations(times, human, subsample: int):
-    """Valid rows (no NaN), 1 kept in ``subsample``, as the predictors keep them."""
-    valid = np.flatnonzero(np.isfinite(human).all(axis=1))[::subsample]
-    return times[valid], human[valid]
+def kept_observations(model, times, human, subsample: int):
+    """The observations a predictor keeps of this stream (normalised, NaN where a
+    modality is not kept): times (s,), values (s, P)."""
+    stream = ObservationStream(model, subsample=subsample)
+    for ti, yi in zip(times, human):
+        stream.accept(ti, yi)
+    return stream.observations()
 
 
-def evaluate_trial(model: IProMP, test, config: EvalConfig, fk) -> dict:
-    """All measures of one held-out trial (see the module docstring)."""
+def evaluate_trial(model: IProMP, test, config: EvalConfig, fk, truth=None) -> dict:
+    """All measures of one held-out trial (see the module docstring).
+
+    ``truth`` is the same trial preprocessed for training (smoothed; default
+    ``test``): its motion's end is the true duration.
+    """
+    truth = test if truth is None else truth
     t = test.times - test.times[0]
-    T, q = float(t[-1]), test.robot
+    q = test.robot
+    T = float(t[model.motion_end(t, q, truth.human)])
     k = model.task_index(test.task)
     goal = fk(q[-1])
     scorer = Scorer(model)
-    t_obs, y_obs = kept_observations(t, test.human, config.subsample)
+    t_obs, y_obs = kept_observations(model, t, test.human, config.subsample)
     opts = dict(likelihood=config.likelihood, n_candidates=config.n_candidates,
                 refine_steps=config.refine_steps)
     oracle = predict(model, scorer, t_obs, y_obs, task=k, duration=T, **opts)
@@ -112,6 +144,7 @@ def evaluate_trial(model: IProMP, test, config: EvalConfig, fk) -> dict:
     out["dynamic"] = {f"{w:.1f}": _dynamic(model, test, t, q, T, goal, fk, w, config,
                                            windows[w], preds, t_obs)
                       for w in config.windows}
+    out["recording"] = float(t[-1])
     return out
 
 
@@ -129,7 +162,7 @@ def update_times(t, t_obs, window: float) -> list[float]:
 def predictions_at(model, scorer, t_obs, y_obs, times, config, opts) -> dict:
     """:func:`~sandbox.core.predict` from the observations up to each time (sorted times)."""
     stats = None
-    if config.likelihood == "joint" and len(scorer.kappas) == 1:
+    if config.likelihood == "joint":
         stats = StreamStatistics(scorer, Lattice.for_tasks(model.task_models,
                                                            config.n_candidates))
     out, fed = {}, 0
@@ -153,17 +186,19 @@ def _score(traj, q, goal, fk, e_phi) -> dict:
 def _dynamic(model, test, t, q, T, goal, fk, window, config, times, preds, t_obs) -> dict:
     pred = DynamicPredictor(model, dow_t=window, window=config.window_mode, incremental=False,
                             **config.predictor_options())
-    fractions, goal_err, believed = [], [], []
+    goal_err, believed, at_recording = [], [], []
 
     def record(upd):
-        fractions.append(upd.time / T)
+        at_recording.append(upd.time / t[-1])
         goal_err.append(float(np.linalg.norm(fk(pred.plan()[1][-1]) - goal)))
         believed.append(upd.task == test.task)
 
     if config.window_mode == "all":        # the same estimates a streamed predictor makes
         for tau in times:
-            record(pred.apply(tau, preds[tau],
-                              n_observations=int(np.searchsorted(t_obs, tau, side="right"))))
+            upd = pred.apply(tau, preds[tau],
+                             n_observations=int(np.searchsorted(t_obs, tau, side="right")))
+            if upd is not None:
+                record(upd)
     else:
         for ti, yi in zip(t, test.human):
             upd = pred.observe(ti, yi)
@@ -171,13 +206,13 @@ def _dynamic(model, test, t, q, T, goal, fk, window, config, times, preds, t_obs
                 record(upd)
     res = _score(pred.commands(t), q, goal, fk, abs(pred.duration - T))
     res["recognition"] = float(pred.task == test.task)
-    res["time_to_correct"] = metrics.time_to_correct(np.array(fractions), np.array(goal_err),
+    res["time_to_correct"] = metrics.time_to_correct(np.array(at_recording), np.array(goal_err),
                                                      config.goal_tol)
     res["jumps"] = [u.jump for u in pred.updates]
     prior_ok = model.tasks[int(np.argmax(model.priors))] == test.task
     curve = []
     for c in config.curve:
-        i = int(np.searchsorted(fractions, c + 1e-9, side="right"))
+        i = int(np.searchsorted(at_recording, c + 1e-9, side="right"))
         curve.append(float(believed[i - 1]) if i > 0 else float(prior_ok))
     res["recognition_curve"] = curve
     res["n_updates"] = len(pred.updates)
@@ -197,8 +232,8 @@ def _run_one(i: int) -> dict:
 
     train, test, fits, config = (_STATE[k] for k in ("train", "test", "fits", "config"))
     fk = _STATE.setdefault("fk", BaxterKinematics().fk)
-    model = config.model().fit_demo_fits(fits[:i] + fits[i + 1:], train[0])
-    return evaluate_trial(model, test[i], config, fk)
+    model = config.model().fit_demo_fits(fits[:i] + fits[i + 1:], train[0])   # trial i unseen
+    return evaluate_trial(model, test[i], config, fk, train[i])
 
 
 def run_loocv(train, test, config: EvalConfig, *, workers: int = 1,
@@ -219,6 +254,9 @@ def run_loocv(train, test, config: EvalConfig, *, workers: int = 1,
     if len(train) != len(test) or any(a.source != b.source or a.task != b.task
                                       for a, b in zip(train, test)):
         raise ValueError("train and test: expected the same trials in the same order")
+    if config.observe is not None:
+        train = [d.select(config.observe) for d in train]
+        test = [d.select(config.observe) for d in test]
     start = time.perf_counter()
     fits = [config.model().demo_fit(d) for d in train]
     _init(train, test, fits, config)

@@ -117,3 +117,44 @@ def bootstrap_ci(values: FloatArray, groups: FloatArray | None = None, *, n_boot
 
 def _macro_mean(values: FloatArray, groups: FloatArray) -> float:
     return float(np.mean([values[groups == g].mean() for g in np.unique(groups)]))
+
+
+def resample_within(groups: Sequence, n_boot: int, rng: np.random.Generator) -> np.ndarray:
+    """Bootstrap index matrix, shape (n_boot, n): trials drawn with replacement within
+    each group (task), so every resample keeps the task sizes."""
+    groups = np.asarray(groups)
+    out = np.empty((n_boot, groups.size), dtype=int)
+    for g in np.unique(groups):
+        idx = np.flatnonzero(groups == g)
+        out[:, idx] = idx[rng.integers(0, idx.size, size=(n_boot, idx.size))]
+    return out
+
+
+def curve_bootstrap(curves: FloatArray, groups: Sequence, *, n_boot: int = 1000,
+                    level: float = 0.95, rng: np.random.Generator | None = None) -> dict:
+    """Percentile intervals of a mean curve over trials and of its late decay.
+
+    Parameters
+    ----------
+    curves : ndarray, shape (n_trials, C)
+        Per trial, e.g. 1 where the task was recognised at each fraction of the motion.
+    groups : sequence, shape (n_trials,)
+        Task of each trial (resampled within).
+
+    Returns
+    -------
+    dict
+        ``mean`` (C,), ``lo``/``hi`` (C,) of the mean curve; ``decay`` (peak minus
+        end of the mean curve) and ``decay_ci`` [lo, hi].
+    """
+    curves = np.asarray(curves, dtype=float)
+    rng = np.random.default_rng(0) if rng is None else rng
+    means = curves[resample_within(groups, n_boot, rng)].mean(axis=1)     # (n_boot, C)
+    q = [(1 - level) / 2, (1 + level) / 2]
+    lo, hi = np.quantile(means, q, axis=0)
+    decay = means.max(axis=1) - means[:, -1]
+    mean = curves.mean(axis=0)
+    return {"mean": mean.tolist(), "lo": lo.tolist(), "hi": hi.tolist(),
+            "decay": float(mean.max() - mean[-1]),
+            "decay_ci": np.quantile(decay, q).tolist()}
+

@@ -5,7 +5,10 @@ mean of the task means, as the paper averages over tasks), the mean of each
 measure and its 95 % bootstrap confidence interval (``<measure>_ci``,
 resampling trials within tasks). Beyond the paper: calibration (``nll`` per
 step, ``coverage`` of the 95 % ellipsoid), command jumps at updates, recognition
-over time, the differences static - dynamic for every ratio and window.
+over time (``recognition_over_time``: the fraction of trials whose task is
+believed at each fraction of the recording; ``recognition_over_time_ci``: its
+bootstrap intervals and its late decay, peak minus end), the differences
+static - dynamic for every ratio and window.
 """
 
 from __future__ import annotations
@@ -77,6 +80,10 @@ def build_report(trials: list[dict], config: dict, dataset: str, runtime_s: floa
         "fractions": list(config["curve"]),
         **{w: np.mean([r["dynamic"][w]["recognition_curve"] for r in trials], axis=0).tolist()
            for w in windows}}
+    labels = [r["task"] for r in trials]
+    report["recognition_over_time_ci"] = {
+        w: metrics.curve_bootstrap([r["dynamic"][w]["recognition_curve"] for r in trials],
+                                   labels, n_boot=n_boot) for w in windows}
     report["jumps"] = {w: _jumps([j for r in trials for j in r["dynamic"][w]["jumps"]])
                        for w in windows}
     report["runtime_s"] = round(float(runtime_s), 2)

@@ -32,6 +32,29 @@ GRID: dict[str, tuple] = {
     "blend_rate": (20.0, 50.0, 100.0),
 }
 TARGETS = {"e_p": 0.05, "e_phi": 0.20, "miss": 0.30, "jump": 0.01}
+#: Floors (normalised units) tried for signal modalities, and (m) for position
+#: modalities other than the hand, when they are observed.
+SIGNAL_FLOORS = (0.1, 0.3, 0.5, 1.0)
+POSITION_FLOORS = (0.01, 0.02, 0.04)
+
+
+def grid_for(modalities) -> dict[str, tuple]:
+    """The options to sweep for these modalities (names or Modality objects; names
+    other than the built-ins count as positions): :data:`GRID`, ``settle_tol``, plus
+    ``signal_floor`` if a signal is observed and a floor per other position modality."""
+    from sandbox.data.spec import BUILT_IN
+
+    mods = [BUILT_IN.get(m, None) if isinstance(m, str) else m for m in modalities]
+    names = [m if isinstance(m, str) else m.name for m in modalities]
+    grid = dict(GRID)
+    grid["settle_tol"] = (None, 0.01, 0.02, 0.05)
+    if any(m is not None and m.kind == "signal" for m in mods):
+        grid["signal_floor"] = SIGNAL_FLOORS
+    others = [n for n, m in zip(names, mods) if n != "hand" and (m is None or
+                                                                m.kind == "position")]
+    if others:
+        grid["noise_floors"] = tuple(tuple((n, f) for n in others) for f in POSITION_FLOORS)
+    return grid
 
 
 def objective(entry: dict, jump_p95: float = 0.0) -> float:
@@ -72,11 +95,15 @@ def _row(rep: dict, cfg: EvalConfig, window: float, ratio: float, name: str, val
     d = rep["dynamic"][f"{window:.1f}"]["mean"]
     s = rep["static"][f"{ratio:.1f}"]["mean"]
     return {
-        "swept": name, "value": value,
-        "noise_floor": cfg.noise_floor, "regularizer": cfg.regularizer,
+        "swept": name, "value": value, "observe": ",".join(cfg.observe or ("hand",)),
+        "noise_floor": cfg.noise_floor, "signal_floor": cfg.signal_floor,
+        "noise_floors": ",".join(f"{n}:{f:g}" for n, f in cfg.noise_floors) or "-",
+        "settle_tol": cfg.settle_tol, "regularizer": cfg.regularizer,
         "likelihood": cfg.likelihood, "window_mode": cfg.window_mode, "n_basis": cfg.n_basis,
         "blend_rate": cfg.blend_rate, "jump_p95": rep["jumps"][f"{window:.1f}"].get("p95"),
         "e_p": d["e_p"], "e_q": d["e_q"], "e_phi": d["e_phi"], "recognition": d["recognition"],
+        "recognition_30": rep["recognition_over_time"][f"{window:.1f}"][2],
+        "late_decay": late_decay(rep["recognition_over_time"][f"{window:.1f}"]),
         "coverage": d["coverage"], "static_e_p": s["e_p"],
         "static_recognition": s["recognition"], "oracle_e_p": rep["oracle"]["mean"]["e_p"],
         "J": objective(d, rep["jumps"][f"{window:.1f}"].get("p95", 0.0)),
@@ -84,9 +111,15 @@ def _row(rep: dict, cfg: EvalConfig, window: float, ratio: float, name: str, val
     }
 
 
-HEADER = ("swept", "noise_floor", "regularizer", "likelihood", "window_mode", "n_basis",
-          "blend_rate", "e_p", "e_q", "e_phi", "recognition", "coverage", "jump_p95",
+HEADER = ("swept", "observe", "noise_floor", "signal_floor", "noise_floors", "settle_tol",
+          "regularizer", "likelihood", "window_mode", "n_basis", "blend_rate", "e_p", "e_q",
+          "e_phi", "recognition", "recognition_30", "late_decay", "coverage", "jump_p95",
           "static_e_p", "oracle_e_p", "J")
+
+
+def late_decay(curve) -> float:
+    """Peak minus end of a recognition-over-time curve (0 when it never falls)."""
+    return float(max(curve) - curve[-1])
 
 
 def _format(row: dict) -> str:

@@ -46,3 +46,47 @@ def replay(task: int, duration: float, rate: float = 100.0, noise: float = 0.0,
     if noise:
         h = h + noise * rng.standard_normal(h.shape)
     return Demo(t, h, r, f"task{task}")
+
+
+@dataclass(frozen=True)
+class MultiDemo:
+    times: np.ndarray
+    human: np.ndarray
+    robot: np.ndarray
+    task: str
+    modalities: tuple = ()
+    human_names: tuple = ()
+
+
+def layout():
+    """hand (3, position), arm (6, position), emg (4, signal): P = 13."""
+    from sandbox.core.modality import Modality
+
+    return (Modality("hand", ("hx", "hy", "hz")),
+            Modality("arm", ("ex", "ey", "ez", "sx", "sy", "sz")),
+            Modality("emg", ("e0", "e1", "e2", "e3"), "signal"))
+
+
+def multimodal(rng: np.random.Generator, n_per_task: int = 10, n_tasks: int = 2,
+               hand_differs: bool = True, emg_levels=(100.0, 250.0), noise: float = 0.002,
+               duration: float = 2.0, rate: float = 100.0) -> list[MultiDemo]:
+    """Demos whose hand (optionally the same for all tasks), arm and EMG-like signal are
+    known functions of the phase; the signal's level tells the tasks apart (raw units)."""
+    mods = layout()
+    names = tuple(d for m in mods for d in m.dims)
+    out = []
+    for k in range(n_tasks):
+        for _ in range(n_per_task):
+            T = duration * (1 + 0.1 * rng.standard_normal())
+            t = np.arange(0, T + 1e-9, 1 / rate)
+            z = t / t[-1]
+            h, r = shape(k if hand_differs else 0, z, 1 + 0.05 * rng.standard_normal())
+            elbow = h + np.array([0.25, 0.1, -0.1]) * (1 - 0.3 * z[:, None])
+            shoulder = np.array([1.4, 0.2, 0.35]) + 0.02 * np.sin(np.pi * z)[:, None]
+            level = emg_levels[k % len(emg_levels)] * (1 + 0.1 * rng.standard_normal())
+            emg = level * (1 + 0.5 * np.sin(np.pi * z))[:, None] * np.array([1, 0.5, 0.8, 1.2])
+            human = np.hstack([h, elbow, shoulder, emg])
+            human[:, :9] += noise * rng.standard_normal((t.size, 9))
+            human[:, 9:] *= 1 + 0.03 * rng.standard_normal((t.size, 4))
+            out.append(MultiDemo(t, human, r, f"task{k}", mods, names))
+    return out

@@ -30,7 +30,7 @@ def test_noise_estimate_recovers_white_noise():
 
 def test_alpha_prior_from_durations():
     demos = synth.demos(np.random.default_rng(2), n_per_task=30, duration_std=0.1)
-    model = IProMP(n_basis=9).fit(demos)
+    model = IProMP(n_basis=9, settle_tol=None, arrive_tol=None).fit(demos)
     for task in model.task_models:
         dur = np.array([d.times[-1] for d in demos if d.task == task.name])
         assert task.nominal_duration == pytest.approx(dur.mean())

@@ -8,11 +8,11 @@ from sandbox.core.phase import Lattice, estimate_phase
 from . import synth
 
 
-def candidate_grid(nominal, mean, std, t_last, n_candidates):
+def candidate_grid(nominal, mean, std, n_candidates):
     tasks = [type("T", (), {"nominal_duration": n, "alpha_mean": m, "alpha_std": s})()
              for n, m, s in zip(nominal, mean, std)]
     lattice = Lattice.for_tasks(tasks, n_candidates)
-    return (*lattice.grid(t_last), lattice.step)
+    return lattice.durations, lattice.spans(), lattice.step
 
 
 @pytest.fixture(scope="module")
@@ -38,25 +38,30 @@ def test_known_speed_is_recovered(model, factor, mode):
 def test_grid_is_shared_and_wide_enough():
     nominal = np.array([2.0, 2.2, 3.0])
     durations, spans, step = candidate_grid(nominal, np.ones(3), np.array([0.1, 0.15, 0.1]),
-                                            t_last=0.5, n_candidates=50)
+                                            n_candidates=50)
     assert np.all(np.diff(durations) > 0)
     for k in range(3):
         T = durations[spans[k, 0]:spans[k, 1]]
         assert T.size >= 50
         assert T[0] >= nominal[k] * (1 - 0.3 * (1 + (k == 1) * 0.5)) - step
+        assert T[-1] <= nominal[k] * (1 + 0.3 * (1 + (k == 1) * 0.5)) + step
         np.testing.assert_allclose(np.diff(T), step)
 
 
-def test_candidates_shorter_than_the_observation_are_excluded():
-    nominal = np.array([2.0, 2.0])
-    durations, spans, _ = candidate_grid(nominal, np.ones(2), np.array([0.1, 0.1]),
-                                         t_last=2.1, n_candidates=50)
-    for a, b in spans:
-        assert durations[a:b].min() >= 2.1
-    durations, spans, _ = candidate_grid(nominal, np.ones(2), np.array([0.1, 0.1]),
-                                         t_last=5.0, n_candidates=50)
-    np.testing.assert_array_equal(durations, [5.0])   # the motion is ending now
-    np.testing.assert_array_equal(spans, [[0, 1], [0, 1]])
+@pytest.mark.parametrize("mode", ["joint", "marginal"])
+def test_observations_past_the_end_see_the_motion_hold(model, mode):
+    """Regression (late decay): an idle tail after the motion used to force every candidate
+    to last as long as the observations, stretching the estimate over the tail."""
+    task = model.task_models[0]
+    true_T = 1.1 * task.nominal_duration
+    demo = synth.replay(0, true_T, noise=0.002, rng=np.random.default_rng(5))
+    tail_t = true_T + np.arange(0.05, 1.0, 0.05)                 # one second holding still
+    tail = demo.human[-1] + 0.002 * np.random.default_rng(6).standard_normal((tail_t.size, 3))
+    t = np.r_[demo.times[::5], tail_t]
+    y = np.vstack([demo.human[::5], tail])
+    est = estimate_phase(Scorer(model), model.task_models, t, y, mode=mode)
+    assert est.durations[0] == pytest.approx(true_T, rel=0.03)
+    assert est.durations[0] < t[-1] - 0.5
 
 
 def test_refinement_never_lowers_the_objective(model):

@@ -133,7 +133,7 @@ def test_static_predicts_once_at_the_ratio(model):
 
 def test_errors(model):
     pred = DynamicPredictor(model)
-    with pytest.raises(ValueError, match="shape"):
+    with pytest.raises(ValueError, match=r"expected 3 values \(hand \(3\)\), got 2"):
         pred.observe(0.0, [1.0, 2.0])
     pred.observe(0.5, [1.0, 0.0, 0.2])
     with pytest.raises(ValueError, match="previous"):

@@ -158,7 +158,7 @@ BAD_FILES = {
     "same_time.csv": (None, "only 1 usable time stamp"),
     "ragged.csv": (None, "row 3 has 5 fields"),
     "upper.csv": (None, "missing column 't' \\(did you mean 'T'\\?\\)"),
-    "no_hand.csv": (None, "fewer than 2 valid human samples \\(0 rows missing, 30 rows"),
+    "no_hand.csv": (None, "fewer than 2 valid samples of 'hand' \\(0 rows missing, 30 rows"),
 }
 
 

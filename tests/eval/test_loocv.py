@@ -33,12 +33,56 @@ def test_shared_estimates_equal_a_streamed_predictor(setup):
         assert res["dynamic"][f"{w:.1f}"]["n_updates"] == len(pred.updates)
 
 
-def test_kept_observations_skip_nan_and_subsample():
+def test_kept_observations_skip_nan_and_subsample(setup):
+    model, _ = setup
     t = np.arange(10.0)
     y = np.ones((10, 3))
     y[[1, 4]] = np.nan
-    kt, _ = kept_observations(t, y, 2)
+    kt, _ = kept_observations(model, t, y, 2)
     np.testing.assert_array_equal(kt, [0, 3, 6, 8])
+
+
+def _multimodal(n_per_task=5):
+    from sandbox.data import Demonstration
+    from tests.core import synth
+
+    demos = synth.multimodal(np.random.default_rng(7), n_per_task=n_per_task)
+    return [Demonstration(d.times, d.human, d.robot, d.task, modalities=d.modalities,
+                          source=f"demo{i}") for i, d in enumerate(demos)]
+
+
+def test_the_normaliser_never_sees_the_held_out_trial(monkeypatch):
+    """Each fold's signal scale comes from the other trials only: a held-out trial with
+    a hundred times the muscle activity must not move it."""
+    import sandbox.eval.loocv as loocv
+
+    demos = _multimodal()
+    loud = demos[0].human.copy()
+    loud[:, 9:] *= 100.0
+    demos[0] = demos[0].replace(human=loud)
+    seen = {}
+
+    def capture(model, test, config, fk, truth=None):
+        seen[test.source] = model.scale.copy()
+        return {}
+
+    monkeypatch.setattr(loocv, "evaluate_trial", capture)
+    config = EvalConfig(windows=(0.5,), ratios=(0.5,), n_basis=9)
+    run_loocv(demos, demos, config)
+    others = config.model().fit(demos[1:])
+    np.testing.assert_allclose(seen["demo0"], others.scale, rtol=1e-12)
+    everyone = config.model().fit(demos)
+    assert np.all(everyone.scale[9:] > 10 * others.scale[9:])     # it would have shown
+    for i in (1, 5):
+        alone = config.model().fit(demos[:i] + demos[i + 1:])
+        np.testing.assert_allclose(seen[f"demo{i}"], alone.scale, rtol=1e-12)
+
+
+def test_observe_selects_modalities_of_the_demonstrations():
+    demos = _multimodal(4)
+    config = EvalConfig(windows=(0.5,), ratios=(0.5,), n_basis=9, observe=("emg",))
+    results, _ = run_loocv(demos, demos, config)
+    assert all(r["dynamic"]["0.5"]["recognition"] == 1.0 for r in results)
 
 
 def test_loocv_runs_every_trial_and_checks_alignment(setup):

@@ -58,7 +58,8 @@ def test_tune_keeps_the_current_value_unless_clearly_better(monkeypatch):
         J = fake[cfg["noise_floor"]]
         entry = {"e_p": J * 0.05, "e_q": 0.0, "e_phi": 0.0, "recognition": 1.0, "coverage": 1.0}
         return {"dynamic": {"0.2": {"mean": entry}}, "static": {"0.3": {"mean": entry}},
-                "oracle": {"mean": entry}, "jumps": {"0.2": {"p95": 0.0}}, "runtime_s": 0.0}
+                "oracle": {"mean": entry}, "jumps": {"0.2": {"p95": 0.0}}, "runtime_s": 0.0,
+                "recognition_over_time": {"0.2": [1.0] * 10}}
 
     monkeypatch.setattr(tune_mod, "run_loocv", run)
     monkeypatch.setattr(tune_mod, "build_report", report)

@@ -1,0 +1,46 @@
+"""The observation options every data-reading command shares: ``--spec`` and ``--observe``.
+
+``--spec FILE`` describes a recorded set's columns (YAML or JSON, see
+:mod:`sandbox.data.spec`); ``--observe hand,arm,emg`` chooses the modalities
+(names from the built-ins or the spec; default the spec's, ``hand``);
+``--human-columns`` and ``--robot-columns`` are shorthands that rename the
+hand's and the robot's columns of that spec.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+
+def add_arguments(parser: argparse.ArgumentParser, *, columns: bool = True) -> None:
+    """Add ``--spec``, ``--observe`` (and ``--human-columns``, ``--robot-columns``)."""
+    parser.add_argument("--spec", default=None, metavar="FILE",
+                        help="YAML/JSON file naming the time, robot and modality columns of a "
+                             "recorded set (default: the Baxter recordings' layout)")
+    parser.add_argument("--observe", default=None, metavar="NAMES",
+                        help="comma-separated modalities to observe: hand, arm (elbow + "
+                             "shoulder), emg, or the spec's own (default: hand)")
+    if columns:
+        parser.add_argument("--human-columns", default=None, metavar="A,B,C",
+                            help="columns of the hand (default human_left_hand_x,y,z)")
+        parser.add_argument("--robot-columns", default=None, metavar="A,B,...",
+                            help="robot columns (default left_s0 ... left_w2)")
+
+
+def split(text: str | None) -> list[str] | None:
+    """``"a, b"`` -> ``["a", "b"]`` (None stays None)."""
+    return None if text is None else [s.strip() for s in text.split(",") if s.strip()]
+
+
+def data_spec(args: argparse.Namespace):
+    """The :class:`~sandbox.data.spec.DataSpec` the options describe."""
+    from sandbox.data.spec import resolve
+
+    return resolve(args.spec, human_columns=split(getattr(args, "human_columns", None)),
+                   robot_columns=split(getattr(args, "robot_columns", None)))
+
+
+def observe(args: argparse.Namespace, spec=None) -> tuple[str, ...]:
+    """The modalities chosen (checked against the spec; the spec's default if not given)."""
+    spec = data_spec(args) if spec is None else spec
+    return tuple(m.name for m in spec.observed(split(args.observe)))

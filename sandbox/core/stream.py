@@ -1,0 +1,118 @@
+"""The observation stream a predictor keeps: which modalities, normalised, subsampled.
+
+A predictor observes some or all of its model's modalities
+(:mod:`sandbox.core.modality`). :class:`ObservationStream` maps each incoming
+row onto the model's human dims (NaN for modalities not observed), divides
+signal modalities by the model's scale, and keeps 1 of every ``subsample``
+valid samples *of each modality* (as the paper keeps 1 of every 5). A modality
+is valid in a row when all its dims are finite; a NaN in it (a dropout) masks
+that modality in that row only. A row with no valid modality is skipped.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+
+from sandbox.core.modality import Modality, select, slices
+from sandbox.core.validation import FloatArray, check_array
+
+
+class ObservationStream:
+    """Observations received so far, in the model's human layout.
+
+    Parameters
+    ----------
+    model : IProMP
+        A fitted model.
+    observe : sequence of str or str, optional
+        Modalities the incoming rows carry, in this order (default: all of the
+        model's). A name the model was not fitted with is a ``ValueError``.
+    subsample : int
+        Keep 1 of every ``subsample`` valid samples of each modality.
+    """
+
+    def __init__(self, model, observe: Sequence[str] | str | None = None,
+                 subsample: int = 5) -> None:
+        if int(subsample) != subsample or subsample < 1:
+            raise ValueError(f"subsample: expected an integer >= 1, got {subsample!r}")
+        self.modalities: tuple[Modality, ...] = tuple(model.modalities)
+        self.observed = select(self.modalities, observe,
+                               f"observe (this model has {[m.name for m in self.modalities]})")
+        where = slices(self.modalities)
+        self._index = {m.name: i for i, m in enumerate(self.modalities)}
+        self._cols = np.concatenate([np.arange(where[m.name].start, where[m.name].stop)
+                                     for m in self.observed])
+        self._dims = [np.arange(where[m.name].start, where[m.name].stop)
+                      for m in self.modalities]
+        self.scale = np.asarray(model.scale, dtype=np.float64)
+        self.n_human = int(model.n_human)
+        self.subsample = int(subsample)
+        self.reset()
+
+    @property
+    def size(self) -> int:
+        """Number of values an incoming row carries (the observed modalities' dims)."""
+        return int(self._cols.size)
+
+    def reset(self) -> None:
+        """Forget every observation."""
+        self._t: list[float] = []
+        self._y: list[FloatArray] = []
+        self._valid = np.zeros(len(self.modalities), dtype=int)
+        self.n_skipped = 0
+
+    def row(self, y) -> FloatArray:
+        """One incoming row as the model's human dims (normalised units, NaN if unobserved).
+
+        ``y`` is an array of :attr:`size` values (the observed modalities' dims in
+        order) or a mapping from observed modality names to their values.
+        """
+        full = np.full(self.n_human, np.nan)
+        if isinstance(y, Mapping):
+            names = [m.name for m in self.observed]
+            unknown = [k for k in y if k not in names]
+            if unknown:
+                raise ValueError(f"y: expected modalities among {names}, got {unknown}")
+            where = slices(self.modalities)
+            for m in self.observed:
+                if m.name in y:
+                    s = where[m.name]
+                    full[s] = check_array(y[m.name], f"y[{m.name!r}]", 1, shape=(m.size,),
+                                          allow_nan=True)
+        else:
+            values = check_array(y, "y", 1, allow_nan=True)
+            if values.size != self.size:
+                layout = ", ".join(f"{m.name} ({m.size})" for m in self.observed)
+                raise ValueError(f"y: expected {self.size} values ({layout}), got {values.size}")
+            full[self._cols] = values
+        return full / self.scale
+
+    def accept(self, t: float, y) -> FloatArray | None:
+        """Take a row received at ``t`` (s); return what is kept of it, or None.
+
+        The kept row has NaN for every modality not kept (not observed, NaN in
+        the row, or dropped by the subsampling).
+        """
+        full = self.row(y)
+        valid = np.array([np.isfinite(full[d]).all() for d in self._dims])
+        if not valid.any():
+            self.n_skipped += 1
+            return None
+        keep = valid & (self._valid % self.subsample == 0)
+        self._valid += valid
+        if not keep.any():
+            return None
+        for i in np.flatnonzero(~keep):
+            full[self._dims[i]] = np.nan
+        self._t.append(float(t))
+        self._y.append(full)
+        return full
+
+    def observations(self) -> tuple[FloatArray, FloatArray]:
+        """Kept observations: times (s,) and values (s, P), normalised, NaN where unobserved."""
+        return np.array(self._t), np.array(self._y).reshape(-1, self.n_human)
+
+    def __len__(self) -> int:
+        return len(self._t)

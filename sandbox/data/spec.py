@@ -1,0 +1,203 @@
+"""What the columns of a recorded set are: time, robot, and the observation modalities.
+
+A :class:`DataSpec` names the time column, the robot columns and every
+modality a set offers (:class:`~sandbox.core.modality.Modality`: columns, kind,
+units); ``observe`` chooses which modalities a model sees. The built-in
+modalities are those of the recorded Baxter handovers (the paper's lab):
+
+======  ==============================================================  ========  =====
+name    columns                                                         kind      units
+======  ==============================================================  ========  =====
+hand    ``human_left_hand_x/y/z``                                       position  m
+arm     ``human_left_elbow_x/y/z``, ``human_left_shoulder_x/y/z``       position  m
+emg     ``emg0`` ... ``emg7`` (Myo armband)                             signal    raw
+======  ==============================================================  ========  =====
+
+``hand`` is the default everywhere (the paper's setup). A user describes their
+own layout once in a spec file, YAML or JSON (``--spec FILE`` on every
+command)::
+
+    time: stamp                      # optional, default t
+    robot: [j1, j2, j3, j4, j5, j6, j7]   # optional, default left_s0 ... left_w2
+    observe: [wrist, grip]           # optional default choice, default [hand]
+    modalities:                      # added to (or replacing) the built-ins
+      wrist: {columns: [wx, wy, wz], kind: position, units: m}
+      grip:  {columns: [f1, f2], kind: signal}
+
+Every key is checked; a mistake is a ``ValueError`` naming the file, the key
+and what was expected.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+from sandbox.core.modality import Modality, check_modalities, select
+
+TIME_COLUMN = "t"
+ROBOT_COLUMNS = ("left_s0", "left_s1", "left_e0", "left_e1", "left_w0", "left_w1", "left_w2")
+HAND = Modality("hand", ("human_left_hand_x", "human_left_hand_y", "human_left_hand_z"),
+                "position", "m")
+ARM = Modality("arm", tuple(f"human_left_{joint}_{axis}" for joint in ("elbow", "shoulder")
+                            for axis in "xyz"), "position", "m")
+EMG = Modality("emg", tuple(f"emg{i}" for i in range(8)), "signal", "raw")
+#: The built-in modalities, by name.
+BUILT_IN: dict[str, Modality] = {m.name: m for m in (HAND, ARM, EMG)}
+_KEYS = {"time", "robot", "observe", "modalities"}
+_MODALITY_KEYS = {"columns", "kind", "units"}
+
+
+@dataclass(frozen=True)
+class DataSpec:
+    """The columns of a recorded set and the modalities it offers.
+
+    Parameters
+    ----------
+    time : str
+        Time column (s).
+    robot : sequence of str
+        Robot columns (rad), e.g. Baxter's seven left-arm joints.
+    modalities : mapping of str to Modality
+        Every modality the set offers, by name (default: the built-ins).
+    observe : sequence of str
+        The modalities observed when a command or function is not told
+        otherwise (default ``("hand",)``).
+    """
+
+    time: str = TIME_COLUMN
+    robot: tuple[str, ...] = ROBOT_COLUMNS
+    modalities: Mapping[str, Modality] = field(default_factory=lambda: dict(BUILT_IN))
+    observe: tuple[str, ...] = ("hand",)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.time, str) or not self.time:
+            raise ValueError(f"time: expected a column name, got {self.time!r}")
+        robot = _names(self.robot, "robot")
+        mods = dict(self.modalities)
+        for name, m in mods.items():
+            if not isinstance(m, Modality) or m.name != name:
+                raise ValueError(f"modalities: expected {name!r} to map to Modality {name!r}, "
+                                 f"got {m!r}")
+        observe = tuple(m.name for m in select(mods.values(), self.observe, "observe"))
+        object.__setattr__(self, "robot", robot)
+        object.__setattr__(self, "modalities", mods)
+        object.__setattr__(self, "observe", observe)
+
+    def observed(self, observe: Sequence[str] | str | None = None) -> tuple[Modality, ...]:
+        """The modalities named by ``observe`` (default :attr:`observe`), in that order.
+
+        Their columns may not be used twice, nor be the time or a robot column.
+        """
+        mods = select(self.modalities.values(), self.observe if observe is None else observe,
+                      "observe")
+        check_modalities(mods)
+        clash = sorted({c for m in mods for c in m.dims} & {self.time, *self.robot})
+        if clash:
+            raise ValueError(f"observe: columns {clash} are also the time or robot columns")
+        return mods
+
+    def with_columns(self, *, human: Sequence[str] | None = None,
+                     robot: Sequence[str] | None = None, time: str | None = None) -> DataSpec:
+        """A copy with other columns: ``human`` replaces the hand's columns (position, m)."""
+        spec = self
+        if human is not None:
+            hand = Modality("hand", _names(human, "human columns"), "position", "m")
+            spec = replace(spec, modalities={**spec.modalities, "hand": hand})
+        if robot is not None:
+            spec = replace(spec, robot=_names(robot, "robot columns"))
+        if time is not None:
+            spec = replace(spec, time=time)
+        return spec
+
+    @classmethod
+    def load(cls, path: str | Path) -> DataSpec:
+        """Read a spec file (YAML or JSON, see the module docstring)."""
+        path = Path(path)
+        if not path.is_file():
+            raise ValueError(f"--spec: expected an existing YAML or JSON file, got {str(path)!r}")
+        text = path.read_text(encoding="utf-8", errors="replace")
+        try:
+            if path.suffix.lower() == ".json":
+                data = json.loads(text)
+            else:
+                import yaml
+
+                data = yaml.safe_load(text)
+        except Exception as error:  # yaml and json raise their own types
+            kind = "JSON" if path.suffix.lower() == ".json" else "YAML"
+            first = (str(error).splitlines() or [""])[0]
+            raise ValueError(f"spec {path}: not valid {kind} ({type(error).__name__}: {first})"
+                             ) from None
+        try:
+            return cls.from_dict(data)
+        except ValueError as error:
+            raise ValueError(f"spec {path}: {error}") from None
+
+    @classmethod
+    def from_dict(cls, data: Any) -> DataSpec:
+        """Build from a parsed spec file (built-in modalities stay available)."""
+        if not isinstance(data, Mapping):
+            raise ValueError(f"expected a mapping with keys {sorted(_KEYS)}, "
+                             f"got {type(data).__name__}")
+        unknown = sorted(set(data) - _KEYS)
+        if unknown:
+            raise ValueError(f"unknown keys {unknown}; expected some of {sorted(_KEYS)}")
+        mods = dict(BUILT_IN)
+        given = data.get("modalities") or {}
+        if not isinstance(given, Mapping):
+            raise ValueError(f"modalities: expected a mapping name -> {{columns, kind, units}}, "
+                             f"got {type(given).__name__}")
+        for name, entry in given.items():
+            mods[str(name)] = _modality(str(name), entry)
+        observe = data.get("observe", ("hand",))
+        if isinstance(observe, str):
+            observe = [n.strip() for n in observe.split(",") if n.strip()]
+        return cls(time=data.get("time", TIME_COLUMN), robot=data.get("robot", ROBOT_COLUMNS),
+                   modalities=mods, observe=tuple(_names(observe, "observe")))
+
+    def to_dict(self) -> dict:
+        """JSON-ready form (inverse of :meth:`from_dict`)."""
+        return {"time": self.time, "robot": list(self.robot), "observe": list(self.observe),
+                "modalities": {n: {"columns": list(m.dims), "kind": m.kind, "units": m.units}
+                               for n, m in self.modalities.items()}}
+
+
+def _names(values: Any, what: str) -> tuple[str, ...]:
+    if isinstance(values, str) or not isinstance(values, Sequence):
+        raise ValueError(f"{what}: expected a list of names, got {values!r}")
+    names = tuple(values)
+    if not names or not all(isinstance(v, str) and v.strip() for v in names):
+        raise ValueError(f"{what}: expected non-empty names, got {list(names)!r}")
+    return tuple(v.strip() for v in names)
+
+
+def _modality(name: str, entry: Any) -> Modality:
+    if not isinstance(entry, Mapping):
+        raise ValueError(f"modalities.{name}: expected a mapping with 'columns' and 'kind', "
+                         f"got {entry!r}")
+    unknown = sorted(set(entry) - _MODALITY_KEYS)
+    if unknown:
+        raise ValueError(f"modalities.{name}: unknown keys {unknown}; expected some of "
+                         f"{sorted(_MODALITY_KEYS)}")
+    if "columns" not in entry:
+        raise ValueError(f"modalities.{name}: 'columns' is missing")
+    try:
+        return Modality(name, _names(entry["columns"], f"modalities.{name}.columns"),
+                        entry.get("kind", "position"), str(entry.get("units", "") or ""))
+    except ValueError as error:
+        raise ValueError(f"modalities.{name}: {error}") from None
+
+
+def resolve(spec: str | Path | DataSpec | None = None, *, human_columns=None,
+            robot_columns=None) -> DataSpec:
+    """The spec a command uses: ``--spec FILE`` (or the default), then ``--human-columns``
+    and ``--robot-columns`` on top."""
+    if isinstance(spec, DataSpec):
+        base = spec
+    else:
+        base = DataSpec() if spec is None else DataSpec.load(spec)
+    return base.with_columns(human=human_columns, robot=robot_columns)
