@@ -73,10 +73,15 @@ def run(args) -> int:
     body = [START, "", _summary_table(reports), ""]
     compare = _compare_sets(args.compare)
     if args.data and compare:
-        table = compare_modalities(args.data, spec, compare, workers=max(1, args.workers))
+        table = compare_modalities(args.data, spec, compare, workers=max(1, args.workers),
+                                   figures=out / "recorded")
         (out / "modalities.md").write_text(table)
+        rel = (out / "recorded").as_posix()
         body += [f"#### Observation modalities on `{Path(args.data).name}` (dynamic, dow_t = "
-                 "0.2 s; 95 % bootstrap intervals)", "", table, ""]
+                 "0.2 s; 95 % bootstrap intervals; recognition over the whole recording, "
+                 "idle tail included)", "", table, "",
+                 f"![recognition by observation]({rel}/modalities.png)",
+                 f"![the late-motion fix taken apart]({rel}/late_motion.png)", ""]
     tune_table = out / "tune.md"
     if tune_table.is_file():
         body += ["<details><summary>Cross-validation of the defaults "
@@ -123,33 +128,76 @@ def _compare_sets(text: str) -> list[tuple[str, ...]]:
     return sets
 
 
-def compare_modalities(data: str, spec, sets, *, workers: int = 2, window: float = 0.2) -> str:
-    """Leave-one-out of each observation set on the same trials; a Markdown table.
+#: The late-motion fix taken apart (options of EvalConfig), for the hand alone.
+ABLATIONS = (
+    ("hand, whole recordings as the motion", {"settle_tol": None, "arrive_tol": None}),
+    ("hand, task re-chosen to the end", {"until_end": False}),
+    ("hand, neither (no late-motion fix)", {"settle_tol": None, "arrive_tol": None,
+                                            "until_end": False}),
+)
+
+
+def compare_modalities(data: str, spec, sets, *, workers: int = 2, window: float = 0.2,
+                       figures=None) -> str:
+    """Leave-one-out of each observation set on the same trials; Markdown tables.
 
     The trials are loaded once with every modality of ``sets`` (a trial any of
-    them cannot use is left out of all), and each row observes its subset.
+    them cannot use is left out of all), and each row observes its subset. If
+    ``hand`` is observed, the late-motion fix is then taken apart on the hand
+    alone (:data:`ABLATIONS`). ``figures``: a folder for ``modalities.png`` and
+    ``late_motion.png`` (recognition over the recording of each row).
     """
+    from dataclasses import replace
+
     from sandbox.eval.datasets import load_pair
-    from sandbox.eval.loocv import EvalConfig, run_loocv
-    from sandbox.eval.report import build_report
+    from sandbox.eval.loocv import EvalConfig
+    from sandbox.eval.plots import plot_curves
 
     every = tuple(dict.fromkeys(n for names in sets for n in names))
     train, test, _ = load_pair(data, spec=spec, observe=every)
+    runs = {",".join(names): EvalConfig(windows=(window,), ratios=(0.3,), observe=names)
+            for names in sets}
+    reports = {label: _evaluate(train, test, config, data, workers)
+               for label, config in runs.items()}
+    tables = _table(reports, window)
+    if "hand" in every:
+        hand = EvalConfig(windows=(window,), ratios=(0.3,), observe=("hand",))
+        late = {"hand (the fix as defined)": reports.get("hand") or _evaluate(
+            train, test, hand, data, workers)}
+        for label, options in ABLATIONS:
+            late[label] = _evaluate(train, test, replace(hand, **options), data, workers)
+        tables += "\n" + _table(late, window)
+    if figures is not None:
+        w = f"{window:.1f}"
+        plot_curves(reports, f"{figures}/modalities.png", w,
+                    "Recognition over the recording, by observation")
+        if "hand" in every:
+            plot_curves(late, f"{figures}/late_motion.png", w,
+                        "Recognition over the recording: the late-motion fix taken apart")
+    return tables
+
+
+def _evaluate(train, test, config, data, workers) -> dict:
+    from sandbox.eval.loocv import run_loocv
+    from sandbox.eval.report import build_report
+
+    trials, runtime = run_loocv(train, test, config, workers=workers, progress=True)
+    print(f"observe {','.join(config.observe)}: {len(trials)} trials in {runtime:.1f} s")
+    return build_report(trials, config.to_dict(), data, runtime)
+
+
+def _table(reports: dict, window: float) -> str:
     rows = ["| observe | e_p (m) | e_q (rad) | e_phi (s) | recognition at 30 % | at the end | "
             "late decay (peak - end) | wall (s) |", "|---|---|---|---|---|---|---|---|"]
     w = f"{window:.1f}"
-    for names in sets:
-        config = EvalConfig(windows=(window,), ratios=(0.3,), observe=names)
-        trials, runtime = run_loocv(train, test, config, workers=workers, progress=True)
-        rep = build_report(trials, config.to_dict(), data, runtime)
+    for label, rep in reports.items():
         d, c = rep["dynamic"][w]["mean"], rep["recognition_over_time_ci"][w]
+        at = list(rep["recognition_over_time"]["fractions"]).index(0.3)
         cells = [f"{d[k]:.3f} [{d[k + '_ci'][0]:.3f}, {d[k + '_ci'][1]:.3f}]"
                  for k in ("e_p", "e_q", "e_phi")]
-        at = list(config.curve).index(0.3)
         cells += [f"{c['mean'][at]:.2f} [{c['lo'][at]:.2f}, {c['hi'][at]:.2f}]",
                   f"{c['mean'][-1]:.2f} [{c['lo'][-1]:.2f}, {c['hi'][-1]:.2f}]",
                   f"{c['decay']:.3f} [{c['decay_ci'][0]:.3f}, {c['decay_ci'][1]:.3f}]",
-                  f"{runtime:.0f}"]
-        rows.append(f"| {','.join(names)} | " + " | ".join(cells) + " |")
-        print(f"observe {','.join(names)}: {len(trials)} trials in {runtime:.1f} s")
+                  f"{rep['runtime_s']:.0f}"]
+        rows.append(f"| {label} | " + " | ".join(cells) + " |")
     return "\n".join(rows) + "\n"

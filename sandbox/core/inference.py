@@ -14,7 +14,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from sandbox.core.likelihood import Scorer, condition_low_rank, condition_robot
+from sandbox.core.likelihood import Scorer, condition_robot
 from sandbox.core.phase import ended_probability, estimate_phase
 from sandbox.core.promp import WeightDistribution, trajectory_distribution
 from sandbox.core.recognition import task_posterior
@@ -41,8 +41,6 @@ class Prediction:
     grid : list or None
         Each task's posterior over its grid of durations
         (:attr:`~sandbox.core.phase.PhaseEstimate.grid`).
-    last : tuple of (float, ndarray) or None
-        The last observation it used: time (s) and values (P,), normalised.
     """
 
     task_index: int
@@ -54,7 +52,6 @@ class Prediction:
     duration: float
     factors: FloatArray | None = None
     grid: list | None = None
-    last: tuple | None = None
 
     def trajectory(self, basis, times) -> tuple[FloatArray, FloatArray]:
         """Robot mean (T, Q) and covariance (T, Q, Q) at ``times`` (s); holds after the end."""
@@ -74,37 +71,12 @@ class Prediction:
         return replace(self, task_index=int(k), robot=robot, duration=float(self.durations[k]),
                        task_posterior=self.task_posterior if posterior is None else posterior)
 
-    def end_distance(self, model) -> tuple[float, int]:
-        """How far the hand has left where the chosen task's motion ends.
-
-        Squared Mahalanobis distance of the last observation of the first position
-        modality (the hand) from its prediction at phase 1 (conditioned on the
-        observations), and the number of dims it has; ``(nan, 0)`` without factors
-        or if that modality is not in the last observation.
-        """
-        hand = next((i for i, m in enumerate(model.modalities) if m.kind == "position"), None)
-        if self.factors is None or self.last is None or hand is None:
-            return float("nan"), 0
-        k, P = self.task_index, model.n_human
-        weights = model.task_models[k].weights
-        human = condition_low_rank(weights, self.factors[k], slice(0, P),
-                                   weights.factor.shape[1])
-        mean, cov = trajectory_distribution(human, model.basis, np.ones(1))
-        start = sum(m.size for m in model.modalities[:hand])
-        seen = np.zeros(P, dtype=bool)
-        seen[start:start + model.modalities[hand].size] = True
-        seen &= np.isfinite(self.last[1])
-        if not seen.any():
-            return float("nan"), 0
-        r = self.last[1][seen] - mean[0, seen]
-        S = cov[0][np.ix_(seen, seen)] + np.diag(model.noise[seen])
-        return float(r @ np.linalg.solve(S, r)), int(seen.sum())
-
-    def ended_probability(self, t: float) -> float:
-        """Probability that the chosen task's motion had ended by ``t`` (s)."""
+    def ended_probability(self, t: float, task: int | None = None) -> float:
+        """Probability that a task's motion (default the chosen one's) had ended by ``t`` (s)."""
+        k = self.task_index if task is None else int(task)
         if self.grid is None:
-            return float(self.duration <= t)
-        return float(ended_probability(self.grid[self.task_index:self.task_index + 1], t)[0])
+            return float(self.durations[k] <= t)
+        return float(ended_probability(self.grid[k:k + 1], t)[0])
 
 
 def predict(model, scorer: Scorer, times: FloatArray, values: FloatArray, *,
@@ -142,4 +114,4 @@ def predict(model, scorer: Scorer, times: FloatArray, values: FloatArray, *,
     robot = condition_robot(model.task_models[k].weights, factor, model.n_human,
                             scorer.rank[k])
     return Prediction(k, post, est.alphas, est.durations, est.log_likelihood, robot, T,
-                      est.factors, est.grid, (float(times[-1]), values[-1]))
+                      est.factors, est.grid)

@@ -411,22 +411,12 @@ def condition_robot(weights: WeightDistribution, factor: FloatArray, n_human: in
         :math:`U_r L_K^{-T}`, regulariser :math:`\\Lambda_r` (eq. 9 restricted to the
         robot block).
     """
-    return condition_low_rank(weights, factor, slice(n_human, None), rank)
-
-
-def condition_low_rank(weights: WeightDistribution, factor: FloatArray, dims: slice,
-                       rank: int) -> WeightDistribution:
-    """The low-rank part of the posterior of some dims' weights (see :func:`condition_robot`).
-
-    Exact for unobserved dims (the robot's). For observed human dims it leaves out
-    the regulariser's own share of the update (:math:`\\Lambda_h` is ~1e-3 of the
-    weight variance): good enough to ask where the model expects the hand.
-    """
     N = weights.n_basis
     R = factor.shape[0] - 1
     LK = factor[:rank, :rank]
     g = factor[R, :rank]
-    block = weights.dims(dims)
+    U_r = weights.factor[n_human * N:]
     kinv_e = scipy.linalg.solve_triangular(LK, g, lower=True, trans="T")
-    new_factor = scipy.linalg.solve_triangular(LK, block.factor.T, lower=True).T
-    return WeightDistribution(block.mean + block.factor @ kinv_e, new_factor, block.reg, N)
+    new_factor = scipy.linalg.solve_triangular(LK, U_r.T, lower=True).T
+    mean = weights.mean[n_human * N:] + U_r @ kinv_e
+    return WeightDistribution(mean, new_factor, weights.reg[n_human:], N)

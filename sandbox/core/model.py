@@ -66,7 +66,7 @@ from sandbox.core.promp import WeightDistribution, fit_weights
 from sandbox.core.validation import FloatArray, check_array, check_positive
 
 #: Default noise floor of signal modalities, in their normalised units (see IProMP).
-SIGNAL_FLOOR = 0.1
+SIGNAL_FLOOR = 1.0
 
 
 class DemonstrationLike(Protocol):
@@ -252,7 +252,7 @@ class IProMP:
         signal_floor: float = SIGNAL_FLOOR,
         noise_floors: Mapping[str, float] | None = None,
         settle_tol: float | None = 0.02,
-        arrive_tol: float | None = 0.03,
+        arrive_tol: float | None = 0.02,
         min_alpha_std: float = 0.02,
         ridge: float = 1e-8,
         priors: Mapping[str, float] | None = None,

@@ -28,7 +28,6 @@ import time as _time
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import chi2
 
 from sandbox.core.blending import blend_unchecked, sigmoid_activations
 from sandbox.core.inference import Prediction, predict
@@ -97,8 +96,7 @@ class _Predictor:
                  n_candidates: int = 50, width: float = 3.0, refine_steps: int = 1,
                  dt: float = 0.01, blend_rate: float = 50.0, blend_delay: float = 0.1,
                  blend: bool = True, horizon: float = 0.0, incremental: bool = True,
-                 until_end: bool = True, end_prob: float = 0.9,
-                 end_margin: float = 0.0, end_gate: float = 0.999) -> None:
+                 until_end: bool = True, end_prob: float = 0.9) -> None:
         if not getattr(model, "is_fitted", False):
             raise RuntimeError("the model is not fitted: fit it (or load it) before predicting")
         if int(n_candidates) != n_candidates or n_candidates < 3:
@@ -118,8 +116,6 @@ class _Predictor:
         self.horizon = check_positive(horizon, "horizon", allow_zero=True)
         self.until_end = bool(until_end)
         self.end_prob = check_fraction(end_prob, "end_prob")
-        self.end_margin = check_positive(end_margin, "end_margin", allow_zero=True)
-        self.end_gate = check_fraction(end_gate, "end_gate")
         self._lattice = Lattice.for_tasks(model.task_models, self.n_candidates, self.width)
         self._incremental = bool(incremental) and self.likelihood == "joint"
         self.reset()
@@ -278,7 +274,7 @@ class _Predictor:
             last = self.updates[-1]
             prediction = prediction.for_task(self.model, self.model.task_index(last.task),
                                              last.task_posterior)
-        elif self.until_end and self._has_ended(prediction, t):
+        elif self.until_end and prediction.ended_probability(t) >= self.end_prob:
             self.ended = True                    # this update decides; later ones hold it
         k = prediction.task_index
         jump = self._blend_in(float(t), prediction.robot, prediction.duration)
@@ -290,15 +286,6 @@ class _Predictor:
         self.updates.append(upd)
         self._after_update()
         return upd
-
-    def _has_ended(self, prediction: Prediction, t: float) -> bool:
-        """Whether the handover is over: the chosen task's motion ended before ``t``
-        (probability >= ``end_prob``) and the hand has left where it ended (the last
-        observation beyond the ``end_gate`` quantile of a chi-square)."""
-        if prediction.ended_probability(t - self.end_margin) < self.end_prob:
-            return False
-        d2, dims = prediction.end_distance(self.model)
-        return bool(dims and d2 > chi2.ppf(self.end_gate, dims))
 
     def _after_update(self) -> None:
         """Hook: what to forget after an update (nothing by default)."""
@@ -405,15 +392,17 @@ class DynamicPredictor(_Predictor):
         The plan reaches at least this far (s) past each update (holding the
         predicted end), e.g. for a controller that looks ahead.
     until_end : bool
-        Hold the task once the motion has ended: when an update finds the
-        chosen task's motion over before the update's time (its duration
-        shorter than the time elapsed), the human's further motion (releasing,
-        retracting, occluded by the robot) is no longer evidence about which
-        task it was. :attr:`ended` turns True; that update and every later one
-        keep the task and posterior chosen before the end and only re-estimate
-        its timing and condition its robot motion on the hand. ``False``
-        re-chooses the task through the whole stream (on the recorded handovers
-        recognition then falls after the handover).
+        Hold the task once the motion has ended: when an update finds that the
+        chosen task's motion was over before the update's time (with posterior
+        probability >= ``end_prob``, from its grid of durations), its choice is
+        the last one: the human's further motion (releasing, retracting,
+        occluded by the robot) is no longer evidence about which task it was.
+        :attr:`ended` turns True and later updates keep that task and posterior,
+        only re-estimating its timing and conditioning its robot motion on the
+        hand. ``False`` re-chooses the task through the whole stream (on the
+        recorded handovers recognition then falls after the handover).
+    end_prob : float
+        Probability of the motion being over that ends it (``until_end``).
     incremental : bool
         Grow the likelihood's sufficient statistics with each observation
         (:mod:`sandbox.core.statistics`) so an update only factors small
@@ -456,15 +445,6 @@ class DynamicPredictor(_Predictor):
     def next_boundary(self, t: float) -> float:
         """The first window boundary after an update at ``t``."""
         return float((np.floor(t / self.dow_t + 1e-9) + 1) * self.dow_t)
-
-    def _has_ended(self, prediction: Prediction, t: float) -> bool:
-        """Whether the handover is over: the chosen task's motion ended before ``t``
-        (probability >= ``end_prob``) and the hand has left where it ended (the last
-        observation beyond the ``end_gate`` quantile of a chi-square)."""
-        if prediction.ended_probability(t - self.end_margin) < self.end_prob:
-            return False
-        d2, dims = prediction.end_distance(self.model)
-        return bool(dims and d2 > chi2.ppf(self.end_gate, dims))
 
     def _after_update(self) -> None:
         if self.window == "latest" and self._stats is not None:

@@ -50,7 +50,8 @@ class EvalConfig:
     ratios : observed fractions of the static formulation.
     windows : dynamic observation windows dow_t (s).
     subsample : keep 1 of this many valid tracker frames (~30 Hz -> ~15 Hz).
-    likelihood, window_mode, n_candidates, refine_steps, blend_rate, blend_delay, until_end :
+    likelihood, window_mode, n_candidates, refine_steps, blend_rate, blend_delay, until_end,
+    end_prob :
         predictor options (:class:`~sandbox.core.DynamicPredictor`).
     n_basis, regularizer, noise_scale, noise_floor, signal_floor, noise_floors, settle_tol :
         model options (:class:`~sandbox.core.IProMP`).
@@ -70,8 +71,6 @@ class EvalConfig:
     blend_delay: float = 0.1
     until_end: bool = True
     end_prob: float = 0.9
-    end_margin: float = 0.0
-    end_gate: float = 0.999
     n_basis: int = 21
     regularizer: float = 1e-3
     noise_scale: float = 1.0
@@ -79,7 +78,7 @@ class EvalConfig:
     signal_floor: float = SIGNAL_FLOOR
     noise_floors: tuple[tuple[str, float], ...] = ()
     settle_tol: float | None = 0.02
-    arrive_tol: float | None = 0.03
+    arrive_tol: float | None = 0.02
     observe: tuple[str, ...] | None = None
     goal_tol: float = 0.05
     curve: tuple[float, ...] = field(default=CURVE)
@@ -95,8 +94,7 @@ class EvalConfig:
         return {"subsample": self.subsample, "likelihood": self.likelihood,
                 "n_candidates": self.n_candidates, "refine_steps": self.refine_steps,
                 "blend_rate": self.blend_rate, "blend_delay": self.blend_delay,
-                "until_end": self.until_end, "end_prob": self.end_prob,
-                "end_margin": self.end_margin, "end_gate": self.end_gate}
+                "until_end": self.until_end, "end_prob": self.end_prob}
 
     def to_dict(self) -> dict:
         return asdict(self)

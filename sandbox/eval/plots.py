@@ -10,6 +10,8 @@ notebook leaves its inline backend alone.
   windows, one curve per report (Exp. 1 vs Exp. 2, paper Fig. 8).
 * ``recognition.png``: recognition over the motion (dynamic, per window) and
   against the observed ratio (static).
+* :func:`plot_curves` (``modalities.png``): recognition over the recording for
+  several reports (e.g. observation sets), with bootstrap bands.
 """
 
 from __future__ import annotations
@@ -126,6 +128,30 @@ def _recognition(report, path):
         ax.grid(alpha=0.3)
     fig.suptitle(f"Task recognition: {report['dataset']}")
     return _save(fig, path)
+
+
+def plot_curves(reports: dict[str, dict], path, window: str = "0.2",
+                title: str = "Recognition over the recording") -> Path:
+    """Recognition over the recording of several reports, one curve (and its 95 %
+    bootstrap band) per label; the chance level of the first report's tasks."""
+    fig, axes = _figure(1, (7, 4))
+    ax = axes
+    first = None
+    for label, report in reports.items():
+        first = first or report
+        band = report["recognition_over_time_ci"][window]
+        x = report["recognition_over_time"]["fractions"]
+        line = ax.plot(x, band["mean"], marker="o", label=label)[0]
+        ax.fill_between(x, band["lo"], band["hi"], color=line.get_color(), alpha=0.12)
+    ax.axhline(1 / len(first["tasks"]), color="k", ls=":", label="chance")
+    ax.set_xlabel("fraction of the recording observed (idle tail included)")
+    ax.set_ylabel(f"trials with the right task (dow_t = {window} s)")
+    ax.set_ylim(0, 1.02)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="lower right")
+    fig.suptitle(title)
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    return _save(fig, Path(path))
 
 
 def _save(fig, path: Path) -> Path:
