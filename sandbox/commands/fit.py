@@ -60,8 +60,9 @@ def run(args: argparse.Namespace) -> int:
                              tasks=_observation.split(args.tasks), n_per_task=args.n_per_task,
                              preprocess=args.preprocess)
     if not demos:
+        first = f"; the first: {caught[0].message}" if caught else ""
         raise ValueError(f"--data: no usable demonstration in {args.data} "
-                         f"({len(caught)} skipped)")
+                         f"({len(caught)} skipped{first})")
     kwargs = {} if args.regularizer is None else {"regularizer": args.regularizer}
     if args.n_basis is not None:
         kwargs["n_basis"] = args.n_basis

@@ -185,3 +185,45 @@ def test_update_on_a_plan_knot_keeps_knots_strictly_increasing(model):
     times, means, _ = pred.plan()
     assert np.all(np.diff(times) > 0)
     assert np.isfinite(pred.commands(times)[0]).all()
+
+
+def _with_tail(task: int, other: int, duration: float = 2.0):
+    """Task ``task`` replayed, then the hand wanders to ``other``'s end over 1 s and stays:
+    motion after the handover that looks like another task's."""
+    demo = synth.replay(task, duration, noise=0.003, rng=np.random.default_rng(3))
+    end_other = synth.shape(other, np.ones(1))[0][0]
+    s = np.linspace(0, 1, 100)[:, None]
+    tail = demo.human[-1] + (end_other - demo.human[-1]) * (3 * s**2 - 2 * s**3)
+    tail = np.vstack([tail, np.repeat(tail[-1:], 300, axis=0)])
+    times = np.r_[demo.times, demo.times[-1] + 0.01 * np.arange(1, tail.shape[0] + 1)]
+    return times, np.vstack([demo.human, tail])
+
+
+def test_the_task_is_held_once_the_motion_is_over(model):
+    """Regression (late decay): motion after the handover is no evidence about the task."""
+    times, human = _with_tail(0, 1)
+    held = DynamicPredictor(model, dow_t=0.2)
+    free = DynamicPredictor(model, dow_t=0.2, until_end=False)
+    for t, y in zip(times, human):
+        held.observe(t, y)
+        free.observe(t, y)
+    assert free.task == "task1"                      # the tail drags an open decision away
+    assert held.ended and held.task == "task0"
+    first = next(i for i, u in enumerate(held.updates) if u.after_end)
+    assert held.updates[first - 1].time < 2.0 + 0.45 and first < len(held.updates) - 3
+    for u in held.updates[first:]:
+        assert u.task == "task0"
+        np.testing.assert_array_equal(u.task_posterior, held.updates[first - 1].task_posterior)
+    held.reset()
+    assert not held.ended and not held.updates
+
+
+def test_until_end_options(model):
+    with pytest.raises(ValueError, match="end_prob"):
+        DynamicPredictor(model, end_prob=0.0)
+    times, human = _with_tail(2, 0)
+    pred = DynamicPredictor(model, dow_t=0.2, likelihood="marginal")
+    for t, y in zip(times, human):
+        pred.observe(t, y)
+    assert pred.ended and pred.task == "task2"       # marginal: the plan just holds
+    assert not any(u.after_end for u in pred.updates)
