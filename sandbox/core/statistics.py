@@ -146,10 +146,10 @@ class StreamStatistics:
             member = g.member                                                     # (K, Pg)
             const += (member @ per_dim)[:, None] + member.sum(axis=1)[:, None] * st.logdet_a
             gamma_term += member @ (st.gamma / sc.sigma2[g.dims]).T
-        loglik, factors = [], []
-        for k, (a, b) in enumerate(spans):
-            ll, L = factor_scores(self.Kt[a:b, k].copy(), self.eps[a:b, k], gamma_term[k, a:b],
-                                  const[k, a:b])
-            loglik.append(ll)
-            factors.append(L)
-        return Scores(loglik, factors)
+        pick = [(k, slice(int(a), int(b))) for k, (a, b) in enumerate(spans)]
+        ll, L = factor_scores(np.concatenate([self.Kt[c, k] for k, c in pick]),   # one batch
+                              np.concatenate([self.eps[c, k] for k, c in pick]),
+                              np.concatenate([gamma_term[k, c] for k, c in pick]),
+                              np.concatenate([const[k, c] for k, c in pick]))
+        cuts = np.cumsum([c.stop - c.start for _, c in pick])[:-1]
+        return Scores(np.split(ll, cuts), np.split(L, cuts))

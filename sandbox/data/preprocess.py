@@ -54,7 +54,7 @@ EXCURSION_WINDOW_S = 0.5
 MAX_EXTRAPOLATE_S = 0.1
 #: Options of :func:`preprocess_human` and their defaults.
 DEFAULTS: dict[str, Any] = {"config": None, "freeze_s": 0.25, "max_fill_s": 1.0, "jump_m": 0.05,
-                            "excursion_m": 0.04, "signal_cutoff_hz": 3.0,
+                            "excursion_m": 0.04, "signal_cutoff_hz": 5.0,
                             "signal_rate_hz": 30.0}
 
 

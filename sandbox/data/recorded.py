@@ -256,7 +256,7 @@ def load_trial(
         recorded handovers 4 cm sets aside 4.9 % of the frames; on synthetic
         tracks with known truth it finds 67 % of the frames more than 3 cm off,
         with 96 % precision), ``signal_cutoff_hz`` and ``signal_rate_hz``
-        (the envelope of signals, :mod:`sandbox.data.signals`).
+        (the envelope of signals, :mod:`sandbox.data.signals`; 5 Hz and 30 Hz by default).
 
     Returns
     -------

@@ -21,8 +21,9 @@ in cascade, time constant :math:`\\tau = 1 / (2 \\pi f_c)`,
     \\tau \\dot s_1 = x - s_1,\\qquad \\tau \\dot s_j = s_{j-1} - s_j\\quad (j = 2..n).
 
 Over the step from one used sample to the next the input is held at the new
-sample ``x``; with :math:`r = \\Delta t_{\\mathrm{eff}} / \\tau` and
-:math:`\\Delta t_{\\mathrm{eff}} = \\max(\\Delta t, \\Delta t_{\\min})` the exact
+sample ``x``; with :math:`r = \\Delta t_{\\mathrm{eff}} / \\tau`,
+:math:`\\Delta t_{\\mathrm{eff}} = \\Delta t` (or :math:`\\Delta t_{\\min}` for a sample
+sharing the previous one's time stamp), the exact
 solution is
 
 .. math::
@@ -35,9 +36,9 @@ resampling; rows sharing a time stamp still count as samples ``min_dt`` apart.
 Every update is a convex combination of ``x`` and the old states, so the output
 stays within the input's range. The state starts at the first used sample.
 Holding the input over a step makes the output lead by up to one step on a
-changing signal, and ``min_dt`` lengthens every step shorter than it: the
-default 20 ms is the Myo's sample period (new samples arrive ~24 ms apart,
-two of them often in one burst with a single time stamp).
+changing signal. The default ``min_dt`` of 20 ms is the Myo's sample period:
+new samples arrive ~24 ms apart, two of them often in one burst with a single
+time stamp.
 
 A causal filter delays the envelope (about ``stages * tau``). A live stream can
 only be filtered causally: each output may depend only on rows received so far,
@@ -148,7 +149,8 @@ def _cascade(t: FloatArray, x: FloatArray, tau: float, stages: int, min_dt: floa
     s = np.repeat(x[:1], stages, axis=0)  # state (stages, C), starts at the first sample
     out[0] = x[0]
     for k in range(1, x.shape[0]):
-        r = max(t[k] - t[k - 1], min_dt) / tau
+        dt = t[k] - t[k - 1]
+        r = (dt if dt > 0 else min_dt) / tau
         d = s - x[k]
         # s_j <- x + exp(-r) sum_i (s_i - x) r^(j-i) / (j-i)!  (exact, input held at x)
         w = np.exp(-r) * r ** np.arange(stages) / fact
@@ -161,7 +163,7 @@ def envelope(
     times: ArrayLike,
     values: ArrayLike,
     *,
-    cutoff_hz: float = 3.0,
+    cutoff_hz: float = 5.0,
     causal: bool = True,
     stages: int = 2,
     min_dt: float = 0.02,
@@ -183,7 +185,7 @@ def envelope(
     stages : int
         Number of cascaded first-order stages.
     min_dt : float
-        Smallest step (s) between two used samples (rows sharing a time stamp).
+        Step (s) given to a used sample sharing the previous one's time stamp.
     use : array_like of bool, shape (T,), optional
         Rows that feed the filter; default :func:`fresh_rows`. Rows with a NaN
         are never used.
@@ -246,7 +248,7 @@ def preprocess_signal(
     values: ArrayLike,
     mode: str,
     *,
-    cutoff_hz: float = 3.0,
+    cutoff_hz: float = 5.0,
     rate_hz: float = 30.0,
     stages: int = 2,
     min_dt: float = 0.02,

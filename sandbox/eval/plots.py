@@ -110,7 +110,7 @@ def _recognition(report, path):
     curve = report["recognition_over_time"]
     for w in _windows(report):
         axes[0].plot(curve["fractions"], curve[w], marker="o", label=f"dynamic, dow_t = {w} s")
-    axes[0].set_xlabel("fraction of the motion observed")
+    axes[0].set_xlabel("fraction of the recording observed (idle tail included)")
     axes[0].set_ylabel("trials with the right task")
     axes[0].set_ylim(0, 1.02)
     axes[0].axhline(1 / len(report["tasks"]), color="k", ls=":", label="chance")
