@@ -21,7 +21,7 @@ Timed, from one run, as medians over ``repeats`` repetitions:
 * ``update_multimodal_ms``: the same update with P = 17 observed dims (hand 3 +
   arm 6 + EMG 8, the recorded set's modalities), the 40 rows carrying all
   three. The arm and EMG of the reference demos are made up for timing only
-  (:func:`multimodal_case`: an elbow and a shoulder offset from the hand, and
+  (:func:`_arm_and_emg`: an elbow and a shoulder offset from the hand, and
   task-dependent activity levels); their realism does not change the
   arithmetic. ``observe_multimodal_ms`` is the statistics' growth per row.
 * ``movement_primitives_condition_ms`` (if the package is installed): its ProMP
@@ -45,12 +45,17 @@ from sandbox.core.recognition import task_posterior
 TASKS = ("left", "right", "up", "down")
 
 
-def reference_case(seed: int = 0, n_per_task: int = 20):
-    """Fitted 4-task model, and the held-out motion's first 2 s at 100 Hz (times, human)."""
+def reference_case(seed: int = 0, n_per_task: int = 20, *, multimodal: bool = False):
+    """Fitted 4-task model, and the held-out motion's first 2 s at 100 Hz (times, human).
+
+    ``multimodal``: the demos also carry ``arm`` and ``emg`` (P = 17, :func:`_arm_and_emg`).
+    """
     from sandbox.data.synthetic import make_dataset
 
     rng = np.random.default_rng(seed)
     demos = [d for d in make_dataset("diverging", n_per_task + 3, rng) if d.task in TASKS]
+    if multimodal:
+        demos = _arm_and_emg(demos, rng)
     train, test = [], None
     for task in TASKS:
         items = [d for d in demos if d.task == task]
@@ -63,35 +68,21 @@ def reference_case(seed: int = 0, n_per_task: int = 20):
     return model, t[keep][:200], test.human[keep][:200]
 
 
-def multimodal_case(seed: int = 0, n_per_task: int = 20):
-    """The reference case with ``arm`` and ``emg`` added (P = 17): model, times, rows (T, 17)."""
+def _arm_and_emg(demos, rng: np.random.Generator) -> list:
+    """The demos with a made-up elbow, shoulder and task-dependent activity (for timing only)."""
     from sandbox.data.spec import ARM, EMG, HAND
-    from sandbox.data.synthetic import make_dataset
 
-    rng = np.random.default_rng(seed)
-    demos = [d for d in make_dataset("diverging", n_per_task + 3, rng) if d.task in TASKS]
     levels = dict(zip(TASKS, (150.0, 250.0, 350.0, 450.0)))
-
-    def extend(d):
+    out = []
+    for d in demos:
         z = (d.times - d.times[0]) / d.duration
         elbow = d.human + np.array([0.25, 0.1, -0.1]) * (1 - 0.3 * z)[:, None]
         shoulder = np.array([1.4, 0.2, 0.35]) + 0.02 * np.sin(np.pi * z)[:, None]
         emg = levels[d.task] * (1 + 0.5 * np.sin(np.pi * z))[:, None] * np.linspace(0.5, 1.5, 8)
         emg = emg * (1 + 0.05 * rng.standard_normal(emg.shape))
-        human = np.hstack([d.human, elbow, shoulder, emg])
-        return d.replace(human=human, human_names=(), modalities=(HAND, ARM, EMG))
-
-    demos = [extend(d) for d in demos]
-    train, test = [], None
-    for task in TASKS:
-        items = [d for d in demos if d.task == task]
-        train += items[:n_per_task]
-        if test is None and task == TASKS[0]:
-            test = next(d for d in items[n_per_task:] if d.duration > 2.2)
-    model = IProMP(n_basis=31).fit(train)
-    t = test.times - test.times[0]
-    keep = t < 2.0 - 1e-9
-    return model, t[keep][:200], test.human[keep][:200]
+        out.append(d.replace(human=np.hstack([d.human, elbow, shoulder, emg]), human_names=(),
+                             modalities=(HAND, ARM, EMG)))
+    return out
 
 
 def _median_ms(fn: Callable[[], object], repeats: int) -> float:
@@ -238,7 +229,7 @@ def run_core_benchmarks(repeats: int = 200, seed: int = 0) -> dict:
 
 
 def _multimodal_figures(seed: int, repeats: int, n_cand: int, hand_ms: float) -> dict:
-    model, t200, y200 = multimodal_case(seed)
+    model, t200, y200 = reference_case(seed, multimodal=True)
     t_update = float(t200[::5][-1])
     pred = _fed_predictor(model, t200, y200, n_candidates=n_cand)
     ms = _median_ms(_timed_update(pred, t_update), repeats)

@@ -121,6 +121,10 @@ def format_summary(result: dict[str, Any]) -> str:
         span = f"{r['duration_mean_s']:.2f} [{r['duration_min_s']:.2f}, {r['duration_max_s']:.2f}]"
         lines.append(f"{task:<20}{r['trials']:>7}  {span:<30}"
                      f"{r['rows_per_s']:>8.1f}{r['frames_per_s']:>10.1f}")
+    rates = ", ".join(f"{name} {r['samples_per_s']:.1f}"
+                      for name, r in result.get("modalities", {}).items())
+    if rates:
+        lines += ["", f"New samples per second, by modality: {rates}"]
     g = result["glitches"]
     lines += ["", f"Tracker glitches over {g['rows']} rows (trials showing it):"]
     labels = [

@@ -221,7 +221,8 @@ def summarize(
     dict
         ``tasks``: per task the number of trials, duration mean/min/max (s),
         rows per second and distinct tracker frames per second; ``all``: the
-        same over all trials; ``glitches``: totals of each glitch with the
+        same over all trials; ``modalities``: new samples per second of each
+        modality (after preprocessing); ``glitches``: totals of each glitch with the
         number of trials showing it; ``skipped``: the reasons.
     """
     reports = [d.meta.get("report") for d in demos]
@@ -233,9 +234,19 @@ def summarize(
     return {
         "tasks": {task: _rates(rs) for task, rs in groups.items()},
         "all": _rates(reports),
+        "modalities": _modality_rates(reports),
         "glitches": _glitch_totals(reports),
         "skipped": [{"file": f, "reason": r} for f, r in skipped],
     }
+
+
+def _modality_rates(reports: list[dict]) -> dict[str, dict[str, float]]:
+    """New (accepted) samples per second of every modality, over all trials."""
+    total = sum(r["duration_s"] for r in reports)
+    names = dict.fromkeys(n for r in reports for n in r.get("modalities", {}))
+    return {n: {"samples_per_s": sum(r["modalities"][n].get("measured_samples", 0)
+                                     for r in reports if n in r.get("modalities", {})) / total}
+            for n in names}
 
 
 def _rates(reports: list[dict]) -> dict[str, float]:

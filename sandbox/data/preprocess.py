@@ -184,7 +184,7 @@ def preprocess_human(
             out, meas, c = _signal(times, cols, preprocess, opts, last)
         outs.append(out)
         measured.append(meas)
-        counts[m.name] = c
+        counts[m.name] = {**c, "measured_samples": int(meas.sum())}
     return np.hstack(outs), np.column_stack(measured), counts
 
 

@@ -105,6 +105,17 @@ def test_summary_of_the_recorded_set(recorded_dir, capsys):
     assert result["skipped"] == []
     assert 0.35 < result["glitches"]["repeated_timestamps"]["fraction_of_rows"] < 0.45
     assert 90 < result["all"]["rows_per_s"] < 110
+    assert 25 < result["modalities"]["hand"]["samples_per_s"] < 31
+
+
+def test_summary_of_the_recorded_set_with_every_modality(recorded_dir, capsys):
+    assert main(["data", "summary", "--data", str(recorded_dir), "--observe", "hand,arm,emg",
+                 "--tasks", "pencil_box", "--synthetic", "none"]) == 0
+    out = capsys.readouterr().out
+    rates = dict(part.rsplit(" ", 1) for part in
+                 out.split("by modality: ")[1].splitlines()[0].split(", "))
+    assert set(rates) == {"hand", "arm", "emg"}
+    assert 20 < float(rates["emg"]) <= 30.5 and 25 < float(rates["arm"]) < 31
 
 
 # --- fit ----------------------------------------------------------------------------------
