@@ -2,7 +2,8 @@
 
 Imports only numpy and scipy.
 
-Notation (as in the paper): P human dims, Q robot dims, N basis functions,
+Notation (as in the paper): P human dims (the observed modalities' dims, see
+:mod:`~sandbox.core.modality`), Q robot dims, N basis functions,
 D = (P+Q)N weights; :math:`\\psi` basis, :math:`\\Psi` design matrix, H observation
 matrix, :math:`\\mu_\\omega, \\Sigma_\\omega` weight distribution,
 :math:`\\Sigma_y` observation noise, :math:`\\alpha` speed factor (phase ratio),
@@ -12,7 +13,8 @@ Modules: :mod:`~sandbox.core.basis`, :mod:`~sandbox.core.promp`,
 :mod:`~sandbox.core.model`, :mod:`~sandbox.core.interaction` (dense reference),
 :mod:`~sandbox.core.likelihood` (fast path), :mod:`~sandbox.core.phase`,
 :mod:`~sandbox.core.recognition`, :mod:`~sandbox.core.blending`,
-:mod:`~sandbox.core.predictor`, :mod:`~sandbox.core.io`.
+:mod:`~sandbox.core.predictor` (with :mod:`~sandbox.core.stream`, the observation
+stream), :mod:`~sandbox.core.modality`, :mod:`~sandbox.core.io`.
 
 References
 ----------
@@ -27,6 +29,7 @@ from sandbox.core.basis import GaussianBasis
 from sandbox.core.blending import blend, sigmoid_activations
 from sandbox.core.inference import Prediction, predict
 from sandbox.core.interaction import condition, log_marginal_likelihood, observation_matrix
+from sandbox.core.modality import Modality
 from sandbox.core.model import DemoFit, IProMP, TaskModel
 from sandbox.core.phase import PhaseEstimate, estimate_phase
 from sandbox.core.predictor import DynamicPredictor, StaticPredictor, Update
@@ -38,6 +41,7 @@ __all__ = [
     "DynamicPredictor",
     "GaussianBasis",
     "IProMP",
+    "Modality",
     "PhaseEstimate",
     "Prediction",
     "StaticPredictor",
