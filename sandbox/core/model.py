@@ -251,7 +251,7 @@ class IProMP:
         noise_floor: float = 0.02,
         signal_floor: float = SIGNAL_FLOOR,
         noise_floors: Mapping[str, float] | None = None,
-        settle_tol: float | None = 0.02,
+        settle_tol: float | None = 0.05,
         arrive_tol: float | None = 0.02,
         min_alpha_std: float = 0.02,
         ridge: float = 1e-8,

@@ -77,7 +77,7 @@ class EvalConfig:
     noise_floor: float = 0.02
     signal_floor: float = SIGNAL_FLOOR
     noise_floors: tuple[tuple[str, float], ...] = ()
-    settle_tol: float | None = 0.02
+    settle_tol: float | None = 0.05
     arrive_tol: float | None = 0.02
     observe: tuple[str, ...] | None = None
     goal_tol: float = 0.05
