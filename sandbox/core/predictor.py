@@ -318,7 +318,10 @@ class _Predictor:
 
     def _blend_in(self, t: float, robot: WeightDistribution, duration: float) -> float:
         keep = self._plan_t < t                       # knot t is added below: no duplicate
-        end = max(duration, self._plan_t[-1], t + max(self.horizon, self.dt))
+        # At least until the blend has completed (the rising sigmoid within e^-10 of 1):
+        # an update after the predicted end must still take over the plan.
+        settled = t + self.blend_delay + 10.0 / self.blend_rate
+        end = max(duration, self._plan_t[-1], t + self.horizon, settled)
         first = (np.floor(t / self.dt + 1e-9) + 1.0) * self.dt
         new_t = np.arange(first, end + self.dt, self.dt)
         new_t = new_t[new_t > t + 1e-9]
