@@ -227,3 +227,19 @@ def test_until_end_options(model):
         pred.observe(t, y)
     assert pred.ended and pred.task == "task2"       # marginal: the plan just holds
     assert not any(u.after_end for u in pred.updates)
+
+
+def test_an_update_after_the_predicted_end_takes_over_the_plan(model):
+    """Regression: a plan used to end one knot after an update past the predicted end, so
+    the blend never completed and the command kept the old plan."""
+    times, human = _with_tail(1, 2)
+    pred = DynamicPredictor(model, dow_t=1.0, until_end=False)
+    for t, y in zip(times, human):
+        pred.observe(t, y)
+    last = pred.updates[-1]
+    assert last.time > last.duration + 0.5                    # past the predicted end
+    plan_t, _, _ = pred.plan()
+    assert plan_t[-1] >= last.time + pred.blend_delay + 10 / pred.blend_rate - 1e-9
+    mean, _ = pred.command(last.time + 0.5)
+    new, _ = pred.prediction(np.array([last.time + 0.5]))
+    np.testing.assert_allclose(mean, new[0], atol=1e-3)
