@@ -202,8 +202,8 @@ def _with_tail(task: int, other: int, duration: float = 2.0):
 def test_the_task_is_held_once_the_motion_is_over(model):
     """Regression (late decay): motion after the handover is no evidence about the task."""
     times, human = _with_tail(0, 1)
-    held = DynamicPredictor(model, dow_t=0.2)
-    free = DynamicPredictor(model, dow_t=0.2, until_end=False)
+    held = DynamicPredictor(model, dow_t=0.2, until_end=True)
+    free = DynamicPredictor(model, dow_t=0.2)                  # the default re-chooses
     for t, y in zip(times, human):
         held.observe(t, y)
         free.observe(t, y)
@@ -222,7 +222,7 @@ def test_until_end_options(model):
     with pytest.raises(ValueError, match="end_prob"):
         DynamicPredictor(model, end_prob=0.0)
     times, human = _with_tail(2, 0)
-    pred = DynamicPredictor(model, dow_t=0.2, likelihood="marginal")
+    pred = DynamicPredictor(model, dow_t=0.2, likelihood="marginal", until_end=True)
     for t, y in zip(times, human):
         pred.observe(t, y)
     assert pred.ended and pred.task == "task2"       # marginal: the plan just holds
