@@ -131,7 +131,9 @@ def _compare_sets(text: str) -> list[tuple[str, ...]]:
 #: The late-motion fix taken apart (options of EvalConfig), for the hand alone.
 ABLATIONS = (
     ("hand, whole recordings as the motion", {"settle_tol": None, "arrive_tol": None}),
-    ("hand, task held once the motion is over", {"until_end": True}),
+    ("hand, task re-chosen to the end", {"until_end": False}),
+    ("hand, neither (no late-motion fix)", {"settle_tol": None, "arrive_tol": None,
+                                            "until_end": False}),
 )
 
 

@@ -16,10 +16,10 @@ task priors (each at its mean duration, weighted by p(k)).
   fraction ``ratio`` of the expected duration.
 
 The plan before an update's time is never rewritten, so what was executed
-stays executed; each update records the jump it caused in the command. On
-request (``until_end=True``), once an update finds that the motion has ended,
-the task is held: later updates only refine that task's timing and robot
-motion.
+stays executed; each update records the jump it caused in the command. Once
+an update finds that the motion has ended (``until_end``), the task is held:
+after the handover the human's motion is no longer evidence about which task
+it was, and later updates only refine that task's timing and robot motion.
 """
 
 from __future__ import annotations
@@ -96,7 +96,7 @@ class _Predictor:
                  n_candidates: int = 50, width: float = 3.0, refine_steps: int = 1,
                  dt: float = 0.01, blend_rate: float = 50.0, blend_delay: float = 0.1,
                  blend: bool = True, horizon: float = 0.0, incremental: bool = True,
-                 until_end: bool = False, end_prob: float = 0.9) -> None:
+                 until_end: bool = True, end_prob: float = 0.9) -> None:
         if not getattr(model, "is_fitted", False):
             raise RuntimeError("the model is not fitted: fit it (or load it) before predicting")
         if int(n_candidates) != n_candidates or n_candidates < 3:
@@ -402,11 +402,10 @@ class DynamicPredictor(_Predictor):
         occluded by the robot) is no longer evidence about which task it was.
         :attr:`ended` turns True and later updates keep that task and posterior,
         only re-estimating its timing and conditioning its robot motion on the
-        hand. Off by default: on the recorded handovers it barely changes
-        recognition once the model's motion ends where the partners arrive
-        (``settle_tol``, ``arrive_tol``), and in the environments, where the
-        human may be slower than predicted, a confident but early end commits to
-        the wrong task (diverging scenario: success 0.75 with it, 0.95 without).
+        hand. ``False`` re-chooses the task through the whole stream (on the
+        recorded handovers recognition then falls after the handover). A
+        closed-loop policy whose episode ends at the handover has no such
+        motion to ignore, and :class:`~sandbox.policies.IProMPPolicy` turns it off.
     end_prob : float
         Probability of the motion being over that ends it (``until_end``).
     incremental : bool

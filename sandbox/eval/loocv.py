@@ -69,7 +69,7 @@ class EvalConfig:
     refine_steps: int = 1
     blend_rate: float = 50.0
     blend_delay: float = 0.1
-    until_end: bool = False
+    until_end: bool = True
     end_prob: float = 0.9
     n_basis: int = 21
     regularizer: float = 1e-3

@@ -202,8 +202,8 @@ def _with_tail(task: int, other: int, duration: float = 2.0):
 def test_the_task_is_held_once_the_motion_is_over(model):
     """Regression (late decay): motion after the handover is no evidence about the task."""
     times, human = _with_tail(0, 1)
-    held = DynamicPredictor(model, dow_t=0.2, until_end=True)
-    free = DynamicPredictor(model, dow_t=0.2)                  # the default re-chooses
+    held = DynamicPredictor(model, dow_t=0.2)
+    free = DynamicPredictor(model, dow_t=0.2, until_end=False)
     for t, y in zip(times, human):
         held.observe(t, y)
         free.observe(t, y)
