@@ -4,7 +4,7 @@
 (:mod:`sandbox.data.recorded`; a :class:`~sandbox.data.spec.DataSpec` says what
 its columns are, ``observe`` which modalities to load) or ``synthetic:NAME``
 with NAME one of :data:`sandbox.data.synthetic.DATASETS` (generated, seeded,
-needs nothing on disk; it observes the hand).
+needs nothing on disk; it observes the hand, the arm or both, no EMG).
 
 Preprocessing defaults: ``"smooth"`` (RTS-smoothed human track, short gaps
 filled) because datasets are mostly used to *train*. Streams a predictor is
@@ -67,7 +67,8 @@ def load_dataset(
         What a folder's columns are (a :class:`~sandbox.data.spec.DataSpec` or a
         spec file); default the built-in layout of the recorded Baxter set.
     observe : sequence of str or str, optional
-        Modalities to load (default the spec's: ``hand``).
+        Modalities to load (default the spec's: ``hand``); synthetic sets carry
+        ``hand`` and ``arm`` (e.g. ``"hand,arm"``), no ``emg``.
     seed : int
         Seed of the synthetic generator (``np.random.default_rng(seed)``);
         unused for folders.
@@ -100,10 +101,8 @@ def load_dataset(
     layout = resolve(spec)
     if isinstance(data, str) and data.startswith(SYNTHETIC_PREFIX):
         observed = [m.name for m in layout.observed(observe)]
-        if observed != ["hand"]:
-            raise ValueError(f"observe: synthetic sets carry the hand only, got {observed}")
         demos = _synthetic(data[len(SYNTHETIC_PREFIX):], seed, tasks, n_per_task, preprocess,
-                           options)
+                           {"observe": observed, **options})
     elif isinstance(data, (str, Path)) and Path(data).is_dir():
         given = {"observe": observe, **options}
         if "columns" not in options:          # columns= is shorthand for a hand-only spec
@@ -128,14 +127,18 @@ def _recorded(root, tasks, n_per_task, preprocess, options) -> list[Demonstratio
 
 
 def _synthetic(name, seed, tasks, n_per_task, preprocess, options) -> list[Demonstration]:
+    """A named synthetic set; ``options["observe"]``: its modalities (hand and/or arm)."""
     from sandbox.data.synthetic import make_dataset
+    from sandbox.data.synthetic.observe import check_observe
 
+    options = dict(options)
+    observe = check_observe(options.pop("observe"))
     if name not in synthetic_names():
         raise ValueError(f"data: expected {_spec_options()}, got 'synthetic:{name}'")
     if "columns" in options:
         raise ValueError("columns: only used for recorded folders, not synthetic:NAME")
     n = DEFAULT_SYNTHETIC_PER_TASK if n_per_task is None else int(n_per_task)
-    demos = make_dataset(name, n, np.random.default_rng(seed))
+    demos = make_dataset(name, n, np.random.default_rng(seed), observe=observe)
     if tasks is not None:
         available = list(stack_tasks(demos))
         unknown = [t for t in tasks if t not in available]

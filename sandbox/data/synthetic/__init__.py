@@ -1,10 +1,13 @@
 """Synthetic paired human/robot handover demonstrations (seeded), the default data.
 
 Datasets by name: :func:`make_dataset` (``"two_task"``, ``"diverging"``,
-``"objects"``). Submodules: ``base`` (constants), ``two_task`` (the minimal
-generator), ``human`` (clean reaches), ``tracker`` (sensor artefacts),
-``tasks`` (task geometry and random draws), ``robot`` (the paired Baxter arm
-motion), ``generator`` (assembly), ``families`` (objects and diverging tasks),
+``"objects"``), observing the hand (default) or the hand and the arm
+(``observe="hand,arm"``). Submodules: ``base`` (constants), ``two_task`` (the
+minimal generator), ``human`` (clean reaches), ``arm`` (the human's elbow and
+shoulder), ``two_link`` (the arm's inverse kinematics), ``tracker`` (sensor
+artefacts), ``observe`` (which modalities a demonstration carries), ``tasks``
+(task geometry and random draws), ``robot`` (the paired Baxter arm motion),
+``generator`` (assembly), ``families`` (objects and diverging tasks),
 ``intent`` (a change of task mid-motion, with its ground truth), ``realism``
 (synthetic vs recorded statistics).
 
@@ -19,8 +22,12 @@ Examples
 >>> demo, truth = intent_switch_demo("left", "right", 0.6, np.random.default_rng(0))
 >>> demo.task, truth.task_at([0.0, demo.duration]).tolist()
 ('right', ['left', 'right'])
+>>> arm = make_dataset("objects", 1, np.random.default_rng(0), observe="hand,arm")
+>>> arm[0].human.shape[1], [m.name for m in arm[0].modalities], arm[0].meta["clean_arm"].shape[1]
+(9, ['hand', 'arm'], 6)
 """
 
+from sandbox.data.synthetic.arm import ArmModel, arm_positions
 from sandbox.data.synthetic.base import (
     HAND_START,
     HUMAN_NAMES,
@@ -30,13 +37,19 @@ from sandbox.data.synthetic.base import (
 )
 from sandbox.data.synthetic.families import OBJECTS, diverging_demos, objects_demos
 from sandbox.data.synthetic.intent import IntentSwitch, intent_switch_demo
-from sandbox.data.synthetic.realism import compare_realism, realism_stats
+from sandbox.data.synthetic.realism import (
+    arm_realism_stats,
+    compare_arm_realism,
+    compare_realism,
+    realism_stats,
+)
 from sandbox.data.synthetic.registry import DATASETS, make_dataset
 from sandbox.data.synthetic.tasks import TaskSpec, Variability
 from sandbox.data.synthetic.tracker import TrackerModel
 from sandbox.data.synthetic.two_task import two_task_demos
 
 __all__ = [
+    "ArmModel",
     "DATASETS",
     "HAND_START",
     "HUMAN_NAMES",
@@ -47,6 +60,9 @@ __all__ = [
     "TaskSpec",
     "TrackerModel",
     "Variability",
+    "arm_positions",
+    "arm_realism_stats",
+    "compare_arm_realism",
     "compare_realism",
     "diverging_demos",
     "make_dataset",

@@ -55,6 +55,19 @@ def check_rng(rng: object) -> np.random.Generator:
     return rng
 
 
+def child_rng(rng: np.random.Generator) -> np.random.Generator:
+    """An independent generator spawned from ``rng``'s seed sequence.
+
+    ``rng``'s stream is untouched (its next draws are the same as without this
+    call); only its seed sequence's spawn counter advances, so two calls give
+    two different children (``Generator.spawn``, or its equivalent before
+    numpy 1.25).
+    """
+    if hasattr(rng, "spawn"):
+        return rng.spawn(1)[0]
+    return np.random.default_rng(rng.bit_generator._seed_seq.spawn(1)[0])  # pragma: no cover
+
+
 def check_count(value: object, name: str, minimum: int) -> int:
     """Return ``value`` as an int after checking it is an integer >= ``minimum``."""
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:

@@ -22,6 +22,7 @@ import numpy as np
 
 from sandbox.core.validation import check_positive
 from sandbox.data.demonstration import Demonstration
+from sandbox.data.synthetic.arm import ArmModel
 from sandbox.data.synthetic.generator import generate
 from sandbox.data.synthetic.tasks import TaskSpec, Variability
 from sandbox.data.synthetic.tracker import TrackerModel
@@ -76,6 +77,8 @@ def objects_demos(
     variability: Variability | None = None,
     rate_hz: float = 100.0,
     ik_tol: float = 0.01,
+    observe: Sequence[str] | str = ("hand",),
+    arm_model: ArmModel | None = None,
 ) -> list[Demonstration]:
     """Handovers of a box, a glasses case and a roll of tape (Experiment 1).
 
@@ -93,6 +96,11 @@ def objects_demos(
         Row rate (Hz).
     ik_tol : float
         Required gripper position error (m) at the handover point.
+    observe : str or sequence of str
+        Observed modalities: ``"hand"`` (default), ``"hand,arm"`` (``human``
+        has 9 columns, hand then elbow and shoulder) or ``"arm"``.
+    arm_model : ArmModel, optional
+        The human arm (default ``ArmModel()``), used when the arm is observed.
 
     Returns
     -------
@@ -102,6 +110,7 @@ def objects_demos(
     return generate(
         OBJECTS, n_per_task, rng, family="objects", tracker=tracker,
         variability=variability or Variability(), rate_hz=rate_hz, ik_tol=ik_tol,
+        observe=observe, arm_model=arm_model,
     )
 
 
@@ -115,6 +124,8 @@ def diverging_demos(
     variability: Variability | None = None,
     rate_hz: float = 100.0,
     ik_tol: float = 0.01,
+    observe: Sequence[str] | str = ("hand",),
+    arm_model: ArmModel | None = None,
 ) -> list[Demonstration]:
     """Tasks that share their start and diverge at phase ~0.5 (Experiment 2).
 
@@ -128,7 +139,7 @@ def diverging_demos(
         Tasks, from ``"left", "right", "up", "down", "straight"``.
     branch_m : float
         Distance (m) of each branch's end from the straight path's end.
-    tracker, variability, rate_hz, ik_tol
+    tracker, variability, rate_hz, ik_tol, observe, arm_model
         As in :func:`objects_demos` (default variability:
         :data:`DIVERGING_VARIABILITY`).
 
@@ -141,5 +152,5 @@ def diverging_demos(
     return generate(
         diverging_specs(directions, branch_m), n_per_task, rng, family="diverging",
         tracker=tracker, variability=variability or DIVERGING_VARIABILITY, rate_hz=rate_hz,
-        ik_tol=ik_tol,
+        ik_tol=ik_tol, observe=observe, arm_model=arm_model,
     )

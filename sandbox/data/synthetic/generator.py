@@ -15,14 +15,15 @@ import numpy as np
 
 from sandbox.core.validation import FloatArray, check_positive
 from sandbox.data.demonstration import Demonstration
+from sandbox.data.synthetic.arm import ArmModel
 from sandbox.data.synthetic.base import (
-    HUMAN_NAMES,
     ROBOT_NAMES,
     check_count,
     check_rng,
     sample_times,
 )
 from sandbox.data.synthetic.human import reach_positions
+from sandbox.data.synthetic.observe import check_observe, observe_human
 from sandbox.data.synthetic.robot import (
     GRASP_OFFSET,
     joint_trajectory,
@@ -37,7 +38,7 @@ from sandbox.data.synthetic.tasks import (
     make_reach,
     redraw_end,
 )
-from sandbox.data.synthetic.tracker import TrackerModel, apply_tracker
+from sandbox.data.synthetic.tracker import TrackerModel
 
 
 def handover_target(spec: TaskSpec, draw: DemoDraw) -> FloatArray:
@@ -116,17 +117,21 @@ def build_demo(
     rate_hz: float,
     source: str,
     branching: bool = False,
+    observe: tuple[str, ...] = ("hand",),
+    arm_model: ArmModel | None = None,
 ) -> Demonstration:
     """Assemble one demonstration: clean reach, tracker artefacts, robot trajectory.
 
     ``meta`` holds ``hand_end`` and ``handover_target`` (m), ``reach_time`` and
     ``robot_time`` (start, end; s), ``divergence_time`` (s; ``None`` unless
-    ``branching``) and ``clean_human`` (T, 3) m, the motion before the tracker.
+    ``branching``) and ``clean_human`` (T, 3) m, the hand before the tracker
+    (and ``clean_arm`` (T, 6) m, the arm's, when ``observe`` has ``"arm"``).
     """
     times = sample_times(draw.duration, rate_hz)
     reach = make_reach(spec, draw, var)
     clean = reach_positions(reach, times)
-    human = apply_tracker(times, clean, tracker, np.random.default_rng(draw.tracker_seed))
+    human, modalities, extra = observe_human(observe, times, clean, tracker, draw.tracker_seed,
+                                             arm_model)
     kin = kinematics()
     robot = joint_trajectory(
         times, q_goal, draw.robot_on, draw.robot_off, draw.wobble, (kin.lower, kin.upper)
@@ -138,10 +143,11 @@ def build_demo(
         "robot_time": (draw.robot_on, draw.robot_off),
         "divergence_time": draw.t_div if branching else None,
         "clean_human": clean,
+        **extra,
     }
     return Demonstration(
-        times=times, human=human, robot=robot, task=spec.name, human_names=HUMAN_NAMES,
-        robot_names=ROBOT_NAMES, source=source, meta=meta,
+        times=times, human=human, robot=robot, task=spec.name, robot_names=ROBOT_NAMES,
+        modalities=modalities, source=source, meta=meta,
     )
 
 
@@ -156,6 +162,8 @@ def generate(
     rate_hz: float = 100.0,
     ik_tol: float = 0.01,
     max_redraws: int = 5,
+    observe: Sequence[str] | str = ("hand",),
+    arm_model: ArmModel | None = None,
 ) -> list[Demonstration]:
     """``n_per_task`` paired demonstrations of every task in ``specs``, grouped by task.
 
@@ -179,6 +187,11 @@ def generate(
         Required gripper position error (m) at the handover point.
     max_redraws : int
         Rounds of end-point redraws for unreachable handover points.
+    observe : str or sequence of str
+        Observed modalities, ``"hand"`` (default), ``"arm"`` or both (e.g.
+        ``"hand,arm"``: ``human`` has 9 columns, hand then arm).
+    arm_model : ArmModel, optional
+        The human arm (default ``ArmModel()``); used when the arm is observed.
 
     Returns
     -------
@@ -190,6 +203,7 @@ def generate(
     ik_tol = check_positive(ik_tol, "ik_tol")
     max_redraws = check_count(max_redraws, "max_redraws", 0)
     tracker = TrackerModel() if tracker is None else tracker
+    observe = check_observe(observe)
     if not isinstance(tracker, TrackerModel) or not isinstance(variability, Variability):
         raise ValueError("tracker, variability: expected a TrackerModel and a Variability")
     task_of = [spec for spec in specs for _ in range(n)]
@@ -201,7 +215,7 @@ def generate(
         build_demo(
             spec, draw, q, var=variability, tracker=tracker, rate_hz=rate_hz,
             source=f"synthetic:{family}[{spec.name}#{i % n}]",
-            branching=any(np.any(s.branch) for s in specs),
+            branching=any(np.any(s.branch) for s in specs), observe=observe, arm_model=arm_model,
         )
         for i, (spec, draw, q) in enumerate(zip(task_of, draws, q_goal, strict=True))
     ]

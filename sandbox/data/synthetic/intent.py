@@ -10,20 +10,23 @@ sample: ``a`` before the switch time, ``b`` from it on.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from sandbox.core.validation import FloatArray, check_fraction, check_positive
 from sandbox.data.demonstration import Demonstration
-from sandbox.data.synthetic.base import HUMAN_NAMES, ROBOT_NAMES, check_rng, sample_times
+from sandbox.data.synthetic.arm import ArmModel
+from sandbox.data.synthetic.base import ROBOT_NAMES, check_rng, sample_times
 from sandbox.data.synthetic.families import DIVERGING_VARIABILITY, OBJECTS, diverging_specs
 from sandbox.data.synthetic.generator import handover_target
 from sandbox.data.synthetic.human import reach_positions, switch_paths
+from sandbox.data.synthetic.observe import check_observe, observe_human
 from sandbox.data.synthetic.robot import joint_trajectory, kinematics, solve_handover
 from sandbox.data.synthetic.tasks import DemoDraw, TaskSpec, Variability, draw_demo, make_reach
 from sandbox.data.synthetic.tasks import redraw_end as _redraw_end
-from sandbox.data.synthetic.tracker import TrackerModel, apply_tracker
+from sandbox.data.synthetic.tracker import TrackerModel
 
 #: Families an intent switch can be drawn from.
 SWITCH_FAMILIES = ("diverging", "objects")
@@ -88,6 +91,19 @@ def _solve_pair(
     )
 
 
+def _switched_robot(
+    times: FloatArray, q_goal: FloatArray, draw: DemoDraw, t_switch: float, blend_s: float
+) -> FloatArray:
+    """The robot's motion (T, 7) rad toward ``q_goal[0]``, switching to ``q_goal[1]``."""
+    kin = kinematics()
+    arms = [
+        joint_trajectory(times, q, draw.robot_on, draw.robot_off, draw.wobble,
+                         (kin.lower, kin.upper))
+        for q in q_goal
+    ]
+    return switch_paths(arms[0], arms[1], times, t_switch, blend_s)
+
+
 def intent_switch_demo(
     task_a: str,
     task_b: str,
@@ -102,6 +118,8 @@ def intent_switch_demo(
     rate_hz: float = 100.0,
     ik_tol: float = 0.01,
     max_redraws: int = 5,
+    observe: Sequence[str] | str = ("hand",),
+    arm_model: ArmModel | None = None,
 ) -> tuple[Demonstration, IntentSwitch]:
     """A demonstration that follows ``task_a`` and switches to ``task_b`` at ``switch_phase``.
 
@@ -119,14 +137,16 @@ def intent_switch_demo(
         Duration (s) of the hand's (and robot's) transition to the new motion.
     branch_m : float
         Branch size (m) of the diverging family.
-    tracker, variability, rate_hz, ik_tol, max_redraws
-        As in :func:`sandbox.data.synthetic.generator.generate`.
+    tracker, variability, rate_hz, ik_tol, max_redraws, observe, arm_model
+        As in :func:`sandbox.data.synthetic.generator.generate` (with the arm
+        observed, it follows the switching hand).
 
     Returns
     -------
     demo : Demonstration
         Labelled ``task_b`` (the task the robot completes); ``meta["intent"]``
-        holds the ground truth too.
+        holds the ground truth too, ``meta["clean_human"]`` (and ``meta["clean_arm"]``)
+        the motion before the tracker.
     truth : IntentSwitch
         Which task the human pursues at which time.
     """
@@ -139,6 +159,7 @@ def intent_switch_demo(
     blend_s = check_positive(blend_s, "blend_s")
     var = variability or default_var
     tracker = TrackerModel() if tracker is None else tracker
+    observe = check_observe(observe)
     pair = (specs[task_a], specs[task_b])
     draw = draw_demo(pair[1], var, rng)
     draw, q_goal = _solve_pair(pair, draw, var, rng, check_positive(ik_tol, "ik_tol"), max_redraws)
@@ -146,19 +167,15 @@ def intent_switch_demo(
     t_switch = switch_phase * draw.duration
     paths = [reach_positions(make_reach(s, draw, var), times) for s in pair]
     clean = switch_paths(paths[0], paths[1], times, t_switch, blend_s)
-    human = apply_tracker(times, clean, tracker, np.random.default_rng(draw.tracker_seed))
-    kin = kinematics()
-    arms = [
-        joint_trajectory(times, q, draw.robot_on, draw.robot_off, draw.wobble,
-                         (kin.lower, kin.upper))
-        for q in q_goal
-    ]
+    human, modalities, extra = observe_human(observe, times, clean, tracker, draw.tracker_seed,
+                                             arm_model)
     truth = IntentSwitch((task_a, task_b), t_switch, switch_phase, blend_s, times)
     demo = Demonstration(
-        times=times, human=human, robot=switch_paths(arms[0], arms[1], times, t_switch, blend_s),
-        task=task_b, human_names=HUMAN_NAMES, robot_names=ROBOT_NAMES,
+        times=times, human=human, robot=_switched_robot(times, q_goal, draw, t_switch, blend_s),
+        task=task_b, robot_names=ROBOT_NAMES, modalities=modalities,
         source=f"synthetic:intent[{task_a}->{task_b}@{switch_phase:g}]",
         meta={"intent": truth, "clean_human": clean, "handover_target":
-              handover_target(pair[1], draw), "hand_end": make_reach(pair[1], draw, var).end},
+              handover_target(pair[1], draw), "hand_end": make_reach(pair[1], draw, var).end,
+              **extra},
     )
     return demo, truth

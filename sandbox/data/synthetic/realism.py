@@ -27,6 +27,22 @@ Statistics per demonstration (all from ``human``, the hand x, y, z in m):
     demonstrations of the same task; the end point is the median of the valid
     rows in the last 25 % of the demonstration, the start the median of the
     first 0.1 s.
+
+Statistics of the arm (:func:`arm_realism_stats`, from the ``hand`` and ``arm``
+modalities; elbow and shoulder tracks filtered like the hand's):
+
+``elbow_path``, ``shoulder_path`` (m)
+    Length of the filtered elbow (shoulder) track over the whole demonstration.
+``elbow_hand`` (m)
+    Median elbow-hand distance over the valid rows.
+``shoulder_travel`` (m)
+    Distance from the shoulder's start point to its end point (as above).
+``shoulder_spread`` (m)
+    Distance of the shoulder's start point from the median one of the
+    demonstrations of the same task (where the human stands).
+``upper_arm`` (m)
+    Median shoulder-elbow distance over the valid rows (reported, not a
+    realism target: the tracker's skeleton has a short upper arm).
 """
 
 from __future__ import annotations
@@ -42,6 +58,11 @@ from sandbox.data.demonstration import Demonstration
 
 #: Statistics computed by :func:`realism_stats`, in report order.
 STATISTICS = ("duration", "path_length", "peak_speed", "reach_time", "end_spread", "start_spread")
+#: Statistics computed by :func:`arm_realism_stats`, in report order.
+ARM_STATISTICS = ("elbow_path", "elbow_hand", "shoulder_path", "shoulder_travel",
+                  "shoulder_spread", "upper_arm")
+#: The arm statistics synthetic sets should match (``upper_arm`` is reported only).
+ARM_TARGETS = ARM_STATISTICS[:5]
 
 
 def valid_rows(times: FloatArray, human: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -153,7 +174,8 @@ def realism_stats(demos: Sequence[Demonstration]) -> dict[str, Any]:
     Parameters
     ----------
     demos : sequence of Demonstration
-        At least one; ``human`` must hold the hand x, y, z (m) (P = 3).
+        At least one; their ``hand`` modality (or, without one, ``human``)
+        must hold the hand x, y, z (m) (P = 3).
 
     Returns
     -------
@@ -165,11 +187,13 @@ def realism_stats(demos: Sequence[Demonstration]) -> dict[str, Any]:
     demos = list(demos)
     if not demos or not all(isinstance(d, Demonstration) for d in demos):
         raise ValueError("demos: expected a non-empty sequence of Demonstration")
-    if any(d.human.shape[1] != 3 for d in demos):
+    hands = [_modality(d, "hand") if "hand" in [m.name for m in d.modalities] else d.human
+             for d in demos]
+    if any(h.shape[1] != 3 for h in hands):
         raise ValueError("demos: expected human hand positions with P = 3 dims")
-    rows = [track_stats(d.times, d.human) for d in demos]
+    rows = [track_stats(d.times, h) for d, h in zip(demos, hands, strict=True)]
     out: dict[str, Any] = {k: np.array([r[k] for r in rows]) for k in rows[0]}
-    ends = np.array([end_points(d.times, d.human) for d in demos])  # (n, 2, 3)
+    ends = np.array([end_points(d.times, h) for d, h in zip(demos, hands, strict=True)])
     tasks = [d.task for d in demos]
     out["end_spread"] = _spread(ends[:, 1], tasks)
     out["start_spread"] = _spread(ends[:, 0], tasks)
@@ -197,18 +221,125 @@ def compare_realism(
     """
     a = synthetic if isinstance(synthetic, Mapping) else realism_stats(synthetic)
     b = recorded if isinstance(recorded, Mapping) else realism_stats(recorded)
+    return _table(a, b, STATISTICS)
+
+
+def _table(a: Mapping[str, Any], b: Mapping[str, Any], keys: Sequence[str]
+           ) -> dict[str, dict[str, float]]:
     table = {}
-    for key in STATISTICS:
+    for key in keys:
         s, r = float(a["median"][key]), float(b["median"][key])
         table[key] = {"synthetic": s, "recorded": r, "ratio": s / r if r else float("nan")}
     return table
 
 
+def _modality(demo: Demonstration, name: str) -> FloatArray:
+    """The columns of modality ``name`` of ``demo``, shape (T, k)."""
+    if name not in [m.name for m in demo.modalities]:
+        raise ValueError(f"demos: expected the 'hand' and 'arm' modalities, got "
+                         f"{[m.name for m in demo.modalities]} ({demo.source or demo.task})")
+    return demo.select(name).human
+
+
+def arm_track_stats(times: FloatArray, hand: FloatArray, arm: FloatArray) -> dict[str, float]:
+    """Per-demonstration arm statistics (see the module docstring).
+
+    Parameters
+    ----------
+    times : array_like, shape (T,)
+        Non-decreasing sample times (s).
+    hand : array_like, shape (T, 3)
+        Hand positions (m).
+    arm : array_like, shape (T, 6)
+        Elbow x, y, z and shoulder x, y, z (m).
+
+    Returns
+    -------
+    dict
+        ``elbow_path``, ``elbow_hand``, ``shoulder_path``, ``shoulder_travel``,
+        ``upper_arm`` (m) and ``shoulder_start`` (ndarray, shape (3,), m).
+    """
+    times = np.asarray(times, dtype=float)
+    arm = check_array(arm, "arm", 2, shape=(times.size, 6), allow_nan=True)
+    elbow, shoulder = arm[:, :3], arm[:, 3:]
+    _, rows = valid_rows(times, np.column_stack([np.asarray(hand, dtype=float), arm]))
+    if not rows.size:
+        raise ValueError("arm: expected at least one valid row, got none")
+    start, end = end_points(times, shoulder)
+    return {
+        "elbow_path": _path_length(times, elbow),
+        "elbow_hand": float(np.median(np.linalg.norm(rows[:, :3] - rows[:, 3:6], axis=1))),
+        "shoulder_path": _path_length(times, shoulder),
+        "shoulder_travel": float(np.linalg.norm(end - start)),
+        "upper_arm": float(np.median(np.linalg.norm(rows[:, 3:6] - rows[:, 6:], axis=1))),
+        "shoulder_start": start,
+    }
+
+
+def _path_length(times: FloatArray, track: FloatArray) -> float:
+    """Length (m) of the robustly filtered ``track`` (T, 3)."""
+    _, smooth = smooth_track(times, track)
+    return float(np.sum(np.linalg.norm(np.diff(smooth, axis=0), axis=1)))
+
+
+def arm_realism_stats(demos: Sequence[Demonstration]) -> dict[str, Any]:
+    """Robust statistics of the human arm of a set of demonstrations.
+
+    Parameters
+    ----------
+    demos : sequence of Demonstration
+        At least one, each with the ``hand`` and ``arm`` modalities
+        (:data:`sandbox.data.spec.HAND`, :data:`sandbox.data.spec.ARM`; m).
+
+    Returns
+    -------
+    dict
+        One array of shape (n,) per name in :data:`ARM_STATISTICS` (m), plus
+        ``"median"``: a dict of their medians and ``"n"``: the number of
+        demonstrations.
+    """
+    demos = list(demos)
+    if not demos or not all(isinstance(d, Demonstration) for d in demos):
+        raise ValueError("demos: expected a non-empty sequence of Demonstration")
+    rows = [arm_track_stats(d.times, _modality(d, "hand"), _modality(d, "arm")) for d in demos]
+    out: dict[str, Any] = {k: np.array([r[k] for r in rows]) for k in ARM_STATISTICS
+                           if k != "shoulder_spread"}
+    starts = np.array([r["shoulder_start"] for r in rows])
+    out["shoulder_spread"] = _spread(starts, [d.task for d in demos])
+    out["median"] = {k: float(np.median(out[k])) for k in ARM_STATISTICS}
+    out["n"] = len(demos)
+    return out
+
+
+def compare_arm_realism(
+    synthetic: Sequence[Demonstration] | Mapping[str, Any],
+    recorded: Sequence[Demonstration] | Mapping[str, Any],
+) -> dict[str, dict[str, float]]:
+    """Synthetic vs recorded medians of each arm statistic (as :func:`compare_realism`).
+
+    Parameters
+    ----------
+    synthetic, recorded : sequence of Demonstration or dict
+        Demonstrations with the hand and the arm, or the output of
+        :func:`arm_realism_stats` for them.
+
+    Returns
+    -------
+    dict
+        ``{statistic: {"synthetic": median, "recorded": median, "ratio":
+        synthetic / recorded}}`` for each name in :data:`ARM_STATISTICS`.
+    """
+    a = synthetic if isinstance(synthetic, Mapping) else arm_realism_stats(synthetic)
+    b = recorded if isinstance(recorded, Mapping) else arm_realism_stats(recorded)
+    return _table(a, b, ARM_STATISTICS)
+
+
 def format_realism(table: Mapping[str, Mapping[str, float]]) -> str:
     """The table of :func:`compare_realism` as aligned text, one statistic per line."""
-    lines = [f"{'statistic':<14}{'synthetic':>11}{'recorded':>11}{'ratio':>8}"]
+    w = max([14, *(len(key) + 1 for key in table)])
+    lines = [f"{'statistic':<{w}}{'synthetic':>11}{'recorded':>11}{'ratio':>8}"]
     for key, row in table.items():
         lines.append(
-            f"{key:<14}{row['synthetic']:>11.3f}{row['recorded']:>11.3f}{row['ratio']:>8.2f}"
+            f"{key:<{w}}{row['synthetic']:>11.3f}{row['recorded']:>11.3f}{row['ratio']:>8.2f}"
         )
     return "\n".join(lines)

@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
 
 from sandbox.data.demonstration import Demonstration
 from sandbox.data.synthetic.families import diverging_demos, objects_demos
+from sandbox.data.synthetic.observe import check_observe
 from sandbox.data.synthetic.two_task import two_task_demos
 
 _GENERATORS: dict[str, Callable[..., list[Demonstration]]] = {
@@ -22,7 +23,12 @@ DATASETS = tuple(_GENERATORS)
 
 
 def make_dataset(
-    name: str, n_per_task: int, rng: np.random.Generator, **options: Any
+    name: str,
+    n_per_task: int,
+    rng: np.random.Generator,
+    *,
+    observe: Sequence[str] | str = ("hand",),
+    **options: Any,
 ) -> list[Demonstration]:
     """Generate a named synthetic dataset of paired human/robot demonstrations.
 
@@ -36,6 +42,10 @@ def make_dataset(
         Demonstrations per task.
     rng : numpy.random.Generator
         Source of randomness; the same seed gives the same demonstrations.
+    observe : str or sequence of str
+        Observed modalities: ``"hand"`` (default), ``"hand,arm"`` (``human``
+        has 9 columns: the hand, then the elbow and the shoulder) or ``"arm"``.
+        The hand is the same with or without the arm.
     **options
         Keyword options of the dataset's generator.
 
@@ -46,4 +56,4 @@ def make_dataset(
     """
     if name not in _GENERATORS:
         raise ValueError(f"name: expected one of {list(DATASETS)}, got {name!r}")
-    return _GENERATORS[name](n_per_task, rng, **options)
+    return _GENERATORS[name](n_per_task, rng, observe=check_observe(observe), **options)

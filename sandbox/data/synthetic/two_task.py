@@ -7,16 +7,37 @@ end point (no inverse kinematics), so it is fast and dependency-free.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import Any
+
 import numpy as np
 
+from sandbox.core.modality import Modality
+from sandbox.core.validation import FloatArray
 from sandbox.data.demonstration import Demonstration
+from sandbox.data.synthetic.arm import ArmModel, arm_positions
 from sandbox.data.synthetic.base import (
     HAND_START,
-    HUMAN_NAMES,
     Q_HOME,
     ROBOT_NAMES,
+    child_rng,
     minimum_jerk,
 )
+from sandbox.data.synthetic.observe import SYNTHETIC_MODALITIES, check_observe
+
+
+def _observed(
+    observe: tuple[str, ...], times: FloatArray, clean: FloatArray, hand: FloatArray,
+    noise_m: float, arm_rng: np.random.Generator | None, arm_model: ArmModel | None,
+) -> tuple[FloatArray, tuple[Modality, ...], dict[str, Any]]:
+    """The observed columns (T, P), their modalities and the extra ``meta`` (clean motions)."""
+    mods = tuple(SYNTHETIC_MODALITIES[name] for name in observe)
+    if arm_rng is None:
+        return hand, mods, {}
+    arm = arm_positions(times, clean, arm_rng, model=arm_model)
+    columns = {"hand": hand, "arm": arm + arm_rng.normal(0.0, noise_m, arm.shape)}
+    human = np.column_stack([columns[name] for name in observe])
+    return human, mods, {"clean_human": clean, "clean_arm": arm}
 
 
 def two_task_demos(
@@ -28,6 +49,8 @@ def two_task_demos(
     duration_std: float = 0.25,
     noise_m: float = 0.004,
     separation_m: float = 0.30,
+    observe: Sequence[str] | str = ("hand",),
+    arm_model: ArmModel | None = None,
 ) -> list[Demonstration]:
     """Two handover tasks, ``"left"`` and ``"right"``, with different hand end points.
 
@@ -51,6 +74,13 @@ def two_task_demos(
         Standard deviation of white noise on the human samples (m).
     separation_m : float
         Distance between the two tasks' mean end points (m).
+    observe : str or sequence of str
+        Observed modalities: ``"hand"`` (default), ``"hand,arm"`` or ``"arm"``.
+        The arm (:mod:`sandbox.data.synthetic.arm`, with the same white noise)
+        draws from a child of ``rng``'s seed sequence, never from ``rng``;
+        ``meta`` then holds ``clean_human`` (T, 3) and ``clean_arm`` (T, 6), m.
+    arm_model : ArmModel, optional
+        The human arm (default ``ArmModel()``).
 
     Returns
     -------
@@ -61,6 +91,8 @@ def two_task_demos(
         raise ValueError(f"n_per_task: expected an integer >= 2, got {n_per_task!r}")
     if not isinstance(rng, np.random.Generator):
         raise ValueError(f"rng: expected a numpy.random.Generator, got {type(rng).__name__}")
+    observe = check_observe(observe)
+    arm_rng = child_rng(rng) if "arm" in observe else None
     # A fixed, smooth map from the hand's end point (m) to the joint change (rad).
     jac = np.array(
         [[-0.9, 1.2, 0.1], [0.5, 0.2, -1.1], [0.3, 0.6, 0.4], [0.8, -0.3, -0.9],
@@ -77,16 +109,16 @@ def two_task_demos(
             via = 0.5 * (start + end) + np.array([0.0, 0.0, 0.08]) + rng.normal(0, 0.01, 3)
             s = minimum_jerk(t / dur)[:, None]
             # Quadratic Bezier through the via-point keeps the path smooth and curved.
-            hand = (1 - s) ** 2 * start + 2 * (1 - s) * s * via + s**2 * end
-            hand = hand + rng.normal(0.0, noise_m, hand.shape)
+            clean = (1 - s) ** 2 * start + 2 * (1 - s) * s * via + s**2 * end
+            hand = clean + rng.normal(0.0, noise_m, clean.shape)
             dq = jac @ (end - np.array([0.80, 0.10, 0.20])) + np.array([-0.45, 0.1, 0.15, -0.3,
                                                                          0.0, 0.0, 0.0])
             robot = Q_HOME + s * (dq + 0.1 * np.sin(dq))
+            human, mods, meta = _observed(observe, t, clean, hand, noise_m, arm_rng, arm_model)
             demos.append(
                 Demonstration(
-                    times=t, human=hand, robot=robot, task=task,
-                    human_names=HUMAN_NAMES, robot_names=ROBOT_NAMES,
-                    source=f"synthetic:two_task[{task}#{i}]",
+                    times=t, human=human, robot=robot, task=task, robot_names=ROBOT_NAMES,
+                    modalities=mods, source=f"synthetic:two_task[{task}#{i}]", meta=meta,
                 )
             )
     return demos
