@@ -6,14 +6,16 @@ namespace; :data:`ENV_IDS` lists them::
     import gymnasium as gym
     import sandbox.envs
 
-    env = gym.make("sandbox/BaxterHandoverDiverging-v0")
+    env = gym.make("sandbox/BaxterHandoverDiverging-v1")
     obs, info = env.reset(seed=0, options={"task": "left"})
 
-Without the import, ``gym.make("sandbox.envs:sandbox/BaxterHandover-v0")``
-imports it first. ``sandbox/BaxterHandover-v0`` hands over objects (synthetic
+Without the import, ``gym.make("sandbox.envs:sandbox/BaxterHandover-v1")``
+imports it first. ``sandbox/BaxterHandover-v1`` hands over objects (synthetic
 box, glasses case and tape, or a recorded trial with ``options={"source":
-DIR}``); ``sandbox/BaxterHandoverDiverging-v0`` plays the diverging tasks
-(left, right, up, down, straight). See :class:`BaxterHandoverEnv`.
+DIR}``); ``sandbox/BaxterHandoverDiverging-v1`` plays the diverging tasks
+(left, right, up, down, straight). See :class:`BaxterHandoverEnv`. The
+``-v0`` ids (:data:`LEGACY_IDS`) stay registered for one release with v0's
+observation (no ``arm``, ``emg``).
 
 Modules: ``pybullet`` (the only one importing PyBullet: :class:`Simulation`),
 ``robot`` (Baxter's arm and gripper), ``human`` (hand motion and body),
@@ -33,21 +35,26 @@ from sandbox.envs.task import RewardWeights
 #: Steps before truncation (6 s at the default 50 Hz).
 MAX_EPISODE_STEPS = 300
 
-#: (id, synthetic family) of every registered environment.
+#: (id, synthetic family, observe the arm and EMG) of every registered environment.
 _VARIANTS = (
-    ("sandbox/BaxterHandover-v0", "objects"),
-    ("sandbox/BaxterHandoverDiverging-v0", "diverging"),
+    ("sandbox/BaxterHandover-v1", "objects", True),
+    ("sandbox/BaxterHandoverDiverging-v1", "diverging", True),
+    ("sandbox/BaxterHandover-v0", "objects", False),
+    ("sandbox/BaxterHandoverDiverging-v0", "diverging", False),
 )
 
+#: The current ids (objects, diverging); :data:`LEGACY_IDS` keep v0's observation.
 ENV_IDS: list[str] = []
-for _env_id, _family in _VARIANTS:
+#: The v0 ids (no ``arm``/``emg`` in the observation), kept for one release.
+LEGACY_IDS: list[str] = []
+for _env_id, _family, _body in _VARIANTS:
     if _env_id not in gym.registry:
         gym.register(
             id=_env_id,
             entry_point="sandbox.envs.handover:BaxterHandoverEnv",
-            kwargs={"family": _family},
+            kwargs={"family": _family, "observe_body": _body},
             max_episode_steps=MAX_EPISODE_STEPS,
         )
-    ENV_IDS.append(_env_id)
+    (ENV_IDS if _body else LEGACY_IDS).append(_env_id)
 
-__all__ = ["ENV_IDS", "MAX_EPISODE_STEPS", "BaxterHandoverEnv", "RewardWeights"]
+__all__ = ["ENV_IDS", "LEGACY_IDS", "MAX_EPISODE_STEPS", "BaxterHandoverEnv", "RewardWeights"]

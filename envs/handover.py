@@ -13,7 +13,7 @@ from numpy.typing import NDArray
 from sandbox import urdf
 from sandbox.core.validation import check_array, check_positive
 from sandbox.data.synthetic.base import Q_HOME
-from sandbox.envs.human import HumanHand, HumanMotion
+from sandbox.envs.human import BODY_DIMS, HumanHand, HumanMotion
 from sandbox.envs.options import EpisodeOptions, parse_options
 from sandbox.envs.pybullet import Simulation
 from sandbox.envs.robot import BaxterArm
@@ -25,6 +25,8 @@ FloatArray = NDArray[np.float64]
 #: Physics steps run before the initial state is saved (lets the parked objects settle).
 SETTLE_STEPS = 100
 #: Arguments of :class:`sandbox.viz.Viewer` accepted in ``viewer_options`` ("human" mode).
+#: Upper bound of the observed EMG envelope (raw Myo units: hundreds in the recordings).
+EMG_MAX = 1e4
 VIEWER_KEYS = ("fps", "record", "resolution", "camera", "target", "fov", "floor_z", "realtime",
                "open_browser")
 
@@ -56,18 +58,39 @@ class BaxterHandoverEnv(gym.Env):
 
     Observation space
     -----------------
-    ``Dict``, float64 entries, Baxter's base frame:
+    ``Dict``, float64 entries (the ``*_valid`` flags int8), Baxter's base frame:
 
-    ==========  =====  ==========================================================
-    key         shape  meaning
-    ==========  =====  ==========================================================
-    ``hand``    (3,)   latest tracker measurement of the human hand (m)
-    ``object``  (3,)   the object's grasp point (m)
-    ``q``       (7,)   left-arm joint positions (rad)
-    ``dq``      (7,)   left-arm joint velocities (rad/s)
-    ``gripper`` (1,)   finger opening, 0 closed .. 1 open
-    ``time``    (1,)   time since the episode started (s)
-    ==========  =====  ==========================================================
+    =============  =====  =======================================================
+    key            shape  meaning
+    =============  =====  =======================================================
+    ``hand``       (3,)   latest tracker measurement of the human hand (m)
+    ``arm``        (6,)   latest tracker measurement of the same-side elbow,
+                          then shoulder, x/y/z each (m); 0 where ``arm_valid``
+                          is 0 (v1)
+    ``arm_valid``  (1,)   1 if ``arm`` holds a measurement, 0 if the tracker
+                          has not seen the arm yet or the source has no arm:
+                          teleop, scripted motions, synthetic motions without
+                          an ``arm`` modality (v1)
+    ``emg``        (8,)   latest EMG envelope of a recorded replay (8 Myo
+                          channels, rectified and low-pass filtered, raw
+                          units, 0 .. ``EMG_MAX``); 0 where ``emg_valid`` is
+                          0 (v1)
+    ``emg_valid``  (1,)   1 if ``emg`` holds a measurement: recorded trials
+                          with EMG only, it is not simulated (v1)
+    ``object``     (3,)   the object's grasp point (m)
+    ``q``          (7,)   left-arm joint positions (rad)
+    ``dq``         (7,)   left-arm joint velocities (rad/s)
+    ``gripper``    (1,)   finger opening, 0 closed .. 1 open
+    ``time``       (1,)   time since the episode started (s)
+    =============  =====  =======================================================
+
+    A missing body measurement is a 0 value with its ``*_valid`` flag 0, not
+    NaN: Gymnasium's checker rejects NaN (a NaN is outside any ``Box`` and
+    breaks its determinism checks). :func:`sandbox.policies.modality_values`
+    turns the pair back into NaN for a predictor, which marginalises it.
+    Recorded replays carry the arm and EMG preprocessed as the evaluation's
+    test streams (``preprocess="causal"``: only accepted tracker frames);
+    the value is held from the latest accepted frame, as for ``hand``.
 
     Rewards
     -------
@@ -90,10 +113,12 @@ class BaxterHandoverEnv(gym.Env):
 
     Arguments
     ---------
-    ``gym.make("sandbox/BaxterHandover-v0", ...)`` after ``import sandbox.envs``
-    (or ``gym.make("sandbox.envs:sandbox/BaxterHandover-v0")``) with
+    ``gym.make("sandbox/BaxterHandover-v1", ...)`` after ``import sandbox.envs``
+    (or ``gym.make("sandbox.envs:sandbox/BaxterHandover-v1")``) with
 
     * ``family`` ("objects" or "diverging"): synthetic tasks (set by the id);
+    * ``observe_body`` (True; False for the v0 ids): observe the arm and EMG
+      (``arm``, ``arm_valid``, ``emg``, ``emg_valid``);
     * ``render_mode`` (None, "human" or "rgb_array"): "human" shows the
       episode live in the browser (meshcat, see Rendering);
     * ``control_hz`` (50): steps per second; ``substeps`` (5): physics steps
@@ -127,8 +152,12 @@ class BaxterHandoverEnv(gym.Env):
 
     Version history
     ---------------
+    * v1: the observation gains ``arm``, ``arm_valid``, ``emg`` and
+      ``emg_valid``; recorded replays carry the arm and EMG, synthetic
+      motions the arm when generated with it.
     * v0: initial version; ``render_mode="human"``, the ``teleop`` source and
-      the ``motion`` option added without changing any other behaviour.
+      the ``motion`` option added without changing any other behaviour. Kept
+      registered (``observe_body=False``) for one release.
 
     Attributes
     ----------
@@ -148,7 +177,11 @@ class BaxterHandoverEnv(gym.Env):
     def __init__(self, family: str = "objects", render_mode: str | None = None, *,
                  control_hz: float = 50.0, substeps: int = 5, grasp_radius: float = 0.05,
                  reward_weights: RewardWeights | None = None,
-                 default_object: str = "box", viewer_options: Mapping | None = None) -> None:
+                 default_object: str = "box", viewer_options: Mapping | None = None,
+                 observe_body: bool = True) -> None:
+        if not isinstance(observe_body, bool):
+            raise ValueError(f"observe_body: expected True or False, got {observe_body!r}")
+        self.observe_body = observe_body
         if family not in FAMILIES:
             raise ValueError(f"family: expected one of {list(FAMILIES)}, got {family!r}")
         if render_mode not in (None, *self.metadata["render_modes"]):
@@ -198,7 +231,15 @@ class BaxterHandoverEnv(gym.Env):
             "dq": spaces.Box(-speed, speed, dtype=np.float64),
             "gripper": spaces.Box(0.0, 1.0, (1,), np.float64),
             "time": spaces.Box(0.0, 1e4, (1,), np.float64),
+            **(self._body_space() if self.observe_body else {}),
         })
+
+    @staticmethod
+    def _body_space() -> dict[str, spaces.Space]:
+        return {"arm": spaces.Box(-3.0, 3.0, (BODY_DIMS["arm"],), np.float64),
+                "arm_valid": spaces.MultiBinary(1),
+                "emg": spaces.Box(0.0, EMG_MAX, (BODY_DIMS["emg"],), np.float64),
+                "emg_valid": spaces.MultiBinary(1)}
 
     def _settle_and_save(self) -> None:
         self.robot.reset(Q_HOME)
@@ -316,8 +357,20 @@ class BaxterHandoverEnv(gym.Env):
             "gripper": np.array([self.robot.gripper_opening()]),
             "time": np.array([self._t]),
         }
-        return {k: np.clip(v, self.observation_space[k].low, self.observation_space[k].high)
-                for k, v in obs.items()}
+        obs = {k: np.clip(v, self.observation_space[k].low, self.observation_space[k].high)
+               for k, v in obs.items()}
+        return {**obs, **self._body_observation()} if self.observe_body else obs
+
+    def _body_observation(self) -> dict[str, np.ndarray]:
+        """``arm``/``emg`` (0 where unmeasured) and their ``*_valid`` flags (int8 (1,))."""
+        out: dict[str, np.ndarray] = {}
+        for name in BODY_DIMS:
+            value = self.motion.body_measurement(name, self._t)
+            valid = bool(np.isfinite(value).all())
+            space = self.observation_space[name]
+            out[name] = np.clip(value, space.low, space.high) if valid else np.zeros_like(value)
+            out[f"{name}_valid"] = np.array([valid], dtype=np.int8)
+        return out
 
     @property
     def bullet_client(self):
@@ -328,3 +381,4 @@ class BaxterHandoverEnv(gym.Env):
     def body_ids(self) -> dict[str, int]:
         """Body name -> PyBullet body id (``baxter``, ``human_hand``, objects, ``table``...)."""
         return dict(self.sim.bodies)
+

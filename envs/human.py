@@ -3,7 +3,10 @@
 A :class:`HumanMotion` holds one episode's hand trajectory in Baxter's base
 frame: the *true* path that drives the hand body (and the object it holds)
 and what the skeleton tracker *measured* (steps, jumps, dropouts as NaN), which
-is what the robot observes. After its last sample the hand holds still.
+is what the robot observes. After its last sample the hand holds still. It
+may also carry what the tracker measured of the rest of the body
+(:data:`BODY_DIMS`: the same-side elbow and shoulder ``arm``, the ``emg``
+envelope), NaN where it measured nothing.
 
 :class:`HumanHand` is the kinematic hand/forearm body (``urdf/human_hand.urdf``,
 no mass): the environment teleports it along the true path at every physics
@@ -30,6 +33,9 @@ FloatArray = NDArray[np.float64]
 #: shoulder in the recordings, lowered to elbow height (the forearm's far end
 #: is drawn 0.31 m from the hand along this direction).
 SHOULDER = np.array([1.36, 0.0, 0.15])
+#: Body modalities a motion may carry besides the hand, and their dims: the
+#: tracked elbow then shoulder (x, y, z each, m) and the 8-channel EMG envelope.
+BODY_DIMS = {"arm": 6, "emg": 8}
 
 
 @dataclass(frozen=True, eq=False)
@@ -50,6 +56,10 @@ class HumanMotion:
         Where the motion came from (generator and seed, or file).
     meta : mapping
         Anything else (e.g. the recorded trial's preprocessing report).
+    body : mapping of str to array_like, optional
+        Other measured modalities (keys among :data:`BODY_DIMS`), each shape
+        (T, dims), NaN where nothing was measured; a modality left out is
+        unobserved (all NaN).
     """
 
     times: FloatArray
@@ -58,6 +68,7 @@ class HumanMotion:
     task: str
     source: str = ""
     meta: Mapping[str, Any] = field(default_factory=dict)
+    body: Mapping[str, FloatArray] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         times = check_times(self.times, "times")
@@ -69,13 +80,16 @@ class HumanMotion:
         valid = np.isfinite(measured).all(axis=1)
         if not valid.any():
             raise ValueError("measured: expected at least one sample without NaN, got none")
-        last = np.maximum.accumulate(np.where(valid, np.arange(times.size), -1))
+        last = _last_valid(valid)
         last[last < 0] = int(np.argmax(valid))  # before the first valid sample: that one
         for name, value in (("times", times), ("true", true), ("measured", measured),
                             ("_last_valid", last)):
             value.setflags(write=False)
             object.__setattr__(self, name, value)
         object.__setattr__(self, "meta", dict(self.meta))
+        object.__setattr__(self, "body", _check_body(self.body, times.size))
+        object.__setattr__(self, "_body_last", {
+            name: _last_valid(np.isfinite(v).all(axis=1)) for name, v in self.body.items()})
 
     @property
     def duration(self) -> float:
@@ -94,11 +108,44 @@ class HumanMotion:
         i = max(int(np.searchsorted(self.times, t, side="right")) - 1, 0)
         return self.measured[self._last_valid[i]].copy()
 
+    def body_measurement(self, name: str, t: float) -> FloatArray:
+        """Latest valid sample (dims,) of body modality ``name`` at or before ``t`` (s).
+
+        All NaN before the modality's first valid sample, or if the motion
+        does not carry it. ``name`` is one of :data:`BODY_DIMS`.
+        """
+        if name not in BODY_DIMS:
+            raise ValueError(f"name: expected one of {list(BODY_DIMS)}, got {name!r}")
+        if name not in self.body:
+            return np.full(BODY_DIMS[name], np.nan)
+        i = int(self._body_last[name][max(int(np.searchsorted(self.times, t, "right")) - 1, 0)])
+        return self.body[name][i].copy() if i >= 0 else np.full(BODY_DIMS[name], np.nan)
+
     def scaled(self, speed: float) -> HumanMotion:
         """The same motion played ``speed`` times faster (times divided by ``speed``)."""
         speed = check_positive(speed, "speed")
         return HumanMotion(self.times / speed, self.true, self.measured, self.task,
-                           self.source, {**self.meta, "speed": speed})
+                           self.source, {**self.meta, "speed": speed}, self.body)
+
+
+def _last_valid(valid: NDArray[np.bool_]) -> NDArray[np.int64]:
+    """Index of the latest ``valid`` sample at or before each sample (-1 before the first)."""
+    return np.maximum.accumulate(np.where(valid, np.arange(valid.size), -1))
+
+
+def _check_body(body: Mapping[str, Any], n: int) -> dict[str, FloatArray]:
+    """Validated, read-only copies of a motion's body modalities (see :class:`HumanMotion`)."""
+    if not isinstance(body, Mapping):
+        raise ValueError(f"body: expected a mapping of modality name to array, "
+                         f"got {type(body).__name__}")
+    out = {}
+    for name, values in body.items():
+        if name not in BODY_DIMS:
+            raise ValueError(f"body: expected keys among {list(BODY_DIMS)}, got {name!r}")
+        out[name] = check_array(values, f"body[{name!r}]", 2, shape=(n, BODY_DIMS[name]),
+                                allow_nan=True)
+        out[name].setflags(write=False)
+    return out
 
 
 def forearm_orientation(hand: FloatArray) -> tuple[float, float, float, float]:

@@ -3,12 +3,16 @@
 * :func:`synthetic_motion`: one seeded reach of a task of a synthetic family
   (``"objects"``: box, glasses case, tape; ``"diverging"``: left, right, up,
   down, straight), optionally with an intent switch to another task. The body
-  follows the clean reach, the robot observes it through the tracker model.
+  follows the clean reach, the robot observes it through the tracker model,
+  and the same-side elbow and shoulder (``arm``) when the demonstration
+  carries them; never EMG (it is not simulated).
 * :func:`recorded_motion`: replay of a trial ``<root>/<task>/<trial>.csv`` in
   the recorded layout. The robot observes the causally filtered track
   (:func:`sandbox.data.load_trial` with ``preprocess="causal"``: only accepted
   tracker frames, NaN elsewhere); the body follows the smoothed track
-  (``"smooth"``), its gaps interpolated.
+  (``"smooth"``), its gaps interpolated. The motion also carries the
+  recorded arm (elbow, shoulder) and EMG envelope, preprocessed causally the
+  same way, when the trial has them.
 """
 
 from __future__ import annotations
@@ -22,10 +26,14 @@ from sandbox.data.synthetic.families import DIVERGING_VARIABILITY, OBJECTS, dive
 from sandbox.data.synthetic.generator import generate
 from sandbox.data.synthetic.intent import intent_switch_demo
 from sandbox.data.synthetic.tasks import TaskSpec, Variability
-from sandbox.envs.human import HumanMotion
+from sandbox.envs.human import BODY_DIMS, HumanMotion
 
 #: Synthetic families and their tasks.
 FAMILIES = ("objects", "diverging")
+#: Modalities a synthetic motion is generated with (the hand is the same without the arm).
+SYNTHETIC_OBSERVE = ("hand", "arm")
+#: Modalities a recorded replay loads (each as in evaluation: ``preprocess="causal"``).
+RECORDED_OBSERVE = ("hand", "arm", "emg")
 
 
 def family_specs(family: str) -> tuple[tuple[TaskSpec, ...], Variability]:
@@ -71,16 +79,37 @@ def synthetic_motion(family: str, task: str, rng: np.random.Generator, *,
         if name not in by_name:
             raise ValueError(f"task: expected one of {list(by_name)} ({family}), got {name!r}")
     if switch_to is None:
-        (demo,) = generate([by_name[task]], 1, rng, family=family, variability=variability)
+        (demo,) = generate([by_name[task]], 1, rng, family=family, variability=variability,
+                           observe=SYNTHETIC_OBSERVE)
         meta = {}
     else:
-        demo, truth = intent_switch_demo(task, switch_to, switch_phase, rng, family=family)
+        demo, truth = intent_switch_demo(task, switch_to, switch_phase, rng, family=family,
+                                         observe=SYNTHETIC_OBSERVE)
         meta = {"intent": truth}
     return HumanMotion(
-        times=demo.times - demo.times[0], true=demo.meta["clean_human"], measured=demo.human,
-        task=demo.task, source=demo.source,
+        times=demo.times - demo.times[0], true=demo.meta["clean_human"],
+        measured=demo.select("hand").human, task=demo.task, source=demo.source,
         meta={**meta, "handover_target": np.array(demo.meta["handover_target"])},
+        body=demo_body(demo),
     )
+
+
+def demo_body(demo) -> dict[str, np.ndarray]:
+    """The body modalities (:data:`~sandbox.envs.human.BODY_DIMS`) a demonstration carries.
+
+    Parameters
+    ----------
+    demo : Demonstration
+        Its ``human`` columns of modality ``arm`` (6 dims, m) and ``emg`` (8)
+        are taken where present; the others are left out (unobserved).
+
+    Returns
+    -------
+    dict
+        Modality name -> values, shape (T, dims), NaN where nothing was measured.
+    """
+    names = [m.name for m in demo.modalities]
+    return {name: demo.select(name).human for name in BODY_DIMS if name in names}
 
 
 def recorded_trials(root: str | Path, task: str | None = None) -> list[tuple[str, Path]]:
@@ -120,12 +149,35 @@ def recorded_motion(root: str | Path, task: str | None, trial: int | str | None,
 def _load_motion(task: str, path: str) -> HumanMotion:
     from sandbox.data.recorded import load_trial
 
-    causal = load_trial(path, task=task, preprocess="causal")
+    causal = _load_causal(task, path)
     smooth = load_trial(path, task=task, preprocess="smooth")
     times = causal.times - causal.times[0]
     true = np.column_stack([_fill(times, smooth.human[:, j]) for j in range(3)])
-    return HumanMotion(times=times, true=true, measured=causal.human, task=task, source=path,
-                       meta={"report": causal.meta["report"]})
+    return HumanMotion(times=times, true=true, measured=causal.select("hand").human, task=task,
+                       source=path, meta={"report": causal.meta["report"]},
+                       body=demo_body(causal))
+
+
+def _load_causal(task: str, path: str):
+    """The trial as the evaluation's test streams see it: :data:`RECORDED_OBSERVE`, causal.
+
+    A modality the trial lacks or cannot use (missing columns, a constant
+    signal, fewer than 2 valid frames) is left out, so it is unobserved.
+    """
+    from sandbox.data.recorded import load_trial
+
+    try:
+        return load_trial(path, task=task, observe=RECORDED_OBSERVE, preprocess="causal")
+    except ValueError:
+        pass
+    usable = ["hand"]
+    for name in RECORDED_OBSERVE[1:]:
+        try:
+            load_trial(path, task=task, observe=("hand", name), preprocess="causal")
+            usable.append(name)
+        except ValueError:
+            continue
+    return load_trial(path, task=task, observe=usable, preprocess="causal")
 
 
 def _fill(t: np.ndarray, y: np.ndarray) -> np.ndarray:

@@ -28,6 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from sandbox.core.validation import check_array, check_positive
 from sandbox.data.synthetic.base import HAND_START
+from sandbox.envs.human import BODY_DIMS
 
 FloatArray = NDArray[np.float64]
 
@@ -114,6 +115,12 @@ class TeleopMotion:
             self._frames = {frame: self.position(max(frame / self.frame_hz, self._anchor_t))
                             + noise}
         return self._frames[frame].copy()
+
+    def body_measurement(self, name: str, t: float) -> FloatArray:
+        """All NaN (dims,): the teleoperated hand has no tracked arm and no EMG."""
+        if name not in BODY_DIMS:
+            raise ValueError(f"name: expected one of {list(BODY_DIMS)}, got {name!r}")
+        return np.full(BODY_DIMS[name], np.nan)
 
     def scaled(self, speed: float) -> TeleopMotion:
         """A fresh teleoperated hand (same start and tracker) whose commands are ``speed`` x."""

@@ -8,8 +8,9 @@ A scenario file is one mapping (YAML needs PyYAML; paths are relative to the fil
     object: box                     # optional: box, glasses_case, tape, measuring_tape, screwdriver
     speed: 1.0                      # human speed factor (0.25 - 4)
     time_limit: 6.0                 # episode length limit (s)
-    observe: [hand]                 # modalities the policy observes (the environments
-                                    # carry the hand; a recorded model is fitted on these)
+    observe: [hand]                 # modalities the policy observes: hand, arm, emg (or
+                                    # "hand,arm"); the model is fitted on these (synthetic:
+                                    # hand, arm; recorded: hand, arm, emg)
     human:                          # exactly one of the three forms below
       task: up                      # 1. synthetic reach of a family task (random if omitted),
       switch_to: right              #    optionally switching to another task
@@ -47,12 +48,14 @@ from pathlib import Path
 from typing import Any
 
 SUFFIXES = (".json", ".yaml", ".yml")
-FAMILIES = {"diverging": "sandbox/BaxterHandoverDiverging-v0",
-            "objects": "sandbox/BaxterHandover-v0"}
+FAMILIES = {"diverging": "sandbox/BaxterHandoverDiverging-v1",
+            "objects": "sandbox/BaxterHandover-v1"}
 TOP_KEYS = ("name", "family", "seed", "object", "speed", "time_limit", "observe", "human",
             "policy", "model")
 #: Modalities the environments' observations carry.
-ENV_MODALITIES = ("hand",)
+ENV_MODALITIES = ("hand", "arm", "emg")
+#: Modalities the synthetic motions and models carry (EMG is not simulated).
+SYNTHETIC_MODALITIES = ("hand", "arm")
 HUMAN_KEYS = {"synthetic": ("task", "switch_to", "switch_phase"),
               "waypoints": ("waypoints", "task", "tracker"),
               "recorded": ("recorded", "task", "trial")}
@@ -162,11 +165,16 @@ def read_mapping(path: Path) -> Any:
         raise ValueError(f"scenario {path}: invalid YAML{where}: {problem}") from error
 
 
-def load_scenario(path: str | Path) -> Scenario:
-    """Read and validate a scenario file (or a shipped example by name)."""
+def load_scenario(path: str | Path, *, observe: list[str] | str | None = None) -> Scenario:
+    """Read and validate a scenario file (or a shipped example by name).
+
+    ``observe`` (e.g. ``"hand,arm"``), if given, replaces the file's ``observe:``.
+    """
     path = resolve(path)
     check = _Checker(path)
     data = check.keys(read_mapping(path), "top level", TOP_KEYS)
+    if observe is not None:
+        data["observe"] = observe
     for key in ("human", "policy"):
         if key not in data:
             check.fail(key, "this key (required)", "nothing")
@@ -178,13 +186,19 @@ def load_scenario(path: str | Path) -> Scenario:
         obj = check.choice(obj, "object", urdf.OBJECTS)
     seed = check.integer(data.get("seed", 0), "seed")
     kind, human = _human(check, data["human"], family, path.parent, seed)
+    model = _model(check, data.get("model"), path.parent)
+    observe = _observe(check, data.get("observe", ["hand"]))
+    if kind != "recorded" and "file" not in model and not set(observe) <= set(SYNTHETIC_MODALITIES):
+        check.fail("observe", f"modalities of the synthetic model {list(SYNTHETIC_MODALITIES)} "
+                              "(EMG is not simulated: use a recorded human or a model file)",
+                   list(observe))
     return Scenario(
         path=path, name=str(data.get("name", path.stem)), family=family,
         seed=seed, human_kind=kind, human=human,
-        policy=_policy(check, data["policy"]), model=_model(check, data.get("model"), path.parent),
+        policy=_policy(check, data["policy"]), model=model,
         object=obj, speed=check.number(data.get("speed", 1.0), "speed", 0.25, 4.0),
         time_limit=check.number(data.get("time_limit", 6.0), "time_limit", 0.1, 600.0),
-        observe=_observe(check, data.get("observe", ["hand"])))
+        observe=observe)
 
 
 def _observe(check: _Checker, data: Any) -> tuple[str, ...]:
@@ -193,9 +207,9 @@ def _observe(check: _Checker, data: Any) -> tuple[str, ...]:
             or not all(isinstance(n, str) and n for n in names)):
         check.fail("observe", "a list of modality names", data)
     unknown = [n for n in names if n not in ENV_MODALITIES]
-    if unknown:
-        check.fail("observe", f"modalities the environments observe {list(ENV_MODALITIES)}",
-                   names)
+    if unknown or len(set(names)) != len(names):
+        check.fail("observe", f"distinct modalities the environments observe "
+                              f"{list(ENV_MODALITIES)}", names)
     return tuple(names)
 
 
@@ -332,7 +346,7 @@ def build_model(scenario: Scenario):
     from sandbox.policies import fit_family_model
 
     return fit_family_model(scenario.family, n_per_task=scenario.model["demos"],
-                            seed=scenario.model["seed"])
+                            seed=scenario.model["seed"], observe=scenario.observe)
 
 
 def make_policy(scenario: Scenario, model):
@@ -410,6 +424,7 @@ def run_scenario_file(scenario: Scenario, *, html: str | Path | None = None,
         env.close()
     summary = {"scenario": scenario.name, "file": str(scenario.path), "seed": scenario.seed,
                "human": scenario.human_kind, "policy_spec": scenario.policy,
+               "observe": list(scenario.observe),
                "model_tasks": list(model.tasks), **record.summary()}
     if intent is not None:
         summary["intent_switch"] = {"from": intent.tasks[0], "to": intent.tasks[1],

@@ -14,6 +14,8 @@ Policies: ``"dynamic"`` (:class:`~sandbox.policies.IProMPPolicy`, window
 ``dow_t``), ``"static"`` (:class:`~sandbox.policies.StaticPolicy`, ``ratio``)
 or any callable ``model -> policy``. Synthetic scenarios use a model fitted on
 seeded synthetic demonstrations of the family (:func:`sandbox.policies.fit_family_model`).
+``observe`` chooses the modalities the policy feeds (``hand``, ``arm``,
+``emg``); in the ``recorded`` scenario the model is fitted on them too.
 
 Episode ``i`` is ``env.reset(seed=seed + i)``, so a scenario run is reproducible.
 
@@ -27,7 +29,7 @@ Examples
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -38,10 +40,10 @@ from sandbox.core.validation import check_choice
 
 #: Scenario name -> (environment id, synthetic family).
 SCENARIOS = {
-    "diverging": ("sandbox/BaxterHandoverDiverging-v0", "diverging"),
-    "objects": ("sandbox/BaxterHandover-v0", "objects"),
-    "intent_switch": ("sandbox/BaxterHandoverDiverging-v0", "diverging"),
-    "recorded": ("sandbox/BaxterHandover-v0", None),
+    "diverging": ("sandbox/BaxterHandoverDiverging-v1", "diverging"),
+    "objects": ("sandbox/BaxterHandover-v1", "objects"),
+    "intent_switch": ("sandbox/BaxterHandoverDiverging-v1", "diverging"),
+    "recorded": ("sandbox/BaxterHandover-v1", None),
 }
 POLICIES = ("dynamic", "static")
 
@@ -93,7 +95,8 @@ class EpisodeResult:
 def run_scenario(scenario: str = "diverging", policy: str | Callable = "dynamic", *,
                  n_episodes: int = 20, seed: int = 0, dow_t: float = 0.2, ratio: float = 0.3,
                  data: str | Path | None = None, env=None, model=None,
-                 options: Mapping[str, Any] | None = None) -> list[EpisodeResult]:
+                 options: Mapping[str, Any] | None = None,
+                 observe: Sequence[str] | str | None = None) -> list[EpisodeResult]:
     """Run ``n_episodes`` seeded episodes of ``scenario`` with ``policy``.
 
     Parameters
@@ -118,9 +121,15 @@ def run_scenario(scenario: str = "diverging", policy: str | Callable = "dynamic"
         default one is made and closed.
     model : IProMP, optional
         The model (synthetic scenarios; default: fitted on the family's
-        synthetic demonstrations, seed 0, 20 per task).
+        synthetic demonstrations of the ``observe`` modalities, default the
+        hand, seed 0, 20 per task).
     options : mapping, optional
         Extra ``reset`` options for every episode (e.g. ``{"speed": 1.5}``).
+    observe : sequence of str or str, optional
+        Modalities the ``"dynamic"``/``"static"`` policy feeds (``"hand,arm,emg"``
+        or a list; each must be the model's). Default: every modality of the
+        model the environment observes; ``recorded``: the hand (the model is
+        fitted on the ``observe`` modalities loaded from the set).
 
     Returns
     -------
@@ -135,8 +144,13 @@ def run_scenario(scenario: str = "diverging", policy: str | Callable = "dynamic"
         raise ValueError("data: expected the recorded set's folder for the 'recorded' "
                          f"scenario and nothing otherwise, got scenario={scenario!r}, "
                          f"data={data!r}")
-    make_policy = _policy_factory(policy, dow_t, ratio)
-    episodes = _episodes(scenario, int(n_episodes), int(seed), data, model, options or {})
+    observe = _check_observe(observe)
+    if observe is not None and callable(policy):
+        raise ValueError("observe: expected None with a policy factory (it chooses its own "
+                         f"modalities), got {observe!r}")
+    make_policy = _policy_factory(policy, dow_t, ratio, observe)
+    episodes = _episodes(scenario, int(n_episodes), int(seed), data, model, options or {},
+                         observe)
     own_env = env is None
     if own_env:
         import gymnasium as gym
@@ -186,23 +200,38 @@ def summarize(results: list[EpisodeResult]) -> dict[str, float]:
 
 
 # ------------------------------------------------------------------ internals
-def _policy_factory(policy, dow_t: float, ratio: float) -> Callable:
+def _check_observe(observe) -> tuple[str, ...] | None:
+    """``observe`` as a tuple of names among the environments' modalities (None stays None)."""
+    from sandbox.policies import ENV_MODALITIES
+
+    if observe is None:
+        return None
+    names = [n.strip() for n in observe.split(",")] if isinstance(observe, str) else observe
+    if (not isinstance(names, Sequence) or not names
+            or any(n not in ENV_MODALITIES for n in names) or len(set(names)) != len(names)):
+        raise ValueError(f"observe: expected distinct modalities among {list(ENV_MODALITIES)}, "
+                         f"got {observe!r}")
+    return tuple(names)
+
+
+def _policy_factory(policy, dow_t: float, ratio: float, observe) -> Callable:
     if callable(policy):
         return policy
     from sandbox.policies import IProMPPolicy, StaticPolicy
 
     if policy == "dynamic":
-        return lambda model: IProMPPolicy(model, dow_t=dow_t)
-    return lambda model: StaticPolicy(model, ratio=ratio)
+        return lambda model: IProMPPolicy(model, dow_t=dow_t, observe=observe)
+    return lambda model: StaticPolicy(model, ratio=ratio, observe=observe)
 
 
-def _episodes(scenario, n, seed, data, model, options):
+def _episodes(scenario, n, seed, data, model, options, observe):
     """(seed, model, reset options) of every episode."""
     if scenario == "recorded":
-        return _recorded_episodes(Path(data), n, seed, options)
+        return _recorded_episodes(Path(data), n, seed, options, observe)
     from sandbox.policies import fit_family_model
 
-    model = model if model is not None else fit_family_model(SCENARIOS[scenario][1])
+    if model is None:
+        model = fit_family_model(SCENARIOS[scenario][1], observe=observe or ("hand",))
     out = []
     for i in range(n):
         opts = dict(options)
@@ -214,12 +243,16 @@ def _episodes(scenario, n, seed, data, model, options):
     return out
 
 
-def _recorded_episodes(root: Path, n, seed, options):
-    """Each episode replays a random trial with a model fitted on all the other trials."""
+def _recorded_episodes(root: Path, n, seed, options, observe):
+    """Each episode replays a random trial with a model fitted on all the other trials.
+
+    The model is fitted on the ``observe`` modalities (default the hand) of the
+    smoothed trials; a trial that cannot provide them is left out.
+    """
     from sandbox.core import IProMP
     from sandbox.data.recorded import load_recorded
 
-    demos, _ = load_recorded(root)
+    demos, _ = load_recorded(root, observe=observe or ("hand",))
     rng = np.random.default_rng(seed)
     picks = rng.choice(len(demos), size=n, replace=n > len(demos))
     out = []

@@ -229,6 +229,25 @@ def test_yaml_scenario_with_the_static_policy(tmp_path, capsys):
     assert summary["end_time_s"] <= 2.0 + 1e-9  # the file's time limit
 
 
+def test_observe_key_and_option_choose_the_modalities(tmp_path, capsys):
+    from sandbox.scenario_files import build_model, make_policy
+
+    path = tmp_path / "arm.yaml"
+    path.write_text(YAML + "observe: hand,arm\n")
+    scenario = load_scenario(path)
+    assert scenario.observe == ("hand", "arm")
+    assert load_scenario(path, observe="hand").observe == ("hand",)
+    model = build_model(scenario)
+    assert [m.name for m in model.modalities] == ["hand", "arm"]
+    assert make_policy(scenario, model).observe == ("hand", "arm")
+    path.write_text(YAML)
+    html, out = tmp_path / "r.html", tmp_path / "s.json"
+    assert main(["play", "--scenario", str(path), "--observe", "hand,arm", "--out", str(html),
+                 "--summary", str(out)]) == 0
+    assert "observing hand,arm" in capsys.readouterr().out
+    assert json.loads(out.read_text())["observe"] == ["hand", "arm"]
+
+
 def test_shipped_examples_are_valid():
     for name in ("intent_switch", "waypoints"):
         scenario = load_scenario(name)
@@ -272,6 +291,9 @@ BAD = [
     ("bad.yaml", "human: {task: up}\npolicy: {}\nspeed: 9\n", "speed"),
     ("bad.yaml", "human: {task: up}\npolicy: {}\nmodel: {file: missing.npz}\n", "model.file"),
     ("bad.txt", "{}", "expected a .json, .yaml or .yml file"),
+    ("bad.yaml", "human: {task: up}\npolicy: {}\nobserve: [hand, emg]\n", "EMG is not simulated"),
+    ("bad.yaml", "human: {task: up}\npolicy: {}\nobserve: [hand, leg]\n",
+     "observe: expected distinct modalities"),
 ]
 
 

@@ -15,6 +15,7 @@ from sandbox.policies import (
     IProMPPolicy,
     StaticPolicy,
     fit_family_model,
+    modality_values,
 )
 from sandbox.robot import BaxterKinematics
 
@@ -24,13 +25,25 @@ def model():
     return fit_family_model("diverging")
 
 
-def observations(task="up", seed=0, hz=50.0, q=Q_HOME, extra_s=1.0):
-    """Observations (dicts) of a synthetic motion at ``hz``, the arm fixed at ``q``."""
+@pytest.fixture(scope="module")
+def arm_model():
+    return fit_family_model("diverging", n_per_task=8, observe="hand,arm")
+
+
+def observations(task="up", seed=0, hz=50.0, q=Q_HOME, extra_s=1.0, body=False):
+    """Observations (dicts) of a synthetic motion at ``hz``, the arm fixed at ``q``.
+
+    With ``body`` they carry the v1 entries: the arm, and no EMG (flag 0).
+    """
     motion = synthetic_motion("diverging", task, np.random.default_rng(seed))
     for t in np.arange(0.0, motion.duration + extra_s, 1.0 / hz):
-        yield {"hand": motion.measurement(t), "object": motion.position(t) + [0, 0, -0.02],
+        obs = {"hand": motion.measurement(t), "object": motion.position(t) + [0, 0, -0.02],
                "q": np.array(q, dtype=float), "dq": np.zeros(7), "gripper": np.ones(1),
                "time": np.array([t])}
+        if body:
+            obs.update(arm=motion.body_measurement("arm", t), arm_valid=np.ones(1, np.int8),
+                       emg=np.zeros(8), emg_valid=np.zeros(1, np.int8))
+        yield obs
 
 
 def test_fitted_model_is_cached_per_arguments(model):
@@ -131,3 +144,56 @@ def test_unfitted_model_is_refused():
 def test_docstring_example_runs():
     result = doctest.testmod(sandbox.policies, optionflags=doctest.ELLIPSIS)
     assert result.attempted > 0 and result.failed == 0
+
+
+def test_modality_values_turn_unflagged_entries_into_nan():
+    obs = {"hand": np.ones(3), "arm": np.zeros(6), "arm_valid": np.zeros(1, np.int8),
+           "emg": np.full(8, 5.0), "emg_valid": np.ones(1, np.int8)}
+    values = modality_values(obs, ["hand", "arm", "emg"])
+    assert np.isnan(values["arm"]).all() and values["emg"][0] == 5.0
+    assert obs["arm"][0] == 0.0  # not changed
+    assert set(modality_values({"hand": np.ones(3)}, ["hand", "arm"], required=False)) == {"hand"}
+    with pytest.raises(ValueError, match="'arm' entry"):
+        modality_values({"hand": np.ones(3)}, ["hand", "arm"])
+    with pytest.raises(ValueError, match="names"):
+        modality_values(obs, ["leg"])
+
+
+def test_policy_feeds_every_modality_its_model_has(model, arm_model):
+    assert IProMPPolicy(model).observe == ("hand",)
+    policy = IProMPPolicy(arm_model)
+    assert policy.observe == ("hand", "arm")
+    for obs in observations(body=True):
+        policy(obs)
+    _, y = policy.predictor.stream.observations()
+    assert np.isfinite(y).all()  # the arm was fed at every kept step
+    restricted = IProMPPolicy(arm_model, observe="hand")
+    for obs in observations(body=True):
+        restricted(obs)
+    _, y = restricted.predictor.stream.observations()
+    assert np.isnan(y[:, 3:]).all() and np.isfinite(y[:, :3]).all()
+
+
+def test_a_missing_modality_is_marginalised_not_zero_filled(arm_model):
+    with_arm, without_arm, legacy = (IProMPPolicy(arm_model) for _ in range(3))
+    hand_only = IProMPPolicy(arm_model, observe="hand")
+    for obs in observations(task="left", body=True):
+        unflagged = {**obs, "arm": np.zeros(6), "arm_valid": np.zeros(1, np.int8)}
+        v0 = {k: v for k, v in obs.items() if k not in ("arm", "arm_valid", "emg", "emg_valid")}
+        actions = [with_arm(obs), without_arm(unflagged), legacy(v0), hand_only(obs)]
+    _, y = without_arm.predictor.stream.observations()
+    assert np.isnan(y[:, 3:]).all()  # NaN (marginalised), not zeros
+    np.testing.assert_array_equal(actions[1], actions[3])  # same as observing the hand only
+    np.testing.assert_array_equal(actions[2], actions[3])  # a v0 observation: the same
+    assert without_arm.task == with_arm.task == "left"
+
+
+def test_explicit_observe_is_checked(arm_model, model):
+    with pytest.raises(ValueError, match="observe"):
+        IProMPPolicy(model, observe="hand,arm")  # not the model's
+    with pytest.raises(ValueError, match="environments observe"):
+        StaticPolicy(arm_model, observe=["hand", "leg"])
+    policy = StaticPolicy(arm_model, observe=["hand", "arm"])
+    obs = next(observations())
+    with pytest.raises(ValueError, match="'arm' entry"):
+        policy(obs)  # a v0 observation lacks the arm it must observe

@@ -17,7 +17,7 @@ SWITCH = {"task": "up", "switch_to": "right", "switch_phase": 0.55}
 
 @pytest.fixture(scope="module")
 def env():
-    env = gym.make("sandbox/BaxterHandoverDiverging-v0")
+    env = gym.make("sandbox/BaxterHandoverDiverging-v1")
     yield env
     env.close()
 

@@ -16,7 +16,7 @@ from sandbox.scenarios import EpisodeResult, run_scenario, summarize
 
 @pytest.fixture(scope="module")
 def diverging_env():
-    env = gym.make("sandbox/BaxterHandoverDiverging-v0")
+    env = gym.make("sandbox/BaxterHandoverDiverging-v1")
     yield env
     env.close()
 
@@ -127,3 +127,37 @@ def test_bad_arguments_are_refused(kwargs, match):
 def test_docstring_example_runs():
     result = doctest.testmod(sandbox.scenarios)
     assert result.attempted > 0 and result.failed == 0
+
+
+def test_observe_chooses_the_modalities_and_the_synthetic_model(diverging_env):
+    hand = run_scenario("diverging", "dynamic", n_episodes=1, seed=2, env=diverging_env)
+    both = run_scenario("diverging", "dynamic", n_episodes=1, seed=2, env=diverging_env,
+                        observe="hand,arm")
+    explicit = run_scenario("diverging", "dynamic", n_episodes=1, seed=2, env=diverging_env,
+                            observe=["hand"])
+    assert hand == explicit and both[0].task == hand[0].task
+    assert both[0].recognised != hand[0].recognised or both[0].steps != hand[0].steps \
+        or both[0].final_distance != hand[0].final_distance  # the arm changes the predictions
+
+
+def test_recorded_model_is_fitted_on_the_observed_modalities(recorded_dir):
+    from sandbox.scenarios import _recorded_episodes
+
+    ((_, model, opts),) = _recorded_episodes(recorded_dir, 1, 0, {}, ("hand", "arm", "emg"))
+    assert [m.name for m in model.modalities] == ["hand", "arm", "emg"]
+    ((_, hand_model, _),) = _recorded_episodes(recorded_dir, 1, 0, {}, None)
+    assert [m.name for m in hand_model.modalities] == ["hand"]
+    (result,) = run_scenario("recorded", "static", n_episodes=1, seed=0, data=recorded_dir,
+                             observe="hand,arm,emg")
+    assert result.options == {**opts}
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"observe": "hand,leg"}, "observe"),
+    ({"observe": ["hand", "hand"]}, "observe"),
+    ({"observe": "hand,emg"}, "EMG is not simulated"),
+    ({"observe": "hand", "policy": HoldStill}, "observe"),
+])
+def test_bad_observe_is_refused(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        run_scenario(**{"n_episodes": 1, **kwargs})

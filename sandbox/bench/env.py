@@ -1,7 +1,7 @@
 """Speed of the handover environments (merged into ``python -m sandbox bench --json``).
 
 * ``env_steps_per_s``: ``env.step`` with random actions through ``gym.make``'s
-  wrappers (``sandbox/BaxterHandoverDiverging-v0``), resetting when an episode ends.
+  wrappers (``sandbox/BaxterHandoverDiverging-v1``), resetting when an episode ends.
 * ``raw_pybullet_steps_per_s``: the same scene (the environment's own client,
   bodies and constraints) stepped directly: per step, the arm's and fingers'
   motor targets are set and the physics advanced by the same number of
@@ -21,7 +21,7 @@ import time
 
 import numpy as np
 
-ENV_ID = "sandbox/BaxterHandoverDiverging-v0"
+ENV_ID = "sandbox/BaxterHandoverDiverging-v1"
 
 
 def _make_env():

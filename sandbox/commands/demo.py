@@ -117,7 +117,7 @@ def run(args) -> int:
         model.task_index(task)
     print(f"fitted {len(model.tasks)} tasks {list(model.tasks)} on {args.demos * len(model.tasks)}"
           f" synthetic demos ({time.perf_counter() - start:.1f} s)")
-    env = gym.make("sandbox/BaxterHandoverDiverging-v0")
+    env = gym.make("sandbox/BaxterHandoverDiverging-v1")
     options = {"task": args.from_task, "switch_to": args.to_task, "switch_phase": args.switch}
     viewer = overlay = None
     try:

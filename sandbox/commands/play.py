@@ -9,7 +9,8 @@ With ``--scenario FILE`` (JSON or YAML, see :mod:`sandbox.scenario_files`, or
 the name of a shipped example: ``intent_switch``, ``waypoints``): the scripted
 episode runs to completion, then its replay (HTML) and a JSON summary are
 written (success, handover time, final gripper-to-object distance, recognised
-task over time, updates).
+task over time, updates). ``--observe hand,arm,emg`` chooses the modalities
+the policy observes (and its model is fitted on) in both modes.
 """
 
 from __future__ import annotations
@@ -27,6 +28,10 @@ def add_arguments(parser) -> None:
                         help="scenario replay (HTML; default: <file name>.html here)")
     parser.add_argument("--summary", default=None,
                         help="scenario summary (JSON; default: <file name>.summary.json here)")
+    parser.add_argument("--observe", default=None, metavar="NAMES",
+                        help="modalities the policy observes, comma-separated: hand, arm, emg "
+                             "(scenario: replaces the file's observe:; teleop: hand or hand,arm, "
+                             "the model is fitted on them; default hand)")
     parser.add_argument("--family", default="diverging", choices=["diverging", "objects"],
                         help="teleop: the synthetic tasks the robot knows")
     parser.add_argument("--dow", type=float, default=0.2, help="teleop: dynamic window (s)")
@@ -59,8 +64,10 @@ def _teleop(args) -> int:
     from sandbox.teleop import Keyboard, run_teleop
 
     env_id = ENV_IDS[0] if args.family == "objects" else ENV_IDS[1]
-    model = fit_family_model(args.family, n_per_task=args.demos, seed=args.seed)
-    policy = IProMPPolicy(model, dow_t=args.dow)
+    observe = args.observe or "hand"
+    model = fit_family_model(args.family, n_per_task=args.demos, seed=args.seed,
+                             observe=observe)
+    policy = IProMPPolicy(model, dow_t=args.dow, observe=observe)
     print(f"the robot knows {len(model.tasks)} tasks {list(model.tasks)} "
           f"({args.demos} synthetic demos each); it re-predicts every {args.dow:g} s",
           flush=True)
@@ -87,14 +94,15 @@ def _scenario(args) -> int:
 
     from sandbox.scenario_files import load_scenario, run_scenario_file
 
-    scenario = load_scenario(args.scenario)
+    scenario = load_scenario(args.scenario, observe=args.observe)
     html = Path(args.out or f"{scenario.path.stem}.html")
     summary_path = Path(args.summary or f"{scenario.path.stem}.summary.json")
     if summary_path.suffix.lower() != ".json":
         raise ValueError(f"--summary: expected a file name ending in .json, got "
                          f"{str(summary_path)!r}")
     print(f"scenario '{scenario.name}' ({scenario.path}): {scenario.human_kind} human, "
-          f"{scenario.policy['type']} policy, seed {scenario.seed}", flush=True)
+          f"{scenario.policy['type']} policy observing {','.join(scenario.observe)}, "
+          f"seed {scenario.seed}", flush=True)
 
     def show(belief) -> None:
         probs = " ".join(f"{k}={v:.2f}" for k, v in belief.posterior.items())

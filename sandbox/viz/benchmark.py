@@ -76,7 +76,7 @@ def bench_episode(resolution: float | None, folder: Path) -> None:
     from sandbox.policies import IProMPPolicy, fit_family_model
     from sandbox.viz import Viewer
 
-    env = gym.make("sandbox/BaxterHandoverDiverging-v0")
+    env = gym.make("sandbox/BaxterHandoverDiverging-v1")
     model = fit_family_model("diverging")
     policy = IProMPPolicy(model, dow_t=0.2)
     obs, _ = env.reset(seed=0, options={"speed": 0.7})

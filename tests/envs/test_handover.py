@@ -9,7 +9,7 @@ from gymnasium.utils.env_checker import check_env, data_equivalence
 
 import sandbox.envs
 from sandbox.data.synthetic.base import Q_HOME
-from sandbox.envs import ENV_IDS, MAX_EPISODE_STEPS, BaxterHandoverEnv
+from sandbox.envs import ENV_IDS, LEGACY_IDS, MAX_EPISODE_STEPS, BaxterHandoverEnv
 
 TERMS = ("reward_distance", "reward_success", "reward_action_rate")
 
@@ -38,11 +38,13 @@ def second_env():
 
 
 def test_ids_are_registered_with_a_time_limit():
-    assert ENV_IDS == ["sandbox/BaxterHandover-v0", "sandbox/BaxterHandoverDiverging-v0"]
-    for env_id, family in zip(ENV_IDS, ("objects", "diverging")):
-        spec = gym.spec(env_id)
-        assert spec.max_episode_steps == MAX_EPISODE_STEPS
-        assert spec.kwargs["family"] == family
+    assert ENV_IDS == ["sandbox/BaxterHandover-v1", "sandbox/BaxterHandoverDiverging-v1"]
+    assert LEGACY_IDS == ["sandbox/BaxterHandover-v0", "sandbox/BaxterHandoverDiverging-v0"]
+    for ids, body in ((ENV_IDS, True), (LEGACY_IDS, False)):
+        for env_id, family in zip(ids, ("objects", "diverging")):
+            spec = gym.spec(env_id)
+            assert spec.max_episode_steps == MAX_EPISODE_STEPS
+            assert spec.kwargs == {"family": family, "observe_body": body}
 
 
 def test_reimporting_does_not_register_twice():
@@ -53,13 +55,40 @@ def test_reimporting_does_not_register_twice():
 
 
 @pytest.mark.filterwarnings("ignore:.*symmetric and normalized")  # targets are in rad, by design
+@pytest.mark.filterwarnings("error:.*observation")  # e.g. NaN outside the observation space
 @pytest.mark.parametrize("fixture", ["objects_env", "diverging_env"])
 def test_check_env(fixture, request):
     check_env(request.getfixturevalue(fixture).unwrapped, skip_render_check=False)
 
 
+@pytest.mark.filterwarnings("ignore:.*symmetric and normalized")
+@pytest.mark.filterwarnings("ignore:.*out of date")  # the v0 ids, kept for one release
+@pytest.mark.filterwarnings("error:.*observation")
+@pytest.mark.parametrize("env_id", LEGACY_IDS)
+def test_check_env_legacy_ids(env_id):
+    env = gym.make(env_id)
+    try:
+        check_env(env.unwrapped)
+        obs, _ = env.reset(seed=0)
+        assert set(obs) == {"hand", "object", "q", "dq", "gripper", "time"}
+    finally:
+        env.close()
+
+
+@pytest.mark.filterwarnings("ignore:.*out of date")
+def test_legacy_ids_keep_the_v0_observation(diverging_env):
+    legacy = gym.make("sandbox/BaxterHandoverDiverging-v0")
+    try:
+        old, new = rollout(legacy, seed=4, n_steps=30), rollout(diverging_env, seed=4, n_steps=30)
+    finally:
+        legacy.close()
+    body = ("arm", "arm_valid", "emg", "emg_valid")
+    for a, b in zip([old[0], *old[2::5]], [new[0], *new[2::5]]):
+        assert data_equivalence(a, {k: v for k, v in b.items() if k not in body}, exact=True)
+
+
 def test_module_prefixed_make_1000_random_steps_and_close_twice():
-    env = gym.make("sandbox.envs:sandbox/BaxterHandover-v0")
+    env = gym.make("sandbox.envs:sandbox/BaxterHandover-v1")
     env.reset(seed=0)
     env.action_space.seed(0)
     episodes = 0
@@ -123,7 +152,9 @@ def test_spaces_and_first_observation(objects_env):
     assert env.action_space.shape == (8,)
     np.testing.assert_array_equal(env.action_space.low[:7], env.robot.lower)
     obs, info = objects_env.reset(seed=0)
-    assert set(obs) == {"hand", "object", "q", "dq", "gripper", "time"}
+    assert set(obs) == {"hand", "arm", "arm_valid", "emg", "emg_valid", "object", "q", "dq",
+                        "gripper", "time"}
+    assert obs["arm_valid"].dtype == np.int8 and obs["emg"].shape == (8,)
     np.testing.assert_allclose(obs["q"], Q_HOME, atol=1e-6)
     assert obs["gripper"][0] == pytest.approx(1.0) and obs["time"][0] == 0.0
     assert np.linalg.norm(obs["object"] - obs["hand"]) < 0.1
@@ -165,6 +196,7 @@ def test_step_before_reset_is_refused():
     ({"substeps": 2.5}, "substeps"),
     ({"control_hz": -50.0}, "control_hz"),
     ({"default_object": "banana"}, "default_object"),
+    ({"observe_body": "yes"}, "observe_body"),
 ])
 def test_bad_constructor_arguments(kwargs, match):
     with pytest.raises(ValueError, match=match):
@@ -188,3 +220,46 @@ def test_viewer_hook_names_the_bodies(objects_env):
         assert name in ids
     assert len(set(ids.values())) == len(ids)
     assert env.bullet_client.getNumBodies() == len(ids)
+
+
+def test_synthetic_episodes_observe_the_arm_but_no_emg(diverging_env):
+    obs, _ = diverging_env.reset(seed=0)
+    motion = diverging_env.unwrapped.motion
+    for _ in range(25):
+        obs, *_ = diverging_env.step(np.append(obs["q"], -1.0))
+    assert obs["arm_valid"][0] == 1 and obs["emg_valid"][0] == 0
+    np.testing.assert_array_equal(obs["arm"], motion.body_measurement("arm", 0.5))
+    np.testing.assert_array_equal(obs["emg"], np.zeros(8))
+    elbow, shoulder = obs["arm"][:3], obs["arm"][3:]
+    assert 0.15 < np.linalg.norm(obs["hand"] - elbow) < 0.45  # a forearm, m
+    assert 0.15 < np.linalg.norm(elbow - shoulder) < 0.45  # an upper arm, m
+
+
+def test_scripted_and_teleop_episodes_observe_no_arm_and_no_emg(diverging_env):
+    from sandbox.envs.sources import waypoint_motion
+
+    motion = waypoint_motion([0.0, 1.0], [[1.1, 0.0, 0.2], [0.8, 0.1, 0.2]],
+                             np.random.default_rng(0))
+    for options in ({"motion": motion}, {"source": "teleop"}):
+        obs, _ = diverging_env.reset(seed=0, options=options)
+        obs, *_ = diverging_env.step(np.append(obs["q"], -1.0))
+        assert obs["arm_valid"][0] == 0 and obs["emg_valid"][0] == 0
+        assert not obs["arm"].any() and not obs["emg"].any()
+
+
+def test_recorded_episodes_observe_arm_and_emg_deterministically(objects_env, recorded_dir):
+    options = {"source": str(recorded_dir), "task": "pencil_box", "trial": 1}
+    first = rollout(objects_env, seed=2, n_steps=100, options=options)
+    assert data_equivalence(first, rollout(objects_env, seed=2, n_steps=100, options=options),
+                            exact=True)
+    motion = objects_env.unwrapped.motion
+    observations = [first[0], *first[2::5]]
+    valid = np.array([[o["arm_valid"][0], o["emg_valid"][0]] for o in observations])
+    assert valid[-1].all()  # both measured by the end
+    for k, obs in enumerate(observations):
+        for name in ("arm", "emg"):
+            expected = motion.body_measurement(name, k * 0.02)
+            if obs[f"{name}_valid"][0]:
+                np.testing.assert_allclose(obs[name], expected)
+            else:  # nothing measured yet: zeros, flagged
+                assert np.isnan(expected).all() and not obs[name].any()

@@ -93,3 +93,31 @@ def test_hand_body_follows_the_motion(diverging_env):
     np.testing.assert_allclose(position, env.motion.position(obs["time"][0]), atol=1e-9)
     np.testing.assert_allclose(np.abs(quaternion), np.abs(forearm_orientation(position)),
                                atol=1e-6)
+
+
+def test_body_measurement_holds_the_latest_valid_sample_and_is_nan_before():
+    times = np.array([0.0, 0.1, 0.2, 0.3])
+    arm = np.array([[np.nan] * 6, [1.0] * 6, [np.nan, 2, 2, 2, 2, 2], [3.0] * 6])
+    motion = HumanMotion(times, np.zeros((4, 3)), np.zeros((4, 3)), "up", body={"arm": arm})
+    assert np.isnan(motion.body_measurement("arm", 0.05)).all()
+    np.testing.assert_array_equal(motion.body_measurement("arm", 0.25), np.ones(6))
+    np.testing.assert_array_equal(motion.body_measurement("arm", 9.0), np.full(6, 3.0))
+    assert np.isnan(motion.body_measurement("emg", 0.3)).all()  # not carried
+    assert motion.body_measurement("emg", 0.3).shape == (8,)
+    fast = motion.scaled(2.0)
+    np.testing.assert_array_equal(fast.body_measurement("arm", 0.125), np.ones(6))
+    arm[1] = 7.0  # the motion copied it
+    np.testing.assert_array_equal(motion.body_measurement("arm", 0.1), np.ones(6))
+    with pytest.raises(ValueError, match="name"):
+        motion.body_measurement("leg", 0.0)
+
+
+@pytest.mark.parametrize("body, match", [
+    ({"leg": np.zeros((4, 3))}, "body: expected keys"),
+    ({"arm": np.zeros((4, 3))}, "arm"),
+    ({"emg": np.zeros((3, 8))}, "emg"),
+    ([("arm", np.zeros((4, 6)))], "body: expected a mapping"),
+])
+def test_bad_body_is_refused(body, match):
+    with pytest.raises(ValueError, match=match):
+        HumanMotion(np.arange(4) * 0.1, np.zeros((4, 3)), np.zeros((4, 3)), "up", body=body)

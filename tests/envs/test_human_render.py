@@ -23,7 +23,7 @@ pytestmark = pytest.mark.skipif(not Path("/proc").is_dir(), reason="needs /proc 
 @pytest.fixture(scope="module")
 def human_env():
     """A diverging env in "human" mode, not paced to real time (faster tests)."""
-    env = gym.make("sandbox/BaxterHandoverDiverging-v0", render_mode="human",
+    env = gym.make("sandbox/BaxterHandoverDiverging-v1", render_mode="human",
                    viewer_options={"realtime": False})
     yield env
     env.close()
@@ -95,7 +95,7 @@ def test_render_before_reset_is_refused():
 def test_server_stops_when_the_process_ends_without_close(tmp_path):
     script = textwrap.dedent("""
         import os, gymnasium as gym, sandbox.envs
-        env = gym.make("sandbox/BaxterHandoverDiverging-v0", render_mode="human")
+        env = gym.make("sandbox/BaxterHandoverDiverging-v1", render_mode="human")
         env.reset(seed=0)
         print("PIDS", os.getpid(), env.unwrapped.viewer.server.pid, flush=True)
     """)  # no env.close()

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from sandbox.data.recorded import load_trial
 from sandbox.envs.sources import (
     FAMILIES,
     family_tasks,
@@ -91,3 +92,46 @@ def test_env_replays_a_recorded_trial(objects_env, recorded_dir):
     for _ in range(50):
         obs, *_ = objects_env.step(np.append(obs["q"], -1.0))
     np.testing.assert_allclose(obs["hand"], motion.measurement(1.0))
+
+
+def test_synthetic_motion_carries_the_arm_of_its_demonstration():
+    from sandbox.data.synthetic.families import DIVERGING_VARIABILITY, diverging_specs
+    from sandbox.data.synthetic.generator import generate
+
+    motion = synthetic_motion("diverging", "left", np.random.default_rng(5))
+    spec = [s for s in diverging_specs() if s.name == "left"]
+    (demo,) = generate(spec, 1, np.random.default_rng(5), family="diverging",
+                       variability=DIVERGING_VARIABILITY, observe=("hand", "arm"))
+    assert set(motion.body) == {"arm"}  # no EMG: it is not simulated
+    np.testing.assert_array_equal(motion.body["arm"], demo.select("arm").human)
+    np.testing.assert_array_equal(motion.measured, demo.select("hand").human)
+    switch = synthetic_motion("diverging", "up", np.random.default_rng(1), switch_to="right")
+    assert switch.body["arm"].shape == (switch.times.size, 6)
+
+
+def test_recorded_replay_carries_the_causal_arm_and_emg(recorded_dir):
+    motion = recorded_motion(recorded_dir, "gummed_paper", 0, np.random.default_rng(0))
+    causal = load_trial(motion.source, task="gummed_paper", observe=("hand", "arm", "emg"),
+                        preprocess="causal")
+    np.testing.assert_array_equal(motion.body["arm"], causal.select("arm").human)
+    np.testing.assert_array_equal(motion.body["emg"], causal.select("emg").human)
+    np.testing.assert_array_equal(motion.measured, causal.select("hand").human)
+    assert np.isnan(motion.body["arm"]).any()  # only accepted tracker frames
+
+
+def test_recorded_trial_without_emg_columns_has_no_emg(recorded_dir, tmp_path):
+    import csv
+
+    source = recorded_trials(recorded_dir, "pencil_box")[0][1]
+    with open(source, newline="") as f:
+        rows = list(csv.reader(f))
+    keep = [i for i, name in enumerate(rows[0]) if not name.strip().startswith("emg")]
+    assert len(keep) < len(rows[0])
+    (tmp_path / "pencil_box").mkdir()
+    with open(tmp_path / "pencil_box" / source.name, "w", newline="") as f:
+        csv.writer(f).writerows([[r[i] for i in keep if i < len(r)] for r in rows])
+    motion = recorded_motion(tmp_path, "pencil_box", 0, np.random.default_rng(0))
+    full = recorded_motion(recorded_dir, "pencil_box", 0, np.random.default_rng(0))
+    assert set(motion.body) == {"arm"} and set(full.body) == {"arm", "emg"}
+    np.testing.assert_array_equal(motion.body["arm"], full.body["arm"])
+    assert np.isnan(motion.body_measurement("emg", 1.0)).all()
