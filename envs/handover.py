@@ -321,6 +321,7 @@ class BaxterHandoverEnv(gym.Env):
 
             self.viewer = Viewer(live=True, **self.viewer_options)
             self.viewer.add_simulation(self.sim)
+            self.viewer.add_tracked_arm(self.tracked_arm)
         elif new_episode:
             self.viewer.restart_recording()
             if self.viewer.overlay is not None:
@@ -371,6 +372,15 @@ class BaxterHandoverEnv(gym.Env):
             out[name] = np.clip(value, space.low, space.high) if valid else np.zeros_like(value)
             out[f"{name}_valid"] = np.array([valid], dtype=np.int8)
         return out
+
+    def tracked_arm(self) -> tuple[FloatArray, FloatArray]:
+        """What the tracker measures now: hand (3,) and arm (6,: elbow, shoulder) m, NaN if not.
+
+        Feeds the viewer's tracked arm (:meth:`sandbox.viz.Viewer.add_tracked_arm`).
+        """
+        if self.motion is None:
+            raise RuntimeError("tracked_arm: call reset() first")
+        return self.motion.measurement(self._t), self.motion.body_measurement("arm", self._t)
 
     @property
     def bullet_client(self):

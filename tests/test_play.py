@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import base64
 import json
 import os
 import re
@@ -13,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import umsgpack
 
 from sandbox.cli import main
 from sandbox.data.synthetic.base import HAND_START
@@ -264,6 +266,10 @@ def test_recorded_scenario_holds_the_trial_out(recorded_dir, tmp_path, capsys):
     summary, _ = _run(tmp_path, path, capsys)
     assert summary["task"] == "pencil_box" and summary["object"] == "box"
     assert "pencil_box" in summary["model_tasks"]
+    blobs = re.findall(r'^"([A-Za-z0-9+/=]+)"', (tmp_path / "replay.html").read_text(),
+                       flags=re.M)
+    animated = {a["path"] for a in umsgpack.unpackb(base64.b64decode(blobs[-1]))["animations"]}
+    assert any(p.startswith("/meshcat/bodies/tracked_arm/elbow") for p in animated)  # the arm
 
 
 BAD = [

@@ -13,7 +13,7 @@ The only package of the project that imports meshcat. Main entry points:
 Modules: :mod:`~sandbox.viz.collada`, :mod:`~sandbox.viz.meshes` and
 :mod:`~sandbox.viz.geometry` are numpy only; :mod:`~sandbox.viz.bodies` reads
 PyBullet; :mod:`~sandbox.viz.objects`, :mod:`~sandbox.viz.scene`,
-:mod:`~sandbox.viz.mirror`, :mod:`~sandbox.viz.overlays` and
+:mod:`~sandbox.viz.mirror`, :mod:`~sandbox.viz.overlays`, :mod:`~sandbox.viz.skeleton` and
 :mod:`~sandbox.viz.viewer` build meshcat commands; :mod:`~sandbox.viz.server`
 owns the live server process. Names below are imported lazily, so importing
 a numpy-only module does not load meshcat.
@@ -33,6 +33,7 @@ _EXPORTS = {
     "OverlayStyle": "sandbox.viz.overlays",
     "BodyMirror": "sandbox.viz.mirror",
     "Scene": "sandbox.viz.scene",
+    "TrackedArm": "sandbox.viz.skeleton",
     "LiveServer": "sandbox.viz.server",
     "load_mesh": "sandbox.viz.meshes",
 }

@@ -29,6 +29,7 @@ from sandbox.viz.meshes import DEFAULT_RESOLUTION
 from sandbox.viz.mirror import BodyMirror
 from sandbox.viz.scene import Scene
 from sandbox.viz.server import LiveServer
+from sandbox.viz.skeleton import TrackedArm
 
 #: Default camera position and the point it looks at, in the world (m).
 DEFAULT_CAMERA = (2.3, 1.1, 1.25)
@@ -80,7 +81,8 @@ class Viewer:
     scene : Scene
         The in-process scene and its recording.
     server : LiveServer or None
-    bodies : dict of str to BodyMirror
+    bodies : dict of str to BodyMirror or TrackedArm
+        What :meth:`update` redraws each frame.
     overlay : PredictionOverlay or None
         Set by :meth:`add_overlay`.
     """
@@ -99,7 +101,7 @@ class Viewer:
         self.record = bool(record)
         self.realtime = bool(realtime)
         self.resolution = resolution
-        self.bodies: dict[str, BodyMirror] = {}
+        self.bodies: dict[str, BodyMirror | TrackedArm] = {}
         self.overlay = None
         self.camera = camera
         self.fov = fov
@@ -183,6 +185,29 @@ class Viewer:
             options = {"links": sorted(links & drawn)} if BAXTER_LINK in links else {}
             added.append(self.add_body(sim.client, body, name, **options))
         return added
+
+    def add_tracked_arm(self, source, name: str = "tracked_arm", **options):
+        """Draw the tracked human arm under ``/meshcat/bodies/<name>``, redrawn by :meth:`update`.
+
+        Parameters
+        ----------
+        source : callable
+            Returns ``(hand, arm)`` now: tracked hand (3,) and arm (6,: elbow then
+            shoulder) m, NaN where not measured (hidden then), e.g.
+            ``env.unwrapped.tracked_arm``.
+        name : str
+        **options
+            Passed to :class:`~sandbox.viz.skeleton.TrackedArm` (``style``).
+
+        Returns
+        -------
+        TrackedArm
+            Also kept in :attr:`bodies` (removed by :meth:`remove_body`).
+        """
+        if name in self.bodies:
+            raise ValueError(f"name: a body named {name!r} is already mirrored")
+        self.bodies[name] = TrackedArm(self.vis["bodies"][name], source, **options)
+        return self.bodies[name]
 
     def remove_body(self, name: str) -> None:
         """Stop mirroring a body and remove it (hidden from then on in a recording)."""

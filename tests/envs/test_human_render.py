@@ -105,3 +105,43 @@ def test_server_stops_when_the_process_ends_without_close(tmp_path):
     parent, server = (int(v) for v in out.stdout.split("PIDS")[1].split())
     assert _wait_gone(server), "the meshcat server outlived its process"
     assert _servers_watching(parent) == []
+
+
+def _arm_track(viewer, part, prop):
+    return viewer.scene.timeline.tracks[f"/meshcat/bodies/tracked_arm/{part}"][prop]
+
+
+def test_the_tracked_arm_follows_the_observation_and_hides_without_one(human_env):
+    from sandbox.envs.sources import waypoint_motion
+
+    obs, _ = human_env.reset(seed=5, options={"task": "left"})
+    for _ in range(20):
+        obs, *_ = human_env.step(np.append(Q_HOME, -1.0))
+    viewer = human_env.unwrapped.viewer
+    assert obs["arm_valid"][0] == 1
+    arm = viewer.bodies["tracked_arm"]
+    assert all(arm.visible.values())
+    for part, dims in (("elbow", slice(0, 3)), ("shoulder", slice(3, 6))):
+        track = _arm_track(viewer, part, "position")
+        np.testing.assert_allclose(track[max(track)], obs["arm"][dims], atol=1e-6)
+    motion = waypoint_motion([0.0, 1.0], [[1.1, 0.0, 0.2], [0.8, 0.1, 0.2]],
+                             np.random.default_rng(0))
+    human_env.reset(seed=0, options={"motion": motion})  # scripted: no arm
+    human_env.step(np.append(Q_HOME, -1.0))
+    assert not any(arm.visible.values())
+    for part in arm.PARTS:
+        assert not any(_arm_track(viewer, part, "visible").values())
+        assert "position" not in viewer.scene.timeline.tracks[
+            f"/meshcat/bodies/tracked_arm/{part}"]  # nothing drawn at the origin
+
+
+def test_the_arm_shapes_survive_an_episode_that_ended_hidden(human_env, tmp_path):
+    human_env.reset(seed=0, options={"source": "teleop"})  # no arm: hidden to the end
+    human_env.step(np.append(Q_HOME, -1.0))
+    human_env.reset(seed=6)  # a new recording, with an arm
+    for _ in range(5):
+        human_env.step(np.append(Q_HOME, -1.0))
+    viewer = human_env.unwrapped.viewer
+    for part in viewer.bodies["tracked_arm"].PARTS:
+        assert viewer.scene.nodes[f"/meshcat/bodies/tracked_arm/{part}/shape"].object
+    assert all(viewer.bodies["tracked_arm"].visible.values())

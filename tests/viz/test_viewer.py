@@ -148,3 +148,21 @@ def test_restart_recording_begins_a_new_replay(baxter):
     viewer.restart_recording()
     assert not viewer.scene.recording and viewer.scene.timeline.n_frames == 0
     assert viewer.update(0.0) == 0 and viewer.scene.recording  # frame 0 is new again
+
+
+def test_tracked_arm_is_redrawn_by_update_and_removable():
+    state = {"arm": np.array([1.1, 0.1, 0.2, 1.35, 0.0, 0.33])}
+    viewer = Viewer(fps=10)
+    arm = viewer.add_tracked_arm(lambda: ([1.0, -0.15, 0.25], state["arm"]))
+    assert viewer.bodies["tracked_arm"] is arm
+    with pytest.raises(ValueError, match="already"):
+        viewer.add_tracked_arm(lambda: None)
+    assert viewer.update(0.0) == 4  # beads and segments, nothing else mirrored
+    state["arm"] = state["arm"] + 0.1
+    viewer.update(0.1)
+    track = viewer.scene.timeline.tracks["/meshcat/bodies/tracked_arm/elbow"]["position"]
+    np.testing.assert_allclose(track[1], [1.2, 0.2, 0.3])
+    state["arm"] = np.full(6, np.nan)  # e.g. a teleop episode
+    assert viewer.update(0.2) == 0 and not any(arm.visible.values())
+    viewer.remove_body("tracked_arm")
+    assert "tracked_arm" not in viewer.bodies
