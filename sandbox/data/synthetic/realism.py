@@ -197,9 +197,21 @@ def realism_stats(demos: Sequence[Demonstration]) -> dict[str, Any]:
     tasks = [d.task for d in demos]
     out["end_spread"] = _spread(ends[:, 1], tasks)
     out["start_spread"] = _spread(ends[:, 0], tasks)
-    out["median"] = {k: float(np.median(out[k])) for k in STATISTICS}
-    out["n"] = len(demos)
+    return _with_medians(out, STATISTICS, len(demos))
+
+
+def _with_medians(out: dict[str, Any], keys: Sequence[str], n: int) -> dict[str, Any]:
+    """``out`` (one array per statistic) with ``"median"`` of each of ``keys`` and ``"n"``."""
+    out["median"] = {k: float(np.median(out[k])) for k in keys}
+    out["n"] = n
     return out
+
+
+def _compare(synthetic, recorded, stats, keys: Sequence[str]) -> dict[str, dict[str, float]]:
+    """Medians of ``keys`` side by side; ``stats`` computes them from demonstrations."""
+    a = synthetic if isinstance(synthetic, Mapping) else stats(synthetic)
+    b = recorded if isinstance(recorded, Mapping) else stats(recorded)
+    return _table(a, b, keys)
 
 
 def compare_realism(
@@ -219,9 +231,7 @@ def compare_realism(
         ``{statistic: {"synthetic": median, "recorded": median, "ratio":
         synthetic / recorded}}`` for each name in :data:`STATISTICS`.
     """
-    a = synthetic if isinstance(synthetic, Mapping) else realism_stats(synthetic)
-    b = recorded if isinstance(recorded, Mapping) else realism_stats(recorded)
-    return _table(a, b, STATISTICS)
+    return _compare(synthetic, recorded, realism_stats, STATISTICS)
 
 
 def _table(a: Mapping[str, Any], b: Mapping[str, Any], keys: Sequence[str]
@@ -306,9 +316,7 @@ def arm_realism_stats(demos: Sequence[Demonstration]) -> dict[str, Any]:
                            if k != "shoulder_spread"}
     starts = np.array([r["shoulder_start"] for r in rows])
     out["shoulder_spread"] = _spread(starts, [d.task for d in demos])
-    out["median"] = {k: float(np.median(out[k])) for k in ARM_STATISTICS}
-    out["n"] = len(demos)
-    return out
+    return _with_medians(out, ARM_STATISTICS, len(demos))
 
 
 def compare_arm_realism(
@@ -329,9 +337,7 @@ def compare_arm_realism(
         ``{statistic: {"synthetic": median, "recorded": median, "ratio":
         synthetic / recorded}}`` for each name in :data:`ARM_STATISTICS`.
     """
-    a = synthetic if isinstance(synthetic, Mapping) else arm_realism_stats(synthetic)
-    b = recorded if isinstance(recorded, Mapping) else arm_realism_stats(recorded)
-    return _table(a, b, ARM_STATISTICS)
+    return _compare(synthetic, recorded, arm_realism_stats, ARM_STATISTICS)
 
 
 def format_realism(table: Mapping[str, Mapping[str, float]]) -> str:
