@@ -93,30 +93,81 @@ def window_metric(errors: dict[str, Sequence[float]], gamma: Sequence[float]) ->
 
 def bootstrap_ci(values: FloatArray, groups: FloatArray | None = None, *, n_boot: int = 1000,
                  level: float = 0.95, rng: np.random.Generator | None = None,
-                 statistic: Callable | None = None) -> tuple[float, float]:
+                 statistic: Callable | None = None,
+                 draws: list[np.ndarray] | None = None) -> tuple[float, float]:
     """Percentile bootstrap confidence interval of a mean (or ``statistic``).
 
     Resamples trials with replacement within each group (task), so a
     macro-average over tasks keeps its task weights.
+
+    Parameters
+    ----------
+    values : array_like, shape (n,)
+    groups : array_like, shape (n,), optional
+        Group (task) of each value; one group if omitted.
+    n_boot : int
+        Resamples.
+    level : float
+        Coverage of the interval.
+    rng : numpy.random.Generator, optional
+        Source of the resamples (default: seeded with 0).
+    statistic : callable, optional
+        ``statistic(values, groups) -> float`` of a resample; default the macro
+        mean (mean over groups of the group means), computed for all resamples at once.
+    draws : list of ndarray, optional
+        The resamples, as returned by :func:`within_group_draws` for these
+        ``groups``; pass them to reuse one set of resamples over many measures
+        (``rng`` and ``n_boot`` are then unused).
     """
     values = np.asarray(values, dtype=float)
     if values.size == 0:
         return (float("nan"), float("nan"))
-    rng = np.random.default_rng(0) if rng is None else rng
     groups = np.zeros(values.size, dtype=int) if groups is None else np.asarray(groups)
-    stat = statistic or _macro_mean
-    labels = np.unique(groups)
-    idx = [np.flatnonzero(groups == g) for g in labels]
-    samples = np.empty(n_boot)
-    for b in range(n_boot):
-        pick = np.concatenate([rng.choice(i, size=i.size, replace=True) for i in idx])
-        samples[b] = stat(values[pick], groups[pick])
+    if draws is None:
+        rng = np.random.default_rng(0) if rng is None else rng
+        draws = within_group_draws(groups, n_boot, rng)
+    if statistic is None:
+        samples = macro_mean_samples(values, draws)
+    else:
+        picks = np.concatenate(draws, axis=1)
+        samples = np.array([statistic(values[p], groups[p]) for p in picks])
     lo, hi = np.quantile(samples, [(1 - level) / 2, (1 + level) / 2])
     return float(lo), float(hi)
 
 
-def _macro_mean(values: FloatArray, groups: FloatArray) -> float:
-    return float(np.mean([values[groups == g].mean() for g in np.unique(groups)]))
+def within_group_draws(groups: Sequence, n_boot: int,
+                       rng: np.random.Generator) -> list[np.ndarray]:
+    """Bootstrap resamples within each group, one index matrix per group.
+
+    Parameters
+    ----------
+    groups : sequence, shape (n,)
+        Group (task) of each trial.
+    n_boot : int
+        Resamples.
+    rng : numpy.random.Generator
+
+    Returns
+    -------
+    list of ndarray, each shape (n_boot, n_g)
+        For each group in sorted order, the indices (into ``groups``) drawn with
+        replacement among that group's members. The draws are made resample by
+        resample and group by group, so the same ``rng`` state always gives the
+        same resamples whatever the values later measured on them.
+    """
+    groups = np.asarray(groups)
+    members = [np.flatnonzero(groups == g) for g in np.unique(groups)]
+    draws = [np.empty((n_boot, m.size), dtype=int) for m in members]
+    for b in range(n_boot):
+        for d, m in zip(draws, members):
+            d[b] = rng.choice(m, size=m.size, replace=True)
+    return draws
+
+
+def macro_mean_samples(values: FloatArray, draws: list[np.ndarray]) -> FloatArray:
+    """Macro mean (mean over groups of each group's mean) of every resample, shape (n_boot,)."""
+    values = np.asarray(values, dtype=float)
+    return np.stack([values[d].mean(axis=1) for d in draws], axis=1).mean(axis=1)
 
 
 def resample_within(groups: Sequence, n_boot: int, rng: np.random.Generator) -> np.ndarray:

@@ -28,12 +28,23 @@ def gamma_label(gamma) -> str:
     return ",".join(f"{g:.2f}" for g in gamma)
 
 
-def _section(trials: list[dict], tasks: list[str], get, keys, n_boot: int) -> dict:
+def _section(trials: list[dict], tasks: list[str], get, keys, n_boot: int,
+             draws_cache: dict | None = None) -> dict:
+    """Per task and over tasks ("mean"): each measure's mean and bootstrap interval.
+
+    Every measure of one row set is resampled with the same draws (a fresh
+    ``default_rng(0)`` per set, as each measure had before); ``draws_cache``
+    keeps them across sections that share the row set.
+    """
+    cache = {} if draws_cache is None else draws_cache
     labels = np.array([r["task"] for r in trials])
     out: dict = {}
     for task in tasks + ["mean"]:
         rows = trials if task == "mean" else [r for r, lab in zip(trials, labels) if lab == task]
         groups = np.array([r["task"] for r in rows])
+        key_ = (task, groups.tobytes(), n_boot)
+        if key_ not in cache:
+            cache[key_] = metrics.within_group_draws(groups, n_boot, np.random.default_rng(0))
         entry = {}
         for key in keys:
             values = np.array([get(r)[key] for r in rows], dtype=float)
@@ -41,8 +52,10 @@ def _section(trials: list[dict], tasks: list[str], get, keys, n_boot: int) -> di
                 entry[key] = float(np.mean([values[groups == g].mean() for g in tasks]))
             else:
                 entry[key] = float(values.mean())
-            lo, hi = metrics.bootstrap_ci(values, groups, n_boot=n_boot,
-                                          rng=np.random.default_rng(0))
+            if values.size:
+                lo, hi = metrics.bootstrap_ci(values, groups, draws=cache[key_])
+            else:
+                lo, hi = float("nan"), float("nan")
             entry[f"{key}_ci"] = [lo, hi]
         out[task] = entry
     return out
@@ -52,6 +65,7 @@ def build_report(trials: list[dict], config: dict, dataset: str, runtime_s: floa
                  n_boot: int = 1000) -> dict:
     """The report dictionary (see the module docstring)."""
     tasks = list(dict.fromkeys(r["task"] for r in trials))
+    draws: dict = {}
     ratios = [f"{f:.1f}" for f in config["ratios"]]
     windows = [f"{w:.1f}" for w in config["windows"]]
     report = {
@@ -60,14 +74,14 @@ def build_report(trials: list[dict], config: dict, dataset: str, runtime_s: floa
         "n_trials": {t: sum(r["task"] == t for r in trials) for t in tasks},
         "config": config,
         "static": {f: _section(trials, tasks, lambda r, f=f: r["static"][f],
-                               MEASURES + ("recognition", "nll", "coverage"), n_boot)
+                               MEASURES + ("recognition", "nll", "coverage"), n_boot, draws)
                    for f in ratios},
         "dynamic": {w: _section(trials, tasks, lambda r, w=w: r["dynamic"][w],
                                 MEASURES + ("recognition", "time_to_correct", "nll",
-                                            "coverage"), n_boot)
+                                            "coverage"), n_boot, draws)
                     for w in windows},
         "oracle": _section(trials, tasks, lambda r: r["oracle"], MEASURES + ("nll", "coverage"),
-                           n_boot),
+                           n_boot, draws),
     }
     report["window_metric"], report["best_window"] = _window_metric(report, windows)
     report["differences"] = {

@@ -60,3 +60,47 @@ def test_bootstrap_interval_contains_the_mean_and_shrinks_with_n():
     groups = np.repeat([0, 1], 15)
     lo3, hi3 = metrics.bootstrap_ci(np.r_[np.zeros(15), np.ones(15)], groups)
     assert lo3 == hi3 == 0.5        # macro-average keeps task weights exactly
+
+
+def _loop_bootstrap(values, groups, n_boot, rng):
+    """The per-resample reference: draw, then take the macro mean, one resample at a time."""
+    members = [np.flatnonzero(groups == g) for g in np.unique(groups)]
+    samples = []
+    for _ in range(n_boot):
+        pick = np.concatenate([rng.choice(m, size=m.size, replace=True) for m in members])
+        v, g = values[pick], groups[pick]
+        samples.append(np.mean([v[g == label].mean() for label in np.unique(g)]))
+    return tuple(np.quantile(samples, [(1 - 0.95) / 2, (1 + 0.95) / 2]))
+
+
+def test_vectorised_bootstrap_equals_the_per_resample_loop_exactly():
+    rng = np.random.default_rng(5)
+    groups = np.array(["b"] * 7 + ["a"] * 12 + ["c"] * 3)
+    rng.shuffle(groups)
+    values = rng.normal(size=groups.size)
+    expected = _loop_bootstrap(values, groups, 400, np.random.default_rng(9))
+    assert metrics.bootstrap_ci(values, groups, n_boot=400,
+                                rng=np.random.default_rng(9)) == expected
+    draws = metrics.within_group_draws(groups, 400, np.random.default_rng(9))
+    assert metrics.bootstrap_ci(values, groups, draws=draws) == expected
+    # a custom statistic sees the same resamples
+    custom = metrics.bootstrap_ci(values, groups, draws=draws,
+                                  statistic=lambda v, g: float(np.mean([v[g == x].mean()
+                                                                        for x in np.unique(g)])))
+    np.testing.assert_allclose(custom, expected, rtol=0, atol=1e-15)
+
+
+def test_report_sections_reuse_draws_without_changing_intervals():
+    from sandbox.eval.report import _section
+
+    rng = np.random.default_rng(1)
+    trials = [{"task": t, "m": {"x": float(rng.normal()), "y": float(rng.normal())}}
+              for t in ["p"] * 6 + ["q"] * 4]
+    out = _section(trials, ["p", "q"], lambda r: r["m"], ("x", "y"), 200)
+    for task in ("p", "q", "mean"):
+        rows = [r for r in trials if task in ("mean", r["task"])]
+        groups = np.array([r["task"] for r in rows])
+        for key in ("x", "y"):
+            values = np.array([r["m"][key] for r in rows])
+            expected = _loop_bootstrap(values, groups, 200, np.random.default_rng(0))
+            assert tuple(out[task][f"{key}_ci"]) == expected
