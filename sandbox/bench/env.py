@@ -7,10 +7,13 @@
   motor targets are set and the physics advanced by the same number of
   substeps, nothing else (no observation, no hand motion, no reward).
 * ``env_raw_ratio``: their ratio (target >= 0.5).
+* ``env_v0_steps_per_s``: the same random stepping of the legacy hand-only id
+  (``sandbox/BaxterHandoverDiverging-v0``), and ``env_v1_v0_ratio`` the cost of
+  observing the arm and EMG (target >= 0.9).
 * ``policy_steps_per_s``: steps per second with the dynamic policy
   (:class:`sandbox.policies.IProMPPolicy`, ``dow_t = 0.1`` s) choosing the actions.
 
-Env and raw stepping alternate in blocks and each figure is the median over
+The -v1, -v0 and raw stepping alternate in blocks and each figure is the median over
 blocks, so both are measured in the same run under the same load. Run with
 ``OPENBLAS_NUM_THREADS=1``.
 """
@@ -22,14 +25,16 @@ import time
 import numpy as np
 
 ENV_ID = "sandbox/BaxterHandoverDiverging-v1"
+#: The legacy id with the hand-only observation, timed beside ``ENV_ID``.
+LEGACY_ENV_ID = "sandbox/BaxterHandoverDiverging-v0"
 
 
-def _make_env():
+def _make_env(env_id: str = ENV_ID):
     import gymnasium as gym
 
     import sandbox.envs  # noqa: F401  (registers the environments)
 
-    return gym.make(ENV_ID)
+    return gym.make(env_id)
 
 
 def _env_block(env, n_steps: int, rng: np.random.Generator) -> float:
@@ -65,24 +70,29 @@ def _raw_block(env, n_steps: int, rng: np.random.Generator) -> float:
 
 
 def env_vs_raw(n_steps: int = 200, blocks: int = 5, seed: int = 0) -> dict[str, float]:
-    """Median env and raw PyBullet steps per second over alternating blocks, and their ratio."""
-    env = _make_env()
+    """Median -v1, -v0 and raw PyBullet steps per second over alternating blocks, and ratios."""
+    env, legacy = _make_env(), _make_env(LEGACY_ENV_ID)
     rng = np.random.default_rng(seed)
     try:
-        env.reset(seed=seed)
-        _env_block(env, 20, rng)  # warm up
-        env_times, raw_times = [], []
+        for e in (env, legacy):
+            e.reset(seed=seed)
+            _env_block(e, 20, rng)  # warm up
+        env_times, legacy_times, raw_times = [], [], []
         for _ in range(blocks):
             env_times.append(_env_block(env, n_steps, rng))
+            legacy_times.append(_env_block(legacy, n_steps, rng))
             env.reset()
             raw_times.append(_raw_block(env, n_steps, rng))
             env.reset()
     finally:
         env.close()
+        legacy.close()
     env_rate = n_steps / float(np.median(env_times))
+    legacy_rate = n_steps / float(np.median(legacy_times))
     raw_rate = n_steps / float(np.median(raw_times))
     return {"env_steps_per_s": env_rate, "raw_pybullet_steps_per_s": raw_rate,
-            "env_raw_ratio": env_rate / raw_rate}
+            "env_raw_ratio": env_rate / raw_rate, "env_v0_steps_per_s": legacy_rate,
+            "env_v1_v0_ratio": env_rate / legacy_rate}
 
 
 def policy_steps_per_s(n_episodes: int = 3, dow_t: float = 0.1, seed: int = 0) -> float:
