@@ -8,7 +8,9 @@ observed modalities (every one its model has and the environments carry:
 :class:`~sandbox.core.DynamicPredictor` and steers the arm along the blended
 plan; :class:`StaticPolicy` does the same with the static baseline
 (:class:`~sandbox.core.StaticPredictor`, one prediction after a fraction of
-the motion). A modality missing at a step (NaN, e.g. no EMG in a synthetic
+the motion). :class:`RecordedRobotPolicy` replays what the real robot did in a
+recorded trial: the ceiling a predictor of the recorded robot can reach in a
+replay of that trial. A modality missing at a step (NaN, e.g. no EMG in a synthetic
 episode) is marginalised by the predictor, not zero-filled.
 
 From the plan to an action, at control period ``dt``:
@@ -284,3 +286,70 @@ def _observed(model: IProMP, observe) -> tuple[tuple[str, ...] | None, bool]:
                          f"{list(ENV_MODALITIES)}, got {list(names)}")
     return names, True
 
+
+class RecordedRobotPolicy:
+    """The recorded robot's own motion as a controller: the reference for recorded replays.
+
+    Commands, at each step, the robot's recorded joint positions at the next
+    control time (linear interpolation; the last recorded pose after the
+    trial's end), through the same speed limit and gripper rule as
+    :class:`IProMPPolicy`. In a replay of the same trial it shows how often the
+    motion the predictors learn from would itself hand over in the simulated
+    scene, where the object rides at the tracked hand.
+
+    Parameters
+    ----------
+    times : array_like, shape (T,)
+        The trial's sample times (s); the episode's time 0 is ``times[0]``.
+    robot : array_like, shape (T, 7)
+        Recorded left-arm joint positions (rad).
+    task : str
+        The trial's task (reported as the recognised task).
+    control_hz, close_radius, max_velocity
+        As for :class:`IProMPPolicy`.
+    """
+
+    def __init__(self, times, robot, task: str, *, control_hz: float = 50.0,
+                 close_radius: float = 0.045, max_velocity=None) -> None:
+        from sandbox.core.validation import check_times
+        from sandbox.robot import BaxterKinematics
+
+        t = check_times(times, "times")
+        self._times = t - t[0]
+        self._robot = check_array(robot, "robot", 2, shape=(t.size, 7))
+        if not isinstance(task, str) or not task:
+            raise ValueError(f"task: expected a task name, got {task!r}")
+        self.task = task
+        self.dt = 1.0 / check_positive(control_hz, "control_hz")
+        self.close_radius = check_positive(close_radius, "close_radius")
+        limits = MAX_VELOCITY if max_velocity is None else max_velocity
+        self.max_velocity = check_array(limits, "max_velocity", 1, shape=(7,))
+        check_positive(float(self.max_velocity.min()), "max_velocity")
+        self.kinematics = BaxterKinematics()
+        self.reset()
+
+    @classmethod
+    def from_demo(cls, demo, **options) -> RecordedRobotPolicy:
+        """The policy replaying a :class:`~sandbox.data.Demonstration`'s robot."""
+        return cls(demo.times, demo.robot, demo.task, **options)
+
+    def reset(self) -> None:
+        """Start the trial again."""
+        self._target: FloatArray | None = None
+
+    @property
+    def task_posterior(self) -> dict[str, float]:
+        """Certain of the recorded task."""
+        return {self.task: 1.0}
+
+    def __call__(self, obs: Mapping[str, FloatArray]) -> FloatArray:
+        """The action (8,): the recorded pose at ``t + dt`` (speed-limited), gripper command."""
+        t = float(np.asarray(obs["time"]).reshape(-1)[0])
+        q = check_array(obs["q"], "obs['q']", 1, shape=(7,))
+        goal = np.array([np.interp(t + self.dt, self._times, joint) for joint in self._robot.T])
+        previous = q if self._target is None else self._target
+        step = self.max_velocity * self.dt
+        self._target = previous + np.clip(goal - previous, -step, step)
+        tip = self.kinematics.fk(q, link="left_gripper")
+        close = np.linalg.norm(tip - np.asarray(obs["object"], dtype=float)) < self.close_radius
+        return np.append(self._target, 1.0 if close else -1.0)

@@ -11,9 +11,12 @@ scenario           what the human does
 =================  =========================================================================
 
 Policies: ``"dynamic"`` (:class:`~sandbox.policies.IProMPPolicy`, window
-``dow_t``), ``"static"`` (:class:`~sandbox.policies.StaticPolicy`, ``ratio``)
-or any callable ``model -> policy``. Synthetic scenarios use a model fitted on
-seeded synthetic demonstrations of the family (:func:`sandbox.policies.fit_family_model`).
+``dow_t``), ``"static"`` (:class:`~sandbox.policies.StaticPolicy`, ``ratio``),
+``"recorded_robot"`` (``recorded`` scenario only: the trial's own recorded robot
+motion, :class:`~sandbox.policies.RecordedRobotPolicy`, the reference a
+predictor of it can reach) or any callable ``model -> policy``. Synthetic
+scenarios use a model fitted on seeded synthetic demonstrations of the family
+(:func:`sandbox.policies.fit_family_model`).
 ``observe`` chooses the modalities the policy feeds (``hand``, ``arm``,
 ``emg``); in the ``recorded`` scenario the model is fitted on them too.
 
@@ -45,7 +48,7 @@ SCENARIOS = {
     "intent_switch": ("sandbox/BaxterHandoverDiverging-v1", "diverging"),
     "recorded": ("sandbox/BaxterHandover-v1", None),
 }
-POLICIES = ("dynamic", "static")
+POLICIES = ("dynamic", "static", "recorded_robot")
 
 
 @dataclass(frozen=True)
@@ -140,6 +143,9 @@ def run_scenario(scenario: str = "diverging", policy: str | Callable = "dynamic"
         check_choice(policy, "policy", POLICIES)
     if isinstance(n_episodes, bool) or int(n_episodes) != n_episodes or n_episodes < 1:
         raise ValueError(f"n_episodes: expected an integer >= 1, got {n_episodes!r}")
+    if policy == "recorded_robot" and scenario != "recorded":
+        raise ValueError(f"policy: 'recorded_robot' replays a recorded trial's robot, expected "
+                         f"scenario='recorded', got {scenario!r}")
     if (scenario == "recorded") != (data is not None):
         raise ValueError("data: expected the recorded set's folder for the 'recorded' "
                          f"scenario and nothing otherwise, got scenario={scenario!r}, "
@@ -159,7 +165,8 @@ def run_scenario(scenario: str = "diverging", policy: str | Callable = "dynamic"
 
         env = gym.make(SCENARIOS[scenario][0])
     try:
-        return [run_episode(env, make_policy(m), s, opts) for s, m, opts in episodes]
+        return [run_episode(env, make_policy(m, demo), s, opts)
+                for s, m, opts, demo in episodes]
     finally:
         if own_env:
             env.close()
@@ -215,17 +222,20 @@ def _check_observe(observe) -> tuple[str, ...] | None:
 
 
 def _policy_factory(policy, dow_t: float, ratio: float, observe) -> Callable:
+    """``(model, held-out demo or None) -> policy``."""
     if callable(policy):
-        return policy
-    from sandbox.policies import IProMPPolicy, StaticPolicy
+        return lambda model, demo: policy(model)
+    from sandbox.policies import IProMPPolicy, RecordedRobotPolicy, StaticPolicy
 
     if policy == "dynamic":
-        return lambda model: IProMPPolicy(model, dow_t=dow_t, observe=observe)
-    return lambda model: StaticPolicy(model, ratio=ratio, observe=observe)
+        return lambda model, demo: IProMPPolicy(model, dow_t=dow_t, observe=observe)
+    if policy == "recorded_robot":
+        return lambda model, demo: RecordedRobotPolicy.from_demo(demo)
+    return lambda model, demo: StaticPolicy(model, ratio=ratio, observe=observe)
 
 
 def _episodes(scenario, n, seed, data, model, options, observe):
-    """(seed, model, reset options) of every episode."""
+    """(seed, model, reset options, held-out demo or None) of every episode."""
     if scenario == "recorded":
         return _recorded_episodes(Path(data), n, seed, options, observe)
     from sandbox.policies import fit_family_model
@@ -239,7 +249,7 @@ def _episodes(scenario, n, seed, data, model, options, observe):
             rng = np.random.default_rng(seed + i)
             a, b = rng.choice(list(model.tasks), size=2, replace=False)
             opts.update(task=str(a), switch_to=str(b), switch_phase=float(rng.uniform(0.3, 0.6)))
-        out.append((seed + i, model, opts))
+        out.append((seed + i, model, opts, None))
     return out
 
 
@@ -261,5 +271,5 @@ def _recorded_episodes(root: Path, n, seed, options, observe):
         model = IProMP().fit([d for j, d in enumerate(demos) if j != int(k)])
         opts = {**options, "source": str(root), "task": held_out.task,
                 "trial": Path(held_out.source).name}
-        out.append((seed + i, model, opts))
+        out.append((seed + i, model, opts, held_out))
     return out

@@ -13,6 +13,7 @@ from sandbox.envs.sources import synthetic_motion
 from sandbox.policies import (
     MAX_VELOCITY,
     IProMPPolicy,
+    RecordedRobotPolicy,
     StaticPolicy,
     fit_family_model,
     modality_values,
@@ -197,3 +198,32 @@ def test_explicit_observe_is_checked(arm_model, model):
     obs = next(observations())
     with pytest.raises(ValueError, match="'arm' entry"):
         policy(obs)  # a v0 observation lacks the arm it must observe
+
+
+def test_recorded_robot_policy_follows_the_recording_within_the_speed_limits():
+    times = np.linspace(10.0, 12.0, 21)                  # absolute times: the trial starts at 0
+    robot = Q_HOME + np.outer(np.linspace(0.0, 0.2, 21), np.ones(7))   # 0.1 rad/s per joint
+    policy = RecordedRobotPolicy(times, robot, "pencil_box")
+    obs = next(observations(q=robot[0]))
+    tip = BaxterKinematics().fk(robot[0], link="left_gripper")
+    first = policy({**obs, "time": np.array([0.0]), "object": tip + [0.2, 0.0, 0.0]})
+    np.testing.assert_allclose(first[:7], Q_HOME + 0.1 * policy.dt, atol=1e-12)
+    assert first[7] == -1.0 and policy.task == "pencil_box"
+    assert policy.task_posterior == {"pencil_box": 1.0}
+    policy.reset()
+    far = policy({**obs, "time": np.array([5.0]), "object": tip + [0.01, 0.0, 0.0]})
+    # past the end: the last recorded pose, reached no faster than the speed limit allows
+    np.testing.assert_allclose(far[:7], robot[0] + np.minimum(0.2, MAX_VELOCITY * policy.dt))
+    assert far[7] == 1.0
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"times": [0.0, 0.0]}, "increasing"),
+    ({"robot": np.zeros((2, 6))}, "robot"),
+    ({"task": ""}, "task"),
+    ({"close_radius": -1.0}, "close_radius"),
+])
+def test_recorded_robot_policy_refuses_bad_arguments(kwargs, match):
+    args = {"times": [0.0, 1.0], "robot": np.zeros((2, 7)), "task": "t", **kwargs}
+    with pytest.raises(ValueError, match=match):
+        RecordedRobotPolicy(args.pop("times"), args.pop("robot"), args.pop("task"), **args)

@@ -98,6 +98,15 @@ def test_recorded_scenario_replays_a_held_out_trial(recorded_dir):
                                  "screw_driver")
 
 
+def test_recorded_robot_replays_the_trials_own_robot(recorded_dir):
+    (result,) = run_scenario("recorded", "recorded_robot", n_episodes=1, seed=0,
+                             data=recorded_dir)
+    dynamic = run_scenario("recorded", "dynamic", n_episodes=1, seed=0, data=recorded_dir)[0]
+    assert result.options == dynamic.options           # the same held-out trial
+    assert {task for _, task in result.recognised} == {result.task}
+    assert np.isfinite(result.min_distance) and result.steps > 0
+
+
 def test_summarize():
     def episode(success, time, distance, task, recognised):
         return EpisodeResult(0, task, "box", success, time, distance, distance,
@@ -118,6 +127,7 @@ def test_summarize():
     ({"n_episodes": 2.5}, "n_episodes"),
     ({"scenario": "recorded"}, "data"),
     ({"data": "/somewhere"}, "data"),
+    ({"policy": "recorded_robot"}, "scenario='recorded'"),
 ])
 def test_bad_arguments_are_refused(kwargs, match):
     with pytest.raises(ValueError, match=match):
@@ -143,9 +153,11 @@ def test_observe_chooses_the_modalities_and_the_synthetic_model(diverging_env):
 def test_recorded_model_is_fitted_on_the_observed_modalities(recorded_dir):
     from sandbox.scenarios import _recorded_episodes
 
-    ((_, model, opts),) = _recorded_episodes(recorded_dir, 1, 0, {}, ("hand", "arm", "emg"))
+    ((_, model, opts, demo),) = _recorded_episodes(recorded_dir, 1, 0, {},
+                                                   ("hand", "arm", "emg"))
     assert [m.name for m in model.modalities] == ["hand", "arm", "emg"]
-    ((_, hand_model, _),) = _recorded_episodes(recorded_dir, 1, 0, {}, None)
+    assert demo.task == opts["task"] and demo.source.endswith(opts["trial"])
+    ((_, hand_model, _, _),) = _recorded_episodes(recorded_dir, 1, 0, {}, None)
     assert [m.name for m in hand_model.modalities] == ["hand"]
     (result,) = run_scenario("recorded", "static", n_episodes=1, seed=0, data=recorded_dir,
                              observe="hand,arm,emg")
