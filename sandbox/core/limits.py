@@ -20,8 +20,72 @@ MAX_DURATION_S = 60.0
 #: motion of human duration means the times are not in seconds.
 MIN_MEDIAN_DT_S = 1e-4
 
+#: Latest time a predictor accepts (s since the motion started): observations,
+#: updates. A closed-loop episode (scenario files allow up to 600 s) stays
+#: far below it; absolute clock timestamps (~1.7e9 s) do not.
+#: Raise it with the predictors' ``max_time=``.
+MAX_TIME_S = 600.0
 
-def check_duration(times: ArrayLike, name: str = "times", max_duration: float = MAX_DURATION_S) -> float:
+#: Most basis functions per dim (N). The method uses 15-31; each likelihood
+#: factorisation is N x N per speed candidate.
+MAX_N_BASIS = 100
+
+#: Most speed candidates per task (``n_candidates``; default 50).
+MAX_CANDIDATES = 1000
+
+#: Most floats a predictor's speed lattice may need for its likelihood
+#: statistics: C durations x (N^2 per modality + K (R+1)^2), with K tasks of
+#: rank <= R (256 MiB of float64). The default models need about 1e5.
+MAX_LATTICE_FLOATS = 2**25
+
+#: Most knots of a predictor's plan (its resolution ``dt`` over its length):
+#: 1000 s at the default 0.01 s. Memory grows with Q^2 per knot (40 MB for
+#: Baxter's 7 joints).
+MAX_PLAN_STEPS = 100_000
+
+#: Most observations a predictor keeps (after ``subsample``) before ``reset()``:
+#: a minute at 333 kept rows per second. A batch update allocates
+#: C x kept x N floats.
+MAX_OBSERVATIONS = 20_000
+
+#: Largest ``subsample`` (keep 1 of this many observations).
+MAX_SUBSAMPLE = 10_000
+
+#: Most human dims P and most robot dims Q of a model.
+MAX_DIMS = 64
+
+#: Largest magnitude of any demonstration value (m, rad or raw signal units):
+#: no such quantity comes near it, and sums of squares of millions of samples
+#: stay far from overflow.
+MAX_ABS_VALUE = 1e9
+
+#: A task's demonstrations must differ: the largest standard deviation of
+#: their weights (normalised units) must exceed this fraction of the weights'
+#: largest magnitude. Duplicated, constant or all-zero demos fall far below it
+#: (round-off, ~1e-9 at most); demos that differ only by their duration and
+#: sampling already reach ~1e-3.
+MIN_RELATIVE_SPREAD = 1e-6
+
+#: Margin (m) around the range a model's position modalities were fitted on
+#: (its tasks' mean +/- 3 std over the motion): an observation farther out is
+#: rejected (counted, skipped like a NaN).
+POSITION_MARGIN_M = 10.0
+
+#: Same margin for signal modalities, in their normalised units: 1e3 x the
+#: training demos' standard deviation of the signal.
+SIGNAL_MARGIN = 1e3
+
+#: Model files (``.npz``): largest file, largest array member (uncompressed),
+#: largest metadata member, most archive members, most tasks.
+MAX_MODEL_FILE_BYTES = 256 * 2**20
+MAX_MEMBER_BYTES = 64 * 2**20
+MAX_METADATA_BYTES = 2**20
+MAX_MEMBERS = 1000
+MAX_TASKS = 100
+
+
+def check_duration(times: ArrayLike, name: str = "times",
+                   max_duration: float = MAX_DURATION_S) -> float:
     """Return the span of increasing ``times`` (s) after checking it is plausible.
 
     Parameters
@@ -64,3 +128,33 @@ def _unit_hint(span: float, dt: float) -> str:
     if np.isfinite(dt) and dt > 1.0:
         return " (samples further apart than 1 s: absolute or unscaled timestamps?)"
     return ""
+
+
+def check_time(t, name: str = "t", max_time: float = MAX_TIME_S) -> float:
+    """Return ``t`` as a float after checking it is a finite time within ``max_time`` of 0 (s).
+
+    Parameters
+    ----------
+    t : float
+        Time since the motion started (s).
+    name : str
+        Name used in error messages.
+    max_time : float
+        Largest magnitude accepted (s).
+
+    Raises
+    ------
+    ValueError
+        If ``t`` is not a finite real number or ``|t| > max_time``; the message
+        says when ``t`` looks like an absolute (clock) timestamp.
+    """
+    from sandbox.core.validation import check_number
+
+    v = check_number(t, name)
+    if abs(v) > max_time:
+        hint = (" (looks like an absolute clock timestamp: pass the time since the motion "
+                "started)" if abs(v) > 1e8 else "")
+        raise ValueError(f"{name}: expected a time since the motion started of at most "
+                         f"{max_time:g} s, got {v:g} s{hint}; raise max_time= if this is "
+                         f"really seconds since the start")
+    return v
