@@ -75,10 +75,25 @@ POSITION_MARGIN_M = 10.0
 #: training demos' standard deviation of the signal.
 SIGNAL_MARGIN = 1e3
 
-#: Model files (``.npz``): largest file, largest array member (uncompressed),
+#: Smallest observation noise standard deviation (normalised units; 1e-12 m
+#: for positions): the floor of the fit's noise floors, and of a model file's
+#: noise (its square). Finer noise is not physical and would make the
+#: likelihood overflow.
+MIN_NOISE_STD = 1e-12
+
+#: Largest relative hyperparameter (``regularizer``, ``noise_scale``, ``ridge``).
+MAX_RELATIVE = 1e6
+
+#: Largest magnitude of any number in a model file (weights, regularisers,
+#: noise): far above what a fit of values within ``MAX_ABS_VALUE`` makes, far
+#: below where the likelihood's squares overflow.
+MAX_MODEL_VALUE = 1e30
+
+#: Model files (``.npz``): largest file, largest array member (uncompressed,
+#: as its header and the archive declare it, checked before it is read),
 #: largest metadata member, most archive members, most tasks.
-MAX_MODEL_FILE_BYTES = 256 * 2**20
-MAX_MEMBER_BYTES = 64 * 2**20
+MAX_MODEL_FILE_BYTES = 64 * 2**20
+MAX_MEMBER_BYTES = 32 * 2**20
 MAX_METADATA_BYTES = 2**20
 MAX_MEMBERS = 1000
 MAX_TASKS = 100

@@ -68,7 +68,7 @@ from sandbox.core.demos import (
     check_spread,
     modalities_of,
 )
-from sandbox.core.limits import MAX_DURATION_S
+from sandbox.core.limits import MAX_ABS_VALUE, MAX_DURATION_S, MAX_RELATIVE, MIN_NOISE_STD
 from sandbox.core.modality import Modality
 from sandbox.core.promp import WeightDistribution, fit_weights
 from sandbox.core.validation import FloatArray, check_number, check_positive
@@ -208,7 +208,8 @@ class IProMP:
         the handover happens; normalised ones represent constants exactly.
     regularizer : float
         Relative size of the weight-covariance regulariser (module docstring);
-        default chosen by leave-one-out on the recorded handovers.
+        default chosen by leave-one-out on the recorded handovers. At most
+        :data:`~sandbox.core.limits.MAX_RELATIVE`, as ``noise_scale`` and ``ridge``.
     noise_scale : float
         Multiplies the estimated observation noise :math:`\\Sigma_y`.
     noise_floor : float
@@ -222,7 +223,9 @@ class IProMP:
         Lower bound of :math:`\\sigma_p` of signal modalities, in normalised units
         (fractions of the training demos' standard deviation).
     noise_floors : mapping of str to float, optional
-        Per-modality floors (in the modality's normalised units) overriding the two above.
+        Per-modality floors (in the modality's normalised units) overriding the two
+        above. Every floor is in [:data:`~sandbox.core.limits.MIN_NOISE_STD`,
+        :data:`~sandbox.core.limits.MAX_ABS_VALUE`].
     settle_tol : float or None
         A demonstration's motion ends once the robot stays within this distance
         (rad) of its final configuration (:func:`motion_end`) ...
@@ -277,18 +280,18 @@ class IProMP:
         max_duration: float = MAX_DURATION_S,
     ) -> None:
         self.basis = GaussianBasis(n_basis, basis_width, basis_margin, normalized_basis)
-        self.regularizer = check_positive(regularizer, "regularizer")
-        self.noise_scale = check_positive(noise_scale, "noise_scale")
-        self.noise_floor = check_positive(noise_floor, "noise_floor")
-        self.signal_floor = check_positive(signal_floor, "signal_floor")
-        self.noise_floors = {k: check_positive(v, f"noise_floors[{k!r}]")
+        self.regularizer = check_positive(regularizer, "regularizer", high=MAX_RELATIVE)
+        self.noise_scale = check_positive(noise_scale, "noise_scale", high=MAX_RELATIVE)
+        self.noise_floor = _check_floor(noise_floor, "noise_floor")
+        self.signal_floor = _check_floor(signal_floor, "signal_floor")
+        self.noise_floors = {k: _check_floor(v, f"noise_floors[{k!r}]")
                              for k, v in _mapping(noise_floors, "noise_floors").items()}
         self.settle_tol = (None if settle_tol is None
                            else check_positive(settle_tol, "settle_tol"))
         self.arrive_tol = (None if arrive_tol is None
                            else check_positive(arrive_tol, "arrive_tol"))
         self.min_alpha_std = check_positive(min_alpha_std, "min_alpha_std")
-        self.ridge = check_positive(ridge, "ridge", allow_zero=True)
+        self.ridge = check_positive(ridge, "ridge", allow_zero=True, high=MAX_RELATIVE)
         self.max_duration = check_positive(max_duration, "max_duration")
         self._prior_spec = (None if priors is None else
                             {k: check_number(v, f"priors[{k!r}]", low=0.0)
@@ -501,6 +504,15 @@ def _scale(modalities: Sequence[Modality], moments: FloatArray) -> FloatArray:
                              f"in every training demonstration; nothing to normalise by")
         scale[dims] = std
     return scale
+
+
+def _check_floor(value, name: str) -> float:
+    """A noise floor: a number in [MIN_NOISE_STD, MAX_ABS_VALUE] (limits)."""
+    v = check_positive(value, name, high=MAX_ABS_VALUE)
+    if v < MIN_NOISE_STD:
+        raise ValueError(f"{name}: expected at least {MIN_NOISE_STD:g} (limits.MIN_NOISE_STD), "
+                         f"got {value!r}")
+    return v
 
 
 def _mapping(value, name: str) -> dict:
