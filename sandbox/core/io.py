@@ -45,6 +45,7 @@ from sandbox.core.limits import (
     MAX_TASKS,
     MAX_TIME_S,
     MIN_NOISE_STD,
+    MIN_REGULARIZER,
 )
 from sandbox.core.modality import Modality, check_modalities, default_modalities
 from sandbox.core.promp import WeightDistribution
@@ -161,6 +162,7 @@ def _load(path: Path):
                 _read(archive, f"task{i}_mean", (D,)),
                 _read(archive, f"task{i}_factor", (D, None), max_rank=t["n_demos"]),
                 _positive(_read(archive, f"task{i}_reg", (P + Q,)), f"task{i}_reg", 0.0), N)
+            _check_robot_definite(dist, P, t["name"])
             tasks.append(TaskModel(t["name"], dist, t["nominal_duration"], t["alpha_mean"],
                                    t["alpha_std"], t["n_demos"]))
     v1 = {"settle_tol": None, "arrive_tol": None} if meta["format_version"] == 1 else {}
@@ -191,6 +193,22 @@ def _read(archive, name: str, shape: tuple, max_rank: int | None = None) -> np.n
         raise ValueError(f"member {name!r} holds values beyond +/-{MAX_MODEL_VALUE:g} "
                          f"(limits.MAX_MODEL_VALUE)")
     return arr
+
+
+def _check_robot_definite(dist: WeightDistribution, P: int, task: str) -> None:
+    """Each robot dim's regulariser at least MIN_REGULARIZER / 2 x its weights' variance.
+
+    :math:`UU^T + \\Lambda` is positive definite for any positive :math:`\\Lambda`;
+    this keeps it so in floating point, where the predictors blend the robot's.
+    """
+    N = dist.n_basis
+    U = dist.factor[P * N:].reshape(dist.n_dims - P, N, -1)
+    var = (U**2).sum(axis=2).mean(axis=1)
+    ratio = dist.reg[P:] / np.maximum(var, 1e-300)
+    if np.any(ratio < MIN_REGULARIZER / 2):
+        raise ValueError(f"task {task!r}: robot regularisers of {ratio.min():.3g} x the weights' "
+                         f"variance leave its covariance numerically singular; expected at "
+                         f"least {MIN_REGULARIZER / 2:g} (limits.MIN_REGULARIZER / 2)")
 
 
 def _positive(arr: np.ndarray, name: str, low: float) -> np.ndarray:

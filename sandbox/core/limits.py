@@ -12,6 +12,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
+from sandbox.core.validation import check_number
+
 #: Longest demonstration, trial or plan horizon accepted (s). Handovers last
 #: 1-10 s; a minute leaves ample room. Raise it with ``max_duration=``.
 MAX_DURATION_S = 60.0
@@ -83,6 +85,12 @@ MIN_NOISE_STD = 1e-12
 
 #: Largest relative hyperparameter (``regularizer``, ``noise_scale``, ``ridge``).
 MAX_RELATIVE = 1e6
+
+#: Smallest ``regularizer``. A robot dim's regulariser is at least this
+#: fraction of its weights' variance, which keeps the robot covariance positive
+#: definite in floating point (condition number ~1e9 at worst); a model file
+#: whose robot regularisers fall below half of it is refused.
+MIN_REGULARIZER = 1e-9
 
 #: Largest magnitude of any number in a model file (weights, regularisers,
 #: noise): far above what a fit of values within ``MAX_ABS_VALUE`` makes, far
@@ -163,8 +171,6 @@ def check_time(t, name: str = "t", max_time: float = MAX_TIME_S) -> float:
         If ``t`` is not a finite real number or ``|t| > max_time``; the message
         says when ``t`` looks like an absolute (clock) timestamp.
     """
-    from sandbox.core.validation import check_number
-
     v = check_number(t, name)
     if abs(v) > max_time:
         hint = (" (looks like an absolute clock timestamp: pass the time since the motion "

@@ -68,7 +68,13 @@ from sandbox.core.demos import (
     check_spread,
     modalities_of,
 )
-from sandbox.core.limits import MAX_ABS_VALUE, MAX_DURATION_S, MAX_RELATIVE, MIN_NOISE_STD
+from sandbox.core.limits import (
+    MAX_ABS_VALUE,
+    MAX_DURATION_S,
+    MAX_RELATIVE,
+    MIN_NOISE_STD,
+    MIN_REGULARIZER,
+)
 from sandbox.core.modality import Modality
 from sandbox.core.promp import WeightDistribution, fit_weights
 from sandbox.core.validation import FloatArray, check_number, check_positive
@@ -208,8 +214,10 @@ class IProMP:
         the handover happens; normalised ones represent constants exactly.
     regularizer : float
         Relative size of the weight-covariance regulariser (module docstring);
-        default chosen by leave-one-out on the recorded handovers. At most
-        :data:`~sandbox.core.limits.MAX_RELATIVE`, as ``noise_scale`` and ``ridge``.
+        default chosen by leave-one-out on the recorded handovers. In
+        [:data:`~sandbox.core.limits.MIN_REGULARIZER`,
+        :data:`~sandbox.core.limits.MAX_RELATIVE`]; ``noise_scale`` and ``ridge``
+        are at most ``MAX_RELATIVE`` too.
     noise_scale : float
         Multiplies the estimated observation noise :math:`\\Sigma_y`.
     noise_floor : float
@@ -281,6 +289,9 @@ class IProMP:
     ) -> None:
         self.basis = GaussianBasis(n_basis, basis_width, basis_margin, normalized_basis)
         self.regularizer = check_positive(regularizer, "regularizer", high=MAX_RELATIVE)
+        if self.regularizer < MIN_REGULARIZER:
+            raise ValueError(f"regularizer: expected at least {MIN_REGULARIZER:g} "
+                             f"(limits.MIN_REGULARIZER), got {regularizer!r}")
         self.noise_scale = check_positive(noise_scale, "noise_scale", high=MAX_RELATIVE)
         self.noise_floor = _check_floor(noise_floor, "noise_floor")
         self.signal_floor = _check_floor(signal_floor, "signal_floor")

@@ -99,6 +99,7 @@ class ObservationStream:
                                      for m in self.observed])
         self._dims = [np.arange(where[m.name].start, where[m.name].stop)
                       for m in self.modalities]
+        self._starts = np.array([where[m.name].start for m in self.modalities])
         self.scale = np.asarray(model.scale, dtype=np.float64)
         self.n_human = int(model.n_human)
         self.subsample = subsample
@@ -158,12 +159,12 @@ class ObservationStream:
                              f"motions or raise subsample")
         full = self.row(y)
         low, high = self.bounds
-        valid = np.array([np.isfinite(full[d]).all() for d in self._dims])
-        inside = np.array([np.all((full[d] >= low[d]) & (full[d] <= high[d]))
-                           for d in self._dims])
+        finite = np.isfinite(full)
+        valid = np.logical_and.reduceat(finite, self._starts)
+        inside = np.logical_and.reduceat(finite & (full >= low) & (full <= high), self._starts)
         if np.any(valid & ~inside):
             self.n_rejected += 1
-            valid &= inside
+            valid = inside
         if not valid.any():
             self.n_skipped += 1
             return None
