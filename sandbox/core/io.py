@@ -153,7 +153,7 @@ def _load(path: Path):
         meta = _metadata(archive, path)
         P, Q, N = meta["n_human"], meta["n_robot"], meta["basis"]["n_basis"]
         noise = _positive(_read(archive, "noise", (P,)), "noise", MIN_NOISE_STD**2)
-        scale = (_positive(_read(archive, "scale", (P,)), "scale", 0.0)
+        scale = (_check_scale(_read(archive, "scale", (P,)), meta["modalities"])
                  if meta["format_version"] >= 2 else np.ones(P))
         tasks = []
         for i, t in enumerate(meta["tasks"]):
@@ -209,6 +209,15 @@ def _check_robot_definite(dist: WeightDistribution, P: int, task: str) -> None:
         raise ValueError(f"task {task!r}: robot regularisers of {ratio.min():.3g} x the weights' "
                          f"variance leave its covariance numerically singular; expected at "
                          f"least {MIN_REGULARIZER / 2:g} (limits.MIN_REGULARIZER / 2)")
+
+
+def _check_scale(scale: np.ndarray, modalities) -> np.ndarray:
+    """1 for position dims (never normalised), at least MIN_NOISE_STD for signal dims."""
+    position = np.array([m.kind == "position" for m in modalities for _ in m.dims])
+    if np.any(scale[position] != 1.0) or np.any(scale[~position] < MIN_NOISE_STD):
+        raise ValueError(f"scale must be 1 for position dims and at least {MIN_NOISE_STD:g} "
+                         f"for signal dims, got {scale.tolist()}")
+    return scale
 
 
 def _positive(arr: np.ndarray, name: str, low: float) -> np.ndarray:

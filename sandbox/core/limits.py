@@ -5,6 +5,12 @@ trajectory has tens of basis functions. These limits turn a careless input
 (a trial stamped in milliseconds, a stray 1e6 s timestamp) into a clear
 ``ValueError`` instead of a multi-gigabyte allocation. Each message names the
 limit and, where it can be raised, how.
+
+Who checks what: :meth:`~sandbox.core.model.IProMP.fit` (durations, units,
+values, dims, spread), the predictors (times, options, plan, lattice,
+observations and their range), :meth:`~sandbox.core.model.IProMP.load` (file,
+members, metadata, values). :func:`check_duration` and :func:`check_time` are
+for loaders and callers that want the same checks and messages.
 """
 
 from __future__ import annotations
@@ -14,8 +20,8 @@ from numpy.typing import ArrayLike
 
 from sandbox.core.validation import check_number
 
-#: Longest demonstration, trial or plan horizon accepted (s). Handovers last
-#: 1-10 s; a minute leaves ample room. Raise it with ``max_duration=``.
+#: Longest demonstration or trial accepted (s). Handovers last 1-10 s; a
+#: minute leaves ample room. Raise it with ``max_duration=`` (``IProMP``).
 MAX_DURATION_S = 60.0
 
 #: Shortest median sample interval accepted (s): 10 kHz. Finer spacing on a
@@ -23,9 +29,10 @@ MAX_DURATION_S = 60.0
 MIN_MEDIAN_DT_S = 1e-4
 
 #: Latest time a predictor accepts (s since the motion started): observations,
-#: updates. A closed-loop episode (scenario files allow up to 600 s) stays
-#: far below it; absolute clock timestamps (~1.7e9 s) do not.
-#: Raise it with the predictors' ``max_time=``.
+#: updates; also the longest task duration a model file may hold. A
+#: closed-loop episode (scenario files allow up to 600 s) stays within it;
+#: absolute clock timestamps (~1.7e9 s) do not. Raise it with the predictors'
+#: ``max_time=``.
 MAX_TIME_S = 600.0
 
 #: Most basis functions per dim (N). The method uses 15-31; each likelihood
@@ -46,8 +53,8 @@ MAX_LATTICE_FLOATS = 2**25
 MAX_PLAN_STEPS = 100_000
 
 #: Most observations a predictor keeps (after ``subsample``) before ``reset()``:
-#: a minute at 333 kept rows per second. A batch update allocates
-#: C x kept x N floats.
+#: a minute at 333 kept rows per second, 1000 s at the 20 per second a
+#: closed-loop policy keeps. A batch update allocates C x kept x N floats.
 MAX_OBSERVATIONS = 20_000
 
 #: Largest ``subsample`` (keep 1 of this many observations).

@@ -162,7 +162,8 @@ class _Predictor:
     def _check_steps(self, steps: float, what: str) -> None:
         if not steps <= MAX_PLAN_STEPS:
             raise ValueError(f"plan: {what} would take {steps:.3g} knots of dt={self.dt:g} s, "
-                             f"more than limits.MAX_PLAN_STEPS={MAX_PLAN_STEPS}; raise dt")
+                             f"more than limits.MAX_PLAN_STEPS={MAX_PLAN_STEPS}; raise dt or "
+                             f"shorten that span")
 
     # -------------------------------------------------------------- public
     def reset(self) -> None:
