@@ -1,6 +1,7 @@
 """Saving and loading fitted models: ``.npz`` arrays + JSON metadata, never pickle.
 
-Layout of the file (a numpy ``.npz`` archive, loaded with ``allow_pickle=False``):
+Layout of the file (a numpy ``.npz`` archive, written atomically; any reader of
+``.npz`` can open it with ``allow_pickle=False``):
 
 * ``metadata``: a 0-d unicode array holding JSON with ``format`` (=
   :data:`FORMAT`), ``format_version`` (= :data:`FORMAT_VERSION`), the basis,
@@ -22,7 +23,9 @@ array; only the members it declares are read, each after its ``.npy`` header
 declared the dtype and shape the metadata implies, within the limits; every
 array must be finite, within :data:`~sandbox.core.limits.MAX_MODEL_VALUE`, the
 noise, scale and regularisers positive (so every weight covariance
-:math:`UU^T + \\Lambda` is symmetric positive definite). A corrupt, truncated,
+:math:`UU^T + \\Lambda` is symmetric positive definite; the robot's regulariser
+at least half :data:`~sandbox.core.limits.MIN_REGULARIZER` of its weights'
+variance, so it stays so in floating point). A corrupt, truncated,
 tampered or foreign file, or one from another format version, is refused with
 one ``ValueError`` that says which file and why, and never suggests pickle.
 """

@@ -217,8 +217,8 @@ class _Predictor:
             Joint targets (rad).
         cov : ndarray, shape (Q, Q)
         """
-        t = check_number(t, "t")
         pt = self._plan_t
+        t = min(max(check_number(t, "t"), pt[0]), pt[-1])   # the plan holds at its ends
         i = int(np.clip(np.searchsorted(pt, t, side="right"), 1, pt.size - 1))
         span = pt[i] - pt[i - 1]
         w = float(np.clip((t - pt[i - 1]) / span, 0.0, 1.0)) if span > 0 else 1.0

@@ -5,6 +5,7 @@ Every one of them failed on the code before the fix (a ``MemoryError``, a
 """
 
 import json
+import tempfile
 import tracemalloc
 import zipfile
 
@@ -275,6 +276,7 @@ ENTRIES = {
     "fit(5)": lambda m: IProMP().fit(5),
     "fit(task=None)": lambda m: IProMP(n_basis=7).fit(
         [synth.Demo(np.arange(5.0), np.ones((5, 3)), np.ones((5, 7)), None)] * 2),
+    "save(a folder)": lambda m: m.save(tempfile.gettempdir()),
     "load(None)": lambda m: IProMP.load(None),
     "load(5)": lambda m: IProMP.load(5),
 }
@@ -283,7 +285,8 @@ ENTRIES = {
 @pytest.mark.parametrize("name", list(ENTRIES))
 def test_public_entries_raise_value_error(model, name):
     """issue 13 finding 9: about 900 inputs raised TypeError or OverflowError (e.g.
-    ``observe(None, y)``, ``subsample=inf``, ``IProMP(n_basis=None)``) or were accepted."""
+    ``observe(None, y)``, ``subsample=inf``, ``IProMP(n_basis=None)``) or were accepted
+    (and finding 8: saving to a folder raised IsADirectoryError)."""
     with pytest.raises(ValueError) as info:
         ENTRIES[name](model)
     assert type(info.value) is ValueError

@@ -29,14 +29,16 @@ SETTINGS = settings(deadline=None, derandomize=True, database=None,
 MODEL = IProMP(n_basis=7).fit(synth.demos(np.random.default_rng(0), n_per_task=4))
 HAND = np.array([1.0, 0.0, 0.2])
 
+#: Short strings over a fixed alphabet (no Unicode database to build: fast from cold).
+TEXT = st.text(alphabet="ab1 ,.-\u00e9\u2603", max_size=4)
 #: Anything a careless caller might pass where a number, a flag or a name is expected.
 JUNK = st.one_of(
-    st.none(), st.booleans(), st.text(max_size=4), st.integers(-(10**30), 10**30),
+    st.none(), st.booleans(), TEXT, st.integers(-(10**30), 10**30),
     st.just(10**400), st.floats(allow_nan=True, allow_infinity=True),
     st.lists(st.floats(-10, 10), max_size=3), st.complex_numbers(max_magnitude=5),
-    st.dictionaries(st.text(max_size=2), st.integers(), max_size=2),
+    st.dictionaries(TEXT, st.integers(), max_size=2),
 )
-NUMBER = st.one_of(st.floats(1e-4, 1e3), st.integers(-3, 2000), JUNK)
+NUMBER = st.one_of(st.floats(1e-3, 1e3), st.integers(-3, 2000), JUNK)
 
 
 def _finite(*arrays) -> bool:
@@ -62,7 +64,7 @@ OPTION_VALUES = st.one_of(NUMBER, st.sampled_from(["joint", "marginal", "all", "
                                                    "hand", "emg", True, False]))
 
 
-@settings(SETTINGS, max_examples=150)
+@settings(SETTINGS, max_examples=80)
 @given(st.dictionaries(st.sampled_from(OPTIONS), OPTION_VALUES, max_size=3))
 def test_dynamic_predictor_options(options):
     try:
@@ -113,11 +115,11 @@ def _run(pred, steps) -> float:
         except ValueError:
             continue
         if op != "command" and t is not None:
-            now = float(t)
+            now = max(now, float(t))
     return now
 
 
-@settings(SETTINGS, max_examples=60)
+@settings(SETTINGS, max_examples=40)
 @given(st.lists(STEP, max_size=25), st.sampled_from(["dynamic", "static", "latest",
                                                      "marginal"]))
 def test_predictors_observe_and_update(steps, kind):
@@ -194,9 +196,9 @@ def _saved_members() -> dict[str, bytes]:
 MEMBERS = _saved_members()
 META = json.loads(str(np.load(io.BytesIO(MEMBERS["metadata.npy"]))))
 JSON = st.recursive(st.one_of(st.none(), st.booleans(), st.integers(-(10**20), 10**20),
-                              st.floats(allow_nan=True, allow_infinity=True), st.text(max_size=5)),
+                              st.floats(allow_nan=True, allow_infinity=True), TEXT),
                     lambda inner: st.one_of(st.lists(inner, max_size=3),
-                                            st.dictionaries(st.text(max_size=5), inner,
+                                            st.dictionaries(TEXT, inner,
                                                             max_size=3)),
                     max_leaves=6)
 
@@ -272,7 +274,7 @@ def _mutated(kind, where, what) -> bytes:
     return bytes(raw)
 
 
-@settings(SETTINGS, max_examples=150)
+@settings(SETTINGS, max_examples=100)
 @given(MUTATION)
 def test_load_mutated_model_files(tmp_path_factory, mutation):
     path = tmp_path_factory.getbasetemp() / "mutated.npz"
