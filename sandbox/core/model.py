@@ -77,7 +77,7 @@ from sandbox.core.limits import (
 )
 from sandbox.core.modality import Modality
 from sandbox.core.promp import WeightDistribution, fit_weights
-from sandbox.core.validation import FloatArray, check_number, check_positive
+from sandbox.core.validation import FloatArray, check_mapping, check_number, check_positive
 
 #: Default noise floor of signal modalities, in their normalised units (see IProMP).
 SIGNAL_FLOOR = 1.0
@@ -296,7 +296,7 @@ class IProMP:
         self.noise_floor = _check_floor(noise_floor, "noise_floor")
         self.signal_floor = _check_floor(signal_floor, "signal_floor")
         self.noise_floors = {k: _check_floor(v, f"noise_floors[{k!r}]")
-                             for k, v in _mapping(noise_floors, "noise_floors").items()}
+                             for k, v in check_mapping(noise_floors, "noise_floors").items()}
         self.settle_tol = (None if settle_tol is None
                            else check_positive(settle_tol, "settle_tol"))
         self.arrive_tol = (None if arrive_tol is None
@@ -306,7 +306,7 @@ class IProMP:
         self.max_duration = check_positive(max_duration, "max_duration")
         self._prior_spec = (None if priors is None else
                             {k: check_number(v, f"priors[{k!r}]", low=0.0)
-                             for k, v in _mapping(priors, "priors").items()})
+                             for k, v in check_mapping(priors, "priors").items()})
         self._fitted = False
 
     # ------------------------------------------------------------------ fit
@@ -468,7 +468,7 @@ class IProMP:
         """Set new task priors p(k) (normalised); returns ``self``."""
         self._require_fit()
         spec = {k: check_number(v, f"priors[{k!r}]", low=0.0)
-                for k, v in _mapping(priors, "priors").items()}
+                for k, v in check_mapping(priors, "priors").items()}
         self.priors = _priors(self.tasks, spec)
         return self
 
@@ -524,16 +524,6 @@ def _check_floor(value, name: str) -> float:
         raise ValueError(f"{name}: expected at least {MIN_NOISE_STD:g} (limits.MIN_NOISE_STD), "
                          f"got {value!r}")
     return v
-
-
-def _mapping(value, name: str) -> dict:
-    """``value`` (a mapping of str, or None) as a dict; a ``ValueError`` otherwise."""
-    if value is None:
-        return {}
-    if not isinstance(value, Mapping) or not all(isinstance(k, str) for k in value):
-        raise ValueError(f"{name}: expected a mapping of task or modality names to numbers, "
-                         f"got {type(value).__name__}")
-    return dict(value)
 
 
 def _check_fits(fits, n_basis: int) -> None:

@@ -8,7 +8,7 @@ came: never ``TypeError`` or ``OverflowError``, whatever the input.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -168,6 +168,16 @@ def check_fraction(value: float, name: str) -> float:
     if v > 1:
         raise ValueError(f"{name}: expected a number in (0, 1], got {_show(value)}")
     return v
+
+
+def check_mapping(value, name: str) -> dict:
+    """A mapping with string keys (or None: empty) as a new dict; values are not checked."""
+    if value is None:
+        return {}
+    if not isinstance(value, Mapping) or not all(isinstance(k, str) for k in value):
+        raise ValueError(f"{name}: expected a mapping of names to numbers, got "
+                         f"{type(value).__name__}")
+    return dict(value)
 
 
 def check_choice(value: str, name: str, choices: Sequence[str]) -> str:
