@@ -14,7 +14,11 @@ Modules: :mod:`~sandbox.core.basis`, :mod:`~sandbox.core.promp`,
 :mod:`~sandbox.core.likelihood` (fast path), :mod:`~sandbox.core.phase`,
 :mod:`~sandbox.core.recognition`, :mod:`~sandbox.core.blending`,
 :mod:`~sandbox.core.predictor` (with :mod:`~sandbox.core.stream`, the observation
-stream), :mod:`~sandbox.core.modality`, :mod:`~sandbox.core.io`.
+stream), :mod:`~sandbox.core.modality`, :mod:`~sandbox.core.io` (with
+:mod:`~sandbox.core.archive`, the checked ``.npz`` reader). At the public
+boundary: :mod:`~sandbox.core.validation` (``check_*``, only ``ValueError``),
+:mod:`~sandbox.core.limits` (every size limit, documented) and
+:mod:`~sandbox.core.demos` (what ``fit`` accepts).
 
 References
 ----------

@@ -15,7 +15,15 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from sandbox.core.validation import FloatArray, check_array
+from sandbox.core.limits import MAX_N_BASIS
+from sandbox.core.validation import (
+    FloatArray,
+    check_array,
+    check_bool,
+    check_integer,
+    check_number,
+    check_positive,
+)
 
 
 @dataclass(frozen=True)
@@ -25,7 +33,8 @@ class GaussianBasis:
     Parameters
     ----------
     n_basis : int
-        Number of basis functions N (>= 2). The paper uses 31.
+        Number of basis functions N, 2 to :data:`~sandbox.core.limits.MAX_N_BASIS`.
+        The paper uses 31.
     width : float or None
         Variance h of each bump (phase units squared). ``None``: the squared
         spacing between centres, so neighbours cross at exp(-1/8) of their peak.
@@ -41,12 +50,15 @@ class GaussianBasis:
     normalized: bool = False
 
     def __post_init__(self) -> None:
-        if int(self.n_basis) != self.n_basis or self.n_basis < 2:
-            raise ValueError(f"n_basis: expected an integer >= 2, got {self.n_basis!r}")
-        if self.width is not None and not (np.isfinite(self.width) and self.width > 0):
-            raise ValueError(f"width: expected a finite number > 0 or None, got {self.width!r}")
-        if not (np.isfinite(self.margin) and 0 <= self.margin < 1):
+        n = check_integer(self.n_basis, "n_basis", 2, MAX_N_BASIS)
+        width = None if self.width is None else check_positive(self.width, "width")
+        margin = check_number(self.margin, "margin", low=0.0)
+        if margin >= 1:
             raise ValueError(f"margin: expected a number in [0, 1), got {self.margin!r}")
+        object.__setattr__(self, "n_basis", n)
+        object.__setattr__(self, "width", width)
+        object.__setattr__(self, "margin", margin)
+        object.__setattr__(self, "normalized", check_bool(self.normalized, "normalized"))
 
     @property
     def centers(self) -> FloatArray:
@@ -99,7 +111,11 @@ class GaussianBasis:
 
     @classmethod
     def from_dict(cls, d: dict) -> GaussianBasis:
-        """Inverse of :meth:`to_dict`."""
+        """Inverse of :meth:`to_dict`; a ``ValueError`` for anything else."""
+        keys = {"n_basis", "width", "margin", "normalized"}
+        if not isinstance(d, dict) or not set(d) <= keys:
+            got = sorted(map(str, set(d) - keys)) if isinstance(d, dict) else type(d).__name__
+            raise ValueError(f"basis: expected a mapping with keys among {sorted(keys)}, got {got}")
         return cls(**d)
 
 

@@ -11,7 +11,9 @@ The product is folded pairwise with the symmetric form
 :math:`\\mu^* = a_1\\Sigma_2 M^{-1}\\mu_1 + a_2\\Sigma_1 M^{-1}\\mu_2`,
 :math:`M = a_2\\Sigma_1 + a_1\\Sigma_2`, which needs no inverse of any
 :math:`\\Sigma_i`, handles :math:`a_i = 0` exactly (that distribution drops
-out) and returns :math:`(\\mu_1, \\Sigma_1)` for activations (1, 0).
+out) and returns :math:`(\\mu_1, \\Sigma_1)` for activations (1, 0). Where
+:math:`M` is numerically singular (tasks whose means differ by many orders of
+magnitude more than their spread), its pseudo-inverse stands in for the inverse.
 """
 
 from __future__ import annotations
@@ -96,7 +98,11 @@ def _product(m1, S1, a1, m2, S2, a2):
     b1, b2 = a1[:, None, None], a2[:, None, None]
     M = b2 * S1 + b1 * S2
     rhs = np.concatenate([S1, m1[..., None], m2[..., None]], axis=2)
-    sol = np.linalg.solve(M, rhs)
+    try:
+        sol = np.linalg.solve(M, rhs)
+    except np.linalg.LinAlgError:
+        # M numerically singular (module docstring): pseudo-inverse, not no command.
+        sol = np.linalg.pinv(M, hermitian=True) @ rhs
     new_cov = S2 @ sol[..., :-2]
     new_mean = (b1 * (S2 @ sol[..., -2:-1]) + b2 * (S1 @ sol[..., -1:]))[..., 0]
     return new_mean, 0.5 * (new_cov + new_cov.transpose(0, 2, 1))

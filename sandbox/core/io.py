@@ -1,6 +1,7 @@
 """Saving and loading fitted models: ``.npz`` arrays + JSON metadata, never pickle.
 
-Layout of the file (a numpy ``.npz`` archive, loaded with ``allow_pickle=False``):
+Layout of the file (a numpy ``.npz`` archive, written atomically; any reader of
+``.npz`` can open it with ``allow_pickle=False``):
 
 * ``metadata``: a 0-d unicode array holding JSON with ``format`` (=
   :data:`FORMAT`), ``format_version`` (= :data:`FORMAT_VERSION`), the basis,
@@ -14,27 +15,57 @@ Version history: 1 (package 0.1.0) had the hand only (``human_names``, no
 modalities, no scale); such files still load, as one position modality
 ``"hand"``. Version 2 adds the modalities, the scale and the floors.
 
-The metadata is read and checked before any array, and only the members it
-declares are read. A corrupt, truncated or foreign file, or one from another
-format version, is refused with a ``ValueError`` that says which and why.
+Loading trusts nothing in the file (:mod:`sandbox.core.archive`): the file's
+size and number of members are checked first; the metadata is read and
+checked (types, ranges, the priors a probability vector, the speed priors
+positive, durations within :data:`~sandbox.core.limits.MAX_TIME_S`) before any
+array; only the members it declares are read, each after its ``.npy`` header
+declared the dtype and shape the metadata implies, within the limits; every
+array must be finite, within :data:`~sandbox.core.limits.MAX_MODEL_VALUE`, the
+noise, scale and regularisers positive (so every weight covariance
+:math:`UU^T + \\Lambda` is symmetric positive definite; the robot's regulariser
+at least half :data:`~sandbox.core.limits.MIN_REGULARIZER` of its weights'
+variance, so it stays so in floating point). A corrupt, truncated,
+tampered or foreign file, or one from another format version, is refused with
+one ``ValueError`` that says which file and why, and never suggests pickle.
 """
 
 from __future__ import annotations
 
 import json
 import os
-import zipfile
+import tempfile
 from pathlib import Path
 
 import numpy as np
 
+from sandbox.core.archive import ArchiveError, check_path, open_archive, read_array
 from sandbox.core.basis import GaussianBasis
+from sandbox.core.limits import (
+    MAX_DIMS,
+    MAX_METADATA_BYTES,
+    MAX_MODEL_VALUE,
+    MAX_TASKS,
+    MAX_TIME_S,
+    MIN_NOISE_STD,
+    MIN_REGULARIZER,
+)
 from sandbox.core.modality import Modality, check_modalities, default_modalities
 from sandbox.core.promp import WeightDistribution
+from sandbox.core.validation import check_number
 
 FORMAT = "handover-sandbox/iprompt"
 FORMAT_VERSION = 2
 READABLE_VERSIONS = (1, 2)
+#: Hyperparameters each format version stores (the IProMP options).
+HYPERPARAMETERS = {
+    1: {"regularizer", "noise_scale", "noise_floor", "min_alpha_std", "ridge"},
+    2: {"regularizer", "noise_scale", "noise_floor", "signal_floor", "noise_floors",
+        "settle_tol", "arrive_tol", "min_alpha_std", "ridge"},
+}
+TASK_KEYS = {"name", "nominal_duration", "alpha_mean", "alpha_std", "n_demos", "prior"}
+#: How far from 1 the stored priors may sum.
+PRIOR_TOLERANCE = 1e-6
 
 
 def save_model(model, path: str | os.PathLike) -> None:
@@ -75,128 +106,227 @@ def save_model(model, path: str | os.PathLike) -> None:
         arrays[f"task{i}_mean"] = t.weights.mean
         arrays[f"task{i}_factor"] = t.weights.factor
         arrays[f"task{i}_reg"] = t.weights.reg
+    path = _output_path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            np.savez(fh, **arrays)
+        os.replace(tmp, path)             # never a half-written model file
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+
+
+def _output_path(path) -> Path:
+    if not isinstance(path, (str, os.PathLike)):
+        raise ValueError(f"path: expected a file path (str or os.PathLike), got "
+                         f"{type(path).__name__}")
     path = Path(path)
-    with open(path, "wb") as fh:
-        np.savez(fh, **arrays)
+    if path.is_dir():
+        raise ValueError(f"path: expected a file to write, got the folder {str(path)!r}")
+    if not path.parent.is_dir():
+        raise ValueError(f"path: the folder {str(path.parent)!r} does not exist")
+    return path
 
 
 def load_model(path: str | os.PathLike):
-    """Read a model written by :func:`save_model` (format version 1 or 2)."""
+    """Read a model written by :func:`save_model` (format version 1 or 2).
+
+    Raises
+    ------
+    ValueError
+        If ``path`` is not an existing file, or the file is not a valid model
+        (module docstring): the message names the file and the problem.
+    """
+    path = check_path(path)
+    try:
+        return _load(path)
+    except ValueError as error:       # ArchiveError, or a check of the content
+        text = str(error)
+        where = f"model file {str(path)!r}"
+        raise ValueError(text if text.startswith(where) or text.startswith(f"{str(path)!r}")
+                         else f"{where}: {text}") from None
+
+
+def _load(path: Path):
     from sandbox.core.model import IProMP, TaskModel
 
-    path = Path(path)
-    if not path.is_file():
-        raise ValueError(f"model file: expected an existing .npz file, got {str(path)!r}")
-    try:
-        data = np.load(path, allow_pickle=False)
-    except (zipfile.BadZipFile, OSError, EOFError, ValueError) as error:
-        raise _corrupt(path, error) from error
-    if not isinstance(data, np.lib.npyio.NpzFile):
-        raise ValueError(f"{str(path)!r} is not a handover-sandbox model (a bare array, "
-                         f"not an .npz archive)")
-    with data:
-        meta = _metadata(data, path)
-        names = ["noise"] + (["scale"] if meta["format_version"] >= 2 else [])
-        names += [f"task{i}_{part}" for i in range(len(meta["tasks"]))
-                  for part in ("mean", "factor", "reg")]
-        missing = [n for n in names if n not in data.files]
-        if missing:
-            raise ValueError(f"model file {str(path)!r} is inconsistent: lacks {missing}")
-        arrays = {k: _member(data, k, path) for k in names}
-    hyper = dict(meta["hyperparameters"])
-    model = IProMP(
-        basis_width=meta["basis"]["width"],
-        n_basis=meta["basis"]["n_basis"],
-        basis_margin=meta["basis"]["margin"],
-        normalized_basis=meta["basis"]["normalized"],
-        **({"settle_tol": None, "arrive_tol": None} if meta["format_version"] == 1 else {}),
-        **hyper,
-    )
-    tasks = []
-    try:
+    archive = open_archive(path)
+    with archive:
+        meta = _metadata(archive, path)
+        P, Q, N = meta["n_human"], meta["n_robot"], meta["basis"]["n_basis"]
+        noise = _positive(_read(archive, "noise", (P,)), "noise", MIN_NOISE_STD**2)
+        scale = (_check_scale(_read(archive, "scale", (P,)), meta["modalities"])
+                 if meta["format_version"] >= 2 else np.ones(P))
+        tasks = []
         for i, t in enumerate(meta["tasks"]):
+            D = (P + Q) * N
             dist = WeightDistribution(
-                arrays[f"task{i}_mean"], arrays[f"task{i}_factor"], arrays[f"task{i}_reg"],
-                meta["basis"]["n_basis"],
-            )
-            tasks.append(TaskModel(t["name"], dist, float(t["nominal_duration"]),
-                                   float(t["alpha_mean"]), float(t["alpha_std"]),
-                                   int(t["n_demos"])))
-        noise = np.asarray(arrays["noise"], dtype=np.float64)
-        P = int(meta["n_human"])
-        scale = np.asarray(arrays.get("scale", np.ones(P)), dtype=np.float64)
-        modalities = _modalities(meta, P)
-    except (KeyError, TypeError, ValueError) as error:
-        raise ValueError(f"model file {str(path)!r} is inconsistent: {error}") from error
-    _check_consistent(meta, tasks, noise, scale, path)
+                _read(archive, f"task{i}_mean", (D,)),
+                _read(archive, f"task{i}_factor", (D, None), max_rank=t["n_demos"]),
+                _positive(_read(archive, f"task{i}_reg", (P + Q,)), f"task{i}_reg", 0.0), N)
+            _check_robot_definite(dist, P, t["name"])
+            tasks.append(TaskModel(t["name"], dist, t["nominal_duration"], t["alpha_mean"],
+                                   t["alpha_std"], t["n_demos"]))
+    v1 = {"settle_tol": None, "arrive_tol": None} if meta["format_version"] == 1 else {}
+    model = IProMP(n_basis=N, basis_width=meta["basis"]["width"],
+                   basis_margin=meta["basis"]["margin"],
+                   normalized_basis=meta["basis"]["normalized"], **v1, **meta["hyperparameters"])
     model.task_models = tuple(tasks)
     model.noise = noise
     model.scale = scale
-    model.modalities = modalities
-    model.n_human, model.n_robot = P, int(meta["n_robot"])
-    model.human_names = tuple(d for m in modalities for d in m.dims)
+    model.modalities = meta["modalities"]
+    model.n_human, model.n_robot = P, Q
+    model.human_names = tuple(d for m in meta["modalities"] for d in m.dims)
     model.robot_names = tuple(meta["robot_names"])
-    model.priors = np.array([float(t["prior"]) for t in meta["tasks"]])
+    model.priors = np.array([t["prior"] for t in meta["tasks"]], dtype=np.float64)
     model._fitted = True
     return model
 
 
-def _corrupt(path: Path, error: Exception) -> ValueError:
-    return ValueError(f"model file {str(path)!r} is corrupt, truncated or not a .npz archive "
-                      f"({type(error).__name__})")
+def _read(archive, name: str, shape: tuple, max_rank: int | None = None) -> np.ndarray:
+    """A float member of the expected shape, finite and within MAX_MODEL_VALUE."""
+    arr = read_array(archive, name, "fiu", shape).astype(np.float64)
+    if max_rank is not None and arr.shape[1] > max_rank:
+        raise ValueError(f"member {name!r} has rank {arr.shape[1]}, more than its task's "
+                         f"{max_rank} demonstrations")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"member {name!r} holds NaN or infinity")
+    if arr.size and np.abs(arr).max() > MAX_MODEL_VALUE:
+        raise ValueError(f"member {name!r} holds values beyond +/-{MAX_MODEL_VALUE:g} "
+                         f"(limits.MAX_MODEL_VALUE)")
+    return arr
 
 
-def _member(data, name: str, path: Path) -> np.ndarray:
+def _check_robot_definite(dist: WeightDistribution, P: int, task: str) -> None:
+    """Each robot dim's regulariser at least MIN_REGULARIZER / 2 x its weights' variance.
+
+    :math:`UU^T + \\Lambda` is positive definite for any positive :math:`\\Lambda`;
+    this keeps it so in floating point, where the predictors blend the robot's.
+    """
+    N = dist.n_basis
+    U = dist.factor[P * N:].reshape(dist.n_dims - P, N, -1)
+    var = (U**2).sum(axis=2).mean(axis=1)
+    ratio = dist.reg[P:] / np.maximum(var, 1e-300)
+    if np.any(ratio < MIN_REGULARIZER / 2):
+        raise ValueError(f"task {task!r}: robot regularisers of {ratio.min():.3g} x the weights' "
+                         f"variance leave its covariance numerically singular; expected at "
+                         f"least {MIN_REGULARIZER / 2:g} (limits.MIN_REGULARIZER / 2)")
+
+
+def _check_scale(scale: np.ndarray, modalities) -> np.ndarray:
+    """1 for position dims (never normalised), at least MIN_NOISE_STD for signal dims."""
+    position = np.array([m.kind == "position" for m in modalities for _ in m.dims])
+    if np.any(scale[position] != 1.0) or np.any(scale[~position] < MIN_NOISE_STD):
+        raise ValueError(f"scale must be 1 for position dims and at least {MIN_NOISE_STD:g} "
+                         f"for signal dims, got {scale.tolist()}")
+    return scale
+
+
+def _positive(arr: np.ndarray, name: str, low: float) -> np.ndarray:
+    if np.any(arr <= low):
+        raise ValueError(f"{name} must be {arr.size} positive numbers"
+                         + (f" of at least {low:g}" if low else "") + f", got {arr.min():g}")
+    return arr
+
+
+def _metadata(archive, path: Path) -> dict:
+    """The metadata, checked: every field of the expected type and range."""
+    if "metadata.npy" not in archive.namelist():
+        raise ArchiveError(f"{str(path)!r} is not a handover-sandbox model (no metadata entry)")
+    text = read_array(archive, "metadata", "U", (), MAX_METADATA_BYTES)
     try:
-        return data[name]
-    except (zipfile.BadZipFile, OSError, EOFError, ValueError, KeyError) as error:
-        raise _corrupt(path, error) from error
+        meta = json.loads(str(text))
+    except (ValueError, RecursionError):
+        raise ValueError("metadata is not valid JSON") from None
+    if not isinstance(meta, dict) or meta.get("format") != FORMAT:
+        got = meta.get("format") if isinstance(meta, dict) else type(meta).__name__
+        raise ValueError(f"{str(path)!r} is not a handover-sandbox model (format {got!r})")
+    version = meta.get("format_version")
+    if type(version) is not int or version not in READABLE_VERSIONS:
+        raise ValueError(f"model file {str(path)!r} has format version {version!r}; this "
+                         f"version of the package reads versions {list(READABLE_VERSIONS)}")
+    need = ["basis", "hyperparameters", "n_human", "n_robot", "tasks", "robot_names"]
+    need += ["modalities"] if version >= 2 else []
+    for key in need:
+        if key not in meta:
+            raise ValueError(f"metadata lacks {key!r}")
+    P, Q = _count(meta["n_human"], "n_human"), _count(meta["n_robot"], "n_robot")
+    return {"format_version": version, "basis": GaussianBasis.from_dict(meta["basis"]).to_dict(),
+            "hyperparameters": _hyperparameters(meta["hyperparameters"], version),
+            "n_human": P, "n_robot": Q, "modalities": _modalities(meta, P),
+            "robot_names": _names(meta["robot_names"], "robot_names", (0, Q)),
+            "tasks": _tasks(meta["tasks"])}
+
+
+def _count(value, name: str) -> int:
+    if type(value) is not int or not 1 <= value <= MAX_DIMS:
+        raise ValueError(f"metadata {name}: expected an integer in [1, {MAX_DIMS}], "
+                         f"got {value!r}")
+    return value
+
+
+def _names(value, name: str, sizes: tuple[int, ...]) -> list[str]:
+    if (not isinstance(value, list) or len(value) not in sizes
+            or not all(isinstance(v, str) for v in value)):
+        raise ValueError(f"metadata {name}: expected a list of {' or '.join(map(str, sizes))} "
+                         f"names, got {str(value)[:60]}")
+    return value
+
+
+def _hyperparameters(hyper, version: int) -> dict:
+    known = HYPERPARAMETERS[version]
+    if not isinstance(hyper, dict) or not set(hyper) <= known:
+        got = sorted(map(str, set(hyper) - known)) if isinstance(hyper, dict) else hyper
+        raise ValueError(f"metadata hyperparameters: expected keys among {sorted(known)}, "
+                         f"got {got!r}")
+    return hyper
 
 
 def _modalities(meta: dict, P: int) -> tuple:
     if meta["format_version"] == 1:
-        names = tuple(meta.get("human_names") or ()) or tuple(f"human_{i}" for i in range(P))
+        names = tuple(_names(meta.get("human_names") or [], "human_names", (0, P)))
+        names = names or tuple(f"human_{i}" for i in range(P))
         return check_modalities(default_modalities(names), P)
-    return check_modalities([Modality.from_dict(m) for m in meta["modalities"]], P)
+    mods = meta["modalities"]
+    if not isinstance(mods, list):
+        raise ValueError(f"metadata modalities: expected a list, got {type(mods).__name__}")
+    return check_modalities([Modality.from_dict(m) for m in mods], P)
 
 
-def _metadata(data, path: Path) -> dict:
-    if "metadata" not in data.files:
-        raise ValueError(f"{str(path)!r} is not a handover-sandbox model (no metadata entry)")
-    try:
-        meta = json.loads(str(_member(data, "metadata", path)))
-    except (json.JSONDecodeError, RecursionError) as error:
-        raise ValueError(f"model file {str(path)!r}: metadata is not valid JSON") from error
-    if not isinstance(meta, dict) or meta.get("format") != FORMAT:
-        got = meta.get("format") if isinstance(meta, dict) else type(meta).__name__
-        raise ValueError(f"{str(path)!r} is not a handover-sandbox model (format {got!r})")
-    if meta.get("format_version") not in READABLE_VERSIONS:
-        raise ValueError(
-            f"model file {str(path)!r} has format version {meta.get('format_version')!r}; "
-            f"this version of the package reads versions {list(READABLE_VERSIONS)}"
-        )
-    need = ["basis", "hyperparameters", "n_human", "n_robot", "tasks", "robot_names"]
-    need += ["modalities"] if meta["format_version"] >= 2 else []
-    for key in need:
-        if key not in meta:
-            raise ValueError(f"model file {str(path)!r}: metadata lacks {key!r}")
-    GaussianBasis.from_dict(meta["basis"])
-    return meta
-
-
-def _check_consistent(meta: dict, tasks, noise, scale, path: Path) -> None:
-    P, Q = int(meta["n_human"]), int(meta["n_robot"])
-    if noise.shape != (P,) or not np.all(np.isfinite(noise)) or np.any(noise <= 0):
-        raise ValueError(f"model file {str(path)!r}: noise must be {P} positive numbers")
-    if scale.shape != (P,) or not np.all(np.isfinite(scale)) or np.any(scale <= 0):
-        raise ValueError(f"model file {str(path)!r}: scale must be {P} positive numbers")
-    for t in tasks:
-        if t.weights.n_dims != P + Q:
-            raise ValueError(
-                f"model file {str(path)!r}: task {t.name!r} has {t.weights.n_dims} dims, "
-                f"expected P+Q={P + Q}"
-            )
-        if not (np.isfinite(t.weights.factor).all() and t.nominal_duration > 0 and t.alpha_std > 0):
-            raise ValueError(f"model file {str(path)!r}: task {t.name!r} has invalid numbers")
-    if not tasks:
-        raise ValueError(f"model file {str(path)!r}: no tasks")
+def _tasks(tasks) -> list[dict]:
+    """Task entries: names, durations within MAX_TIME_S, speed priors, priors summing to 1."""
+    if not isinstance(tasks, list) or not 1 <= len(tasks) <= MAX_TASKS:
+        raise ValueError(f"metadata tasks: expected a list of 1 to {MAX_TASKS} tasks, got "
+                         f"{str(tasks)[:60]}")
+    out = []
+    for i, t in enumerate(tasks):
+        if not isinstance(t, dict) or set(t) != TASK_KEYS:
+            raise ValueError(f"metadata tasks[{i}]: expected the keys {sorted(TASK_KEYS)}, got "
+                             f"{sorted(map(str, t)) if isinstance(t, dict) else t!r}")
+        name = t["name"]
+        if not isinstance(name, str) or not name:
+            raise ValueError(f"metadata tasks[{i}].name: expected a non-empty name, got {name!r}")
+        where = f"metadata task {name!r}"
+        nominal = check_number(t["nominal_duration"], f"{where} nominal_duration",
+                               low=0.0, high=MAX_TIME_S)
+        a_mean = check_number(t["alpha_mean"], f"{where} alpha_mean", low=0.0)
+        a_std = check_number(t["alpha_std"], f"{where} alpha_std", low=0.0)
+        if nominal <= 0 or a_mean <= 0 or a_std <= 0 or a_mean * nominal > MAX_TIME_S:
+            raise ValueError(f"{where}: expected nominal_duration, alpha_mean and alpha_std "
+                             f"> 0 and a mean duration within {MAX_TIME_S:g} s, got "
+                             f"{nominal:g}, {a_mean:g}, {a_std:g}")
+        n_demos = t["n_demos"]
+        if type(n_demos) is not int or n_demos < 1:
+            raise ValueError(f"{where} n_demos: expected an integer >= 1, got {n_demos!r}")
+        prior = check_number(t["prior"], f"{where} prior", low=0.0, high=1.0)
+        out.append({"name": name, "nominal_duration": nominal, "alpha_mean": a_mean,
+                    "alpha_std": a_std, "n_demos": n_demos, "prior": prior})
+    names = [t["name"] for t in out]
+    if len(set(names)) != len(names):
+        raise ValueError(f"metadata tasks: names repeat in {names}")
+    total = sum(t["prior"] for t in out)
+    if abs(total - 1.0) > PRIOR_TOLERANCE:
+        raise ValueError(f"metadata priors: expected a probability vector (summing to 1), got "
+                         f"{[t['prior'] for t in out]} (sum {total:g})")
+    return out

@@ -5,6 +5,12 @@ trajectory has tens of basis functions. These limits turn a careless input
 (a trial stamped in milliseconds, a stray 1e6 s timestamp) into a clear
 ``ValueError`` instead of a multi-gigabyte allocation. Each message names the
 limit and, where it can be raised, how.
+
+Who checks what: :meth:`~sandbox.core.model.IProMP.fit` (durations, units,
+values, dims, spread), the predictors (times, options, plan, lattice,
+observations and their range), :meth:`~sandbox.core.model.IProMP.load` (file,
+members, metadata, values). :func:`check_duration` and :func:`check_time` are
+for loaders and callers that want the same checks and messages.
 """
 
 from __future__ import annotations
@@ -12,16 +18,104 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-#: Longest demonstration, trial or plan horizon accepted (s). Handovers last
-#: 1-10 s; a minute leaves ample room. Raise it with ``max_duration=``.
+from sandbox.core.validation import check_number
+
+#: Longest demonstration or trial accepted (s). Handovers last 1-10 s; a
+#: minute leaves ample room. Raise it with ``max_duration=`` (``IProMP``).
 MAX_DURATION_S = 60.0
 
 #: Shortest median sample interval accepted (s): 10 kHz. Finer spacing on a
 #: motion of human duration means the times are not in seconds.
 MIN_MEDIAN_DT_S = 1e-4
 
+#: Latest time a predictor accepts (s since the motion started): observations,
+#: updates; also the longest task duration a model file may hold. A
+#: closed-loop episode (scenario files allow up to 600 s) stays within it;
+#: absolute clock timestamps (~1.7e9 s) do not. Raise it with the predictors'
+#: ``max_time=``.
+MAX_TIME_S = 600.0
 
-def check_duration(times: ArrayLike, name: str = "times", max_duration: float = MAX_DURATION_S) -> float:
+#: Most basis functions per dim (N). The method uses 15-31; each likelihood
+#: factorisation is N x N per speed candidate.
+MAX_N_BASIS = 100
+
+#: Most speed candidates per task (``n_candidates``; default 50).
+MAX_CANDIDATES = 1000
+
+#: Most floats a predictor's speed lattice may need for its likelihood
+#: statistics: C durations x (N^2 per modality + K (R+1)^2), with K tasks of
+#: rank <= R (256 MiB of float64). The default models need about 1e5.
+MAX_LATTICE_FLOATS = 2**25
+
+#: Most knots of a predictor's plan (its resolution ``dt`` over its length):
+#: 1000 s at the default 0.01 s. Memory grows with Q^2 per knot (40 MB for
+#: Baxter's 7 joints).
+MAX_PLAN_STEPS = 100_000
+
+#: Most observations a predictor keeps (after ``subsample``) before ``reset()``:
+#: a minute at 333 kept rows per second, 1000 s at the 20 per second a
+#: closed-loop policy keeps. A batch update allocates C x kept x N floats.
+MAX_OBSERVATIONS = 20_000
+
+#: Largest ``subsample`` (keep 1 of this many observations).
+MAX_SUBSAMPLE = 10_000
+
+#: Most human dims P and most robot dims Q of a model.
+MAX_DIMS = 64
+
+#: Largest magnitude of any demonstration value (m, rad or raw signal units):
+#: no such quantity comes near it, and sums of squares of millions of samples
+#: stay far from overflow.
+MAX_ABS_VALUE = 1e9
+
+#: A task's demonstrations must differ: the largest standard deviation of
+#: their weights (normalised units) must exceed this fraction of the weights'
+#: largest magnitude. Duplicated, constant or all-zero demos fall far below it
+#: (round-off, ~1e-9 at most); demos that differ only by their duration and
+#: sampling already reach ~1e-3.
+MIN_RELATIVE_SPREAD = 1e-6
+
+#: Margin (m) around the range a model's position modalities were fitted on
+#: (its tasks' mean +/- 3 std over the motion): an observation farther out is
+#: rejected (counted, skipped like a NaN).
+POSITION_MARGIN_M = 10.0
+
+#: Same margin for signal modalities, in their normalised units: 1e3 x the
+#: training demos' standard deviation of the signal.
+SIGNAL_MARGIN = 1e3
+
+#: Smallest observation noise standard deviation (normalised units; 1e-12 m
+#: for positions): the floor of the fit's noise floors, and of a model file's
+#: noise (its square). Finer noise is not physical and would make the
+#: likelihood overflow.
+MIN_NOISE_STD = 1e-12
+
+#: Largest relative hyperparameter (``regularizer``, ``noise_scale``, ``ridge``).
+MAX_RELATIVE = 1e6
+
+#: Smallest ``regularizer``. A robot dim's regulariser is at least this
+#: fraction of its weights' variance, which keeps the robot covariance positive
+#: definite in floating point (condition number ~1e9 at worst); a model file
+#: whose robot regularisers fall below half of it is refused.
+MIN_REGULARIZER = 1e-9
+
+#: Largest magnitude of any number in a model file (weights, regularisers,
+#: noise): far above what a fit of values within ``MAX_ABS_VALUE`` makes, far
+#: below where the likelihood's squares overflow.
+MAX_MODEL_VALUE = 1e30
+
+#: Model files (``.npz``): largest file, largest array member (uncompressed,
+#: as its header and the archive declare it, checked before it is read),
+#: largest metadata member, most archive members, most tasks.
+MAX_MODEL_FILE_BYTES = 64 * 2**20
+MAX_MEMBER_BYTES = 32 * 2**20
+MAX_METADATA_BYTES = 2**20
+MAX_MEMBERS = 1000
+MAX_TASKS = 100
+
+
+def check_duration(times: ArrayLike, name: str = "times",
+                   max_duration: float = MAX_DURATION_S) -> float:
     """Return the span of increasing ``times`` (s) after checking it is plausible.
 
     Parameters
@@ -64,3 +158,31 @@ def _unit_hint(span: float, dt: float) -> str:
     if np.isfinite(dt) and dt > 1.0:
         return " (samples further apart than 1 s: absolute or unscaled timestamps?)"
     return ""
+
+
+def check_time(t, name: str = "t", max_time: float = MAX_TIME_S) -> float:
+    """Return ``t`` as a float after checking it is a finite time within ``max_time`` of 0 (s).
+
+    Parameters
+    ----------
+    t : float
+        Time since the motion started (s).
+    name : str
+        Name used in error messages.
+    max_time : float
+        Largest magnitude accepted (s).
+
+    Raises
+    ------
+    ValueError
+        If ``t`` is not a finite real number or ``|t| > max_time``; the message
+        says when ``t`` looks like an absolute (clock) timestamp.
+    """
+    v = check_number(t, name)
+    if abs(v) > max_time:
+        hint = (" (looks like an absolute clock timestamp: pass the time since the motion "
+                "started)" if abs(v) > 1e8 else "")
+        raise ValueError(f"{name}: expected a time since the motion started of at most "
+                         f"{max_time:g} s, got {v:g} s{hint}; raise max_time= if this is "
+                         f"really seconds since the start")
+    return v

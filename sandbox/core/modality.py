@@ -65,7 +65,7 @@ class Modality:
             raise ValueError(f"modality {self.name!r}: expected non-empty dim names, got {dims!r}")
         if len(set(dims)) != len(dims):
             raise ValueError(f"modality {self.name!r}: dim names repeat in {dims!r}")
-        if self.kind not in KINDS:
+        if not isinstance(self.kind, str) or self.kind not in KINDS:
             raise ValueError(f"modality {self.name!r}: kind expected one of {list(KINDS)}, "
                              f"got {self.kind!r}")
         object.__setattr__(self, "dims", dims)
@@ -89,8 +89,13 @@ class Modality:
         unknown = set(d) - {"name", "dims", "kind", "units"}
         if unknown:
             raise ValueError(f"modality: unknown keys {sorted(unknown)}")
-        return cls(d.get("name", ""), tuple(d.get("dims", ())), d.get("kind", "position"),
-                   d.get("units", ""))
+        dims = d.get("dims", ())
+        if isinstance(dims, str) or not isinstance(dims, (list, tuple)):
+            raise ValueError(f"modality: expected a list of dim names, got {dims!r}")
+        units = d.get("units", "")
+        if not isinstance(units, str):
+            raise ValueError(f"modality: expected units as a string, got {units!r}")
+        return cls(d.get("name", ""), tuple(dims), d.get("kind", "position"), units)
 
 
 def default_modalities(names: Sequence[str]) -> tuple[Modality, ...]:
@@ -142,7 +147,13 @@ def select(modalities: Sequence[Modality], names: Sequence[str] | str | None,
         return mods
     if isinstance(names, str):
         names = [n.strip() for n in names.split(",") if n.strip()]
-    names = list(names)
+    try:
+        names = list(names)
+    except TypeError:
+        raise ValueError(f"{what}: expected modality names (a list or 'a,b'), got "
+                         f"{type(names).__name__}") from None
+    if not all(isinstance(n, str) for n in names):
+        raise ValueError(f"{what}: expected modality names (strings), got {names!r}")
     have = {m.name: m for m in mods}
     unknown = [n for n in names if n not in have]
     if unknown or not names:

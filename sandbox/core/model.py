@@ -61,9 +61,23 @@ from typing import Any, Protocol
 import numpy as np
 
 from sandbox.core.basis import GaussianBasis
-from sandbox.core.modality import Modality, check_modalities, default_modalities
+from sandbox.core.demos import (
+    as_demo_list,
+    check_demo,
+    check_demos,
+    check_spread,
+    modalities_of,
+)
+from sandbox.core.limits import (
+    MAX_ABS_VALUE,
+    MAX_DURATION_S,
+    MAX_RELATIVE,
+    MIN_NOISE_STD,
+    MIN_REGULARIZER,
+)
+from sandbox.core.modality import Modality
 from sandbox.core.promp import WeightDistribution, fit_weights
-from sandbox.core.validation import FloatArray, check_array, check_positive
+from sandbox.core.validation import FloatArray, check_mapping, check_number, check_positive
 
 #: Default noise floor of signal modalities, in their normalised units (see IProMP).
 SIGNAL_FLOOR = 1.0
@@ -200,7 +214,10 @@ class IProMP:
         the handover happens; normalised ones represent constants exactly.
     regularizer : float
         Relative size of the weight-covariance regulariser (module docstring);
-        default chosen by leave-one-out on the recorded handovers.
+        default chosen by leave-one-out on the recorded handovers. In
+        [:data:`~sandbox.core.limits.MIN_REGULARIZER`,
+        :data:`~sandbox.core.limits.MAX_RELATIVE`]; ``noise_scale`` and ``ridge``
+        are at most ``MAX_RELATIVE`` too.
     noise_scale : float
         Multiplies the estimated observation noise :math:`\\Sigma_y`.
     noise_floor : float
@@ -214,7 +231,9 @@ class IProMP:
         Lower bound of :math:`\\sigma_p` of signal modalities, in normalised units
         (fractions of the training demos' standard deviation).
     noise_floors : mapping of str to float, optional
-        Per-modality floors (in the modality's normalised units) overriding the two above.
+        Per-modality floors (in the modality's normalised units) overriding the two
+        above. Every floor is in [:data:`~sandbox.core.limits.MIN_NOISE_STD`,
+        :data:`~sandbox.core.limits.MAX_ABS_VALUE`].
     settle_tol : float or None
         A demonstration's motion ends once the robot stays within this distance
         (rad) of its final configuration (:func:`motion_end`) ...
@@ -227,6 +246,16 @@ class IProMP:
         Relative ridge of the per-demo weight fit (eq. 2).
     priors : mapping of str to float, optional
         Task priors p(k); uniform by default. Normalised after fitting.
+    max_duration : float
+        Longest demonstration :meth:`fit` accepts (s); default
+        :data:`~sandbox.core.limits.MAX_DURATION_S`. Longer spans are refused with a
+        hint when they look like milliseconds or nanoseconds.
+
+    Raises
+    ------
+    ValueError
+        For any option that is not what is described above (a string, a
+        boolean where a number is expected, a number out of range).
 
     Examples
     --------
@@ -256,21 +285,28 @@ class IProMP:
         min_alpha_std: float = 0.02,
         ridge: float = 1e-8,
         priors: Mapping[str, float] | None = None,
+        max_duration: float = MAX_DURATION_S,
     ) -> None:
         self.basis = GaussianBasis(n_basis, basis_width, basis_margin, normalized_basis)
-        self.regularizer = check_positive(regularizer, "regularizer")
-        self.noise_scale = check_positive(noise_scale, "noise_scale")
-        self.noise_floor = check_positive(noise_floor, "noise_floor")
-        self.signal_floor = check_positive(signal_floor, "signal_floor")
-        self.noise_floors = {str(k): check_positive(v, f"noise_floors[{k!r}]")
-                             for k, v in dict(noise_floors or {}).items()}
+        self.regularizer = check_positive(regularizer, "regularizer", high=MAX_RELATIVE)
+        if self.regularizer < MIN_REGULARIZER:
+            raise ValueError(f"regularizer: expected at least {MIN_REGULARIZER:g} "
+                             f"(limits.MIN_REGULARIZER), got {regularizer!r}")
+        self.noise_scale = check_positive(noise_scale, "noise_scale", high=MAX_RELATIVE)
+        self.noise_floor = _check_floor(noise_floor, "noise_floor")
+        self.signal_floor = _check_floor(signal_floor, "signal_floor")
+        self.noise_floors = {k: _check_floor(v, f"noise_floors[{k!r}]")
+                             for k, v in check_mapping(noise_floors, "noise_floors").items()}
         self.settle_tol = (None if settle_tol is None
                            else check_positive(settle_tol, "settle_tol"))
         self.arrive_tol = (None if arrive_tol is None
                            else check_positive(arrive_tol, "arrive_tol"))
         self.min_alpha_std = check_positive(min_alpha_std, "min_alpha_std")
-        self.ridge = check_positive(ridge, "ridge", allow_zero=True)
-        self._prior_spec = dict(priors) if priors is not None else None
+        self.ridge = check_positive(ridge, "ridge", allow_zero=True, high=MAX_RELATIVE)
+        self.max_duration = check_positive(max_duration, "max_duration")
+        self._prior_spec = (None if priors is None else
+                            {k: check_number(v, f"priors[{k!r}]", low=0.0)
+                             for k, v in check_mapping(priors, "priors").items()})
         self._fitted = False
 
     # ------------------------------------------------------------------ fit
@@ -280,23 +316,34 @@ class IProMP:
         Parameters
         ----------
         demos : sequence of Demonstration
-            At least two per task, all with the same P, Q and modalities.
+            At least two per task, all with the same P, Q and modalities, each
+            valid as :mod:`sandbox.core.demos` describes (times in seconds
+            spanning at most ``max_duration``).
+
+        Raises
+        ------
+        ValueError
+            For an invalid demonstration (saying which and why), a task with
+            fewer than two demonstrations, or a task whose demonstrations do not
+            differ (:func:`~sandbox.core.demos.check_spread`).
         """
-        _check_demos(demos)
+        demos = as_demo_list(demos)
+        check_demos(demos, self.max_duration)
         return self.fit_demo_fits([self.demo_fit(d) for d in demos], demos[0])
 
     def demo_fit(self, demo: DemonstrationLike) -> DemoFit:
         """Per-demo part of the fit: weights, residuals and moments of the human dims, duration.
 
-        Only the motion is used: the samples up to :func:`motion_end`.
+        Only the motion is used: the samples up to :func:`motion_end`. The
+        demonstration is checked as :meth:`fit` checks it (``ValueError``).
         """
-        P, n = np.shape(demo.human)[1], self.basis.n_basis
-        times = np.asarray(demo.times, dtype=np.float64)
-        end = self.motion_end(times, demo.robot, demo.human) + 1
+        times, human, robot = check_demo(demo, "demo", self.max_duration)
+        P, n = human.shape[1], self.basis.n_basis
+        end = self.motion_end(times, robot, human) + 1
         times = times[:end]
         z = (times - times[0]) / (times[-1] - times[0])
-        human = np.asarray(demo.human, dtype=np.float64)[:end]
-        robot = np.asarray(demo.robot, dtype=np.float64)[:end]
+        human = human[:end]
+        robot = robot[:end]
         wd = fit_weights(z, np.hstack([human, robot]), self.basis, self.ridge)
         err = human - self.basis.evaluate(z) @ wd[:P].T
         ok = np.isfinite(err)
@@ -318,6 +365,7 @@ class IProMP:
         model keeps. Everything the model learns, the scale of signal
         modalities included, comes from ``fits`` alone.
         """
+        _check_fits(fits, self.basis.n_basis)
         weights: dict[str, list] = {}
         durations: dict[str, list] = {}
         for f in fits:
@@ -329,14 +377,17 @@ class IProMP:
                              f"got one for {small}")
         P = fits[0].residual.size
         Q = fits[0].weights.size // self.basis.n_basis - P
-        modalities = _modalities_of(names_from, P)
+        modalities = modalities_of(names_from, P)
         scale = _scale(modalities, np.sum([f.moments for f in fits], axis=0))
         residual = np.sum([f.residual for f in fits], axis=0) / scale**2
         dof = np.sum([f.dof for f in fits], axis=0)
         floors = self.floors(modalities)
         sigma2 = np.maximum(self.noise_scale * residual / dof, floors**2)
         divide = np.r_[scale, np.ones(Q)].repeat(self.basis.n_basis)
-        self._set_fit({k: np.array(v) / divide for k, v in weights.items()},
+        weights = {k: np.array(v) / divide for k, v in weights.items()}
+        for k, w in weights.items():
+            check_spread(k, w)
+        self._set_fit(weights,
                       {k: np.array(v) for k, v in durations.items()}, sigma2, P, Q,
                       names_from, modalities, scale)
         return self
@@ -416,7 +467,9 @@ class IProMP:
     def with_priors(self, priors: Mapping[str, float]) -> IProMP:
         """Set new task priors p(k) (normalised); returns ``self``."""
         self._require_fit()
-        self.priors = _priors(self.tasks, dict(priors))
+        spec = {k: check_number(v, f"priors[{k!r}]", low=0.0)
+                for k, v in check_mapping(priors, "priors").items()}
+        self.priors = _priors(self.tasks, spec)
         return self
 
     def save(self, path) -> None:
@@ -442,14 +495,6 @@ class IProMP:
         )
 
 
-def _modalities_of(demo, P: int) -> tuple[Modality, ...]:
-    mods = tuple(getattr(demo, "modalities", ()) or ())
-    if mods:
-        return check_modalities(mods, P)
-    names = tuple(getattr(demo, "human_names", ()) or ()) or tuple(f"human_{i}" for i in range(P))
-    return check_modalities(default_modalities(names), P)
-
-
 def _scale(modalities: Sequence[Modality], moments: FloatArray) -> FloatArray:
     """Standard deviation of each signal dim over the pooled samples; 1 for positions."""
     count, total, squares = moments
@@ -472,31 +517,25 @@ def _scale(modalities: Sequence[Modality], moments: FloatArray) -> FloatArray:
     return scale
 
 
-def _check_demos(demos: Sequence[DemonstrationLike]) -> None:
-    """Shapes, finiteness, consistent P, Q and modalities (per-task counts: the fit)."""
-    if demos is None or len(demos) == 0:
-        raise ValueError("demos: expected at least two demonstrations per task, got none")
-    P = Q = None
-    for i, d in enumerate(demos):
-        for attr in ("times", "human", "robot", "task"):
-            if not hasattr(d, attr):
-                raise ValueError(f"demos[{i}]: expected a Demonstration, missing '{attr}'")
-        h = check_array(d.human, f"demos[{i}].human", 2, allow_nan=True)
-        r = check_array(d.robot, f"demos[{i}].robot", 2)
-        t = check_array(d.times, f"demos[{i}].times", 1, shape=(h.shape[0],), min_len=2)
-        if r.shape[0] != t.size or not np.all(np.diff(t) > 0):
-            raise ValueError(f"demos[{i}]: expected increasing times matching {t.size} rows")
-        P = h.shape[1] if P is None else P
-        Q = r.shape[1] if Q is None else Q
-        if (h.shape[1], r.shape[1]) != (P, Q):
-            raise ValueError(
-                f"demos[{i}]: expected P={P}, Q={Q} like the first demo, "
-                f"got P={h.shape[1]}, Q={r.shape[1]}"
-            )
-        if _modalities_of(d, P) != _modalities_of(demos[0], P):
-            raise ValueError(f"demos[{i}]: expected the modalities of the first demo "
-                             f"{[m.name for m in _modalities_of(demos[0], P)]}, got "
-                             f"{[m.name for m in _modalities_of(d, P)]}")
+def _check_floor(value, name: str) -> float:
+    """A noise floor: a number in [MIN_NOISE_STD, MAX_ABS_VALUE] (limits)."""
+    v = check_positive(value, name, high=MAX_ABS_VALUE)
+    if v < MIN_NOISE_STD:
+        raise ValueError(f"{name}: expected at least {MIN_NOISE_STD:g} (limits.MIN_NOISE_STD), "
+                         f"got {value!r}")
+    return v
+
+
+def _check_fits(fits, n_basis: int) -> None:
+    """Per-demo fits of one layout: DemoFit instances with one P and one D*N."""
+    if isinstance(fits, (str, bytes)) or not hasattr(fits, "__len__") or len(fits) == 0:
+        raise ValueError("fits: expected a non-empty sequence of DemoFit")
+    if not all(isinstance(f, DemoFit) for f in fits):
+        raise ValueError("fits: expected DemoFit instances (IProMP.demo_fit)")
+    sizes = {(f.residual.size, f.weights.size) for f in fits}
+    if len(sizes) != 1 or next(iter(sizes))[1] % n_basis:
+        raise ValueError(f"fits: expected one layout (P, D*N with N={n_basis}), "
+                         f"got {sorted(sizes)}")
 
 
 def _priors(tasks: Sequence[str], spec: Mapping[str, float] | None) -> FloatArray:
@@ -505,7 +544,9 @@ def _priors(tasks: Sequence[str], spec: Mapping[str, float] | None) -> FloatArra
     unknown = set(spec) - set(tasks)
     if unknown:
         raise ValueError(f"priors: unknown tasks {sorted(unknown)}; tasks are {list(tasks)}")
-    p = np.array([float(spec.get(t, 0.0)) for t in tasks])
+    p = np.array([spec.get(t, 0.0) for t in tasks], dtype=np.float64)
     if not np.all(np.isfinite(p)) or np.any(p < 0) or p.sum() <= 0:
         raise ValueError(f"priors: expected non-negative numbers with a positive sum, got {spec}")
+    if not np.isfinite(p.sum()):
+        p = p / p.max()      # huge priors: scale first, or the sum overflows
     return p / p.sum()

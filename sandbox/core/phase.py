@@ -30,6 +30,7 @@ import numpy as np
 
 from sandbox.core.interaction import LOG_2PI
 from sandbox.core.likelihood import Scorer
+from sandbox.core.limits import MAX_LATTICE_FLOATS
 from sandbox.core.validation import FloatArray
 
 
@@ -86,7 +87,14 @@ class Lattice:
         std = np.array([t.alpha_std for t in tasks])
         lo = nominal * np.maximum(mean - width * std, 0.05)
         hi = nominal * (mean + width * std)
+        if not np.all(hi > lo):
+            raise ValueError(f"tasks: expected speed priors reaching above alpha=0.05, got "
+                             f"means {mean.tolist()} and stds {std.tolist()} (width {width:g})")
         step = float(np.min(hi - lo) / n_candidates)
+        if not (hi.max() - lo.min()) / step <= MAX_LATTICE_FLOATS:
+            raise ValueError(f"tasks: their speed priors span {lo.min():g}-{hi.max():g} s in steps "
+                             f"of {step:g} s: more candidates than limits.MAX_LATTICE_FLOATS; "
+                             f"lower n_candidates or width")
         j_lo = np.ceil(lo / step - 1e-9).astype(np.int64)
         j_hi = np.floor(hi / step + 1e-9).astype(np.int64)
         return cls(step, j_lo, j_hi)

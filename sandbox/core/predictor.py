@@ -16,10 +16,18 @@ task priors (each at its mean duration, weighted by p(k)).
   fraction ``ratio`` of the expected duration.
 
 The plan before an update's time is never rewritten, so what was executed
-stays executed; each update records the jump it caused in the command. Once
+stays executed (an update earlier than the last one is a ``ValueError``); each
+update records the jump it caused in the command. Once
 an update finds that the motion has ended (``until_end``), the task is held:
 after the handover the human's motion is no longer evidence about which task
 it was, and later updates only refine that task's timing and robot motion.
+
+Sizes are bounded (:mod:`sandbox.core.limits`): times within ``max_time`` of the
+start (an absolute clock timestamp is a ``ValueError``), at most
+:data:`~sandbox.core.limits.MAX_PLAN_STEPS` plan knots, a speed lattice within
+:data:`~sandbox.core.limits.MAX_LATTICE_FLOATS`. Observations outside the
+range the model was fitted on (with a margin) are rejected and counted
+(:attr:`~_Predictor.n_rejected`), like NaN rows are skipped.
 """
 
 from __future__ import annotations
@@ -32,6 +40,14 @@ import numpy as np
 from sandbox.core.blending import blend_unchecked, sigmoid_activations
 from sandbox.core.inference import Prediction, predict
 from sandbox.core.likelihood import Scorer
+from sandbox.core.limits import (
+    MAX_CANDIDATES,
+    MAX_LATTICE_FLOATS,
+    MAX_PLAN_STEPS,
+    MAX_TIME_S,
+    MIN_MEDIAN_DT_S,
+    check_time,
+)
 from sandbox.core.phase import Lattice
 from sandbox.core.promp import WeightDistribution, trajectory_distribution
 from sandbox.core.statistics import StreamStatistics
@@ -39,13 +55,18 @@ from sandbox.core.stream import ObservationStream
 from sandbox.core.validation import (
     FloatArray,
     check_array,
+    check_bool,
     check_choice,
     check_fraction,
+    check_integer,
+    check_number,
     check_positive,
 )
 
 LIKELIHOODS = ("joint", "marginal")
 WINDOW_MODES = ("all", "latest")
+#: Most parabolic refinement steps of the speed.
+MAX_REFINE_STEPS = 100
 
 
 @dataclass(frozen=True, eq=False)
@@ -96,29 +117,53 @@ class _Predictor:
                  n_candidates: int = 50, width: float = 3.0, refine_steps: int = 1,
                  dt: float = 0.01, blend_rate: float = 50.0, blend_delay: float = 0.1,
                  blend: bool = True, horizon: float = 0.0, incremental: bool = True,
-                 until_end: bool = True, end_prob: float = 0.9) -> None:
+                 until_end: bool = True, end_prob: float = 0.9,
+                 max_time: float = MAX_TIME_S) -> None:
         if not getattr(model, "is_fitted", False):
             raise RuntimeError("the model is not fitted: fit it (or load it) before predicting")
-        if int(n_candidates) != n_candidates or n_candidates < 3:
-            raise ValueError(f"n_candidates: expected an integer >= 3, got {n_candidates!r}")
         self.model = model
-        self.stream = ObservationStream(model, observe, subsample)
-        self.scorer = Scorer(model)
-        self.subsample = self.stream.subsample
+        self.n_candidates = check_integer(n_candidates, "n_candidates", 3, MAX_CANDIDATES)
         self.likelihood = check_choice(likelihood, "likelihood", LIKELIHOODS)
-        self.n_candidates = int(n_candidates)
         self.width = check_positive(width, "width")
-        self.refine_steps = int(refine_steps)
+        self.refine_steps = check_integer(refine_steps, "refine_steps", 0, MAX_REFINE_STEPS)
         self.dt = check_positive(dt, "dt")
         self.blend_rate = check_positive(blend_rate, "blend_rate")
         self.blend_delay = check_positive(blend_delay, "blend_delay", allow_zero=True)
-        self.blend = bool(blend)
+        self.blend = check_bool(blend, "blend")
         self.horizon = check_positive(horizon, "horizon", allow_zero=True)
-        self.until_end = bool(until_end)
+        self.until_end = check_bool(until_end, "until_end")
         self.end_prob = check_fraction(end_prob, "end_prob")
+        self.max_time = check_positive(max_time, "max_time")
+        self._incremental = check_bool(incremental, "incremental") and self.likelihood == "joint"
+        self.stream = ObservationStream(model, observe, subsample)
+        self.scorer = Scorer(model)
+        self.subsample = self.stream.subsample
         self._lattice = Lattice.for_tasks(model.task_models, self.n_candidates, self.width)
-        self._incremental = bool(incremental) and self.likelihood == "joint"
+        self._check_sizes()
         self.reset()
+
+    def _check_sizes(self) -> None:
+        """The lattice's statistics and the plan's spans within :mod:`sandbox.core.limits`."""
+        sc, C = self.scorer, self._lattice.durations.size
+        floats = C * (sc.N**2 * len(sc.groups) + sc.K * (sc.R + 1) ** 2)
+        if floats > MAX_LATTICE_FLOATS:
+            raise ValueError(f"n_candidates: the speed lattice ({C} durations, N={sc.N}, "
+                             f"{sc.K} tasks of rank <= {sc.R}) needs {floats:.3g} floats, more "
+                             f"than limits.MAX_LATTICE_FLOATS={MAX_LATTICE_FLOATS:g}; lower "
+                             f"n_candidates (now {self.n_candidates}) or width "
+                             f"(now {self.width:g})")
+        spans = {"the longest candidate duration": float(self._lattice.durations.max()),
+                 "horizon": self.horizon,
+                 "the blend (blend_delay + 10/blend_rate)": self.blend_delay
+                 + 10.0 / self.blend_rate}
+        for what, span in spans.items():
+            self._check_steps(span / self.dt, f"{what}, {span:g} s,")
+
+    def _check_steps(self, steps: float, what: str) -> None:
+        if not steps <= MAX_PLAN_STEPS:
+            raise ValueError(f"plan: {what} would take {steps:.3g} knots of dt={self.dt:g} s, "
+                             f"more than limits.MAX_PLAN_STEPS={MAX_PLAN_STEPS}; raise dt or "
+                             f"shorten that span")
 
     # -------------------------------------------------------------- public
     def reset(self) -> None:
@@ -137,22 +182,26 @@ class _Predictor:
         Parameters
         ----------
         t : float
-            Time since the motion started (s); non-decreasing across calls.
+            Time since the motion started (s); non-decreasing across calls and
+            not before the last update; ``|t| <= max_time``.
         y : array_like, shape (P_obs,), or mapping of str to array_like
             The observed modalities' dims in order (m for positions, raw units
             for signals), or a mapping from modality names to their values. A
-            modality with a NaN is masked in this row; a row with no valid
-            modality is skipped (counted in ``n_skipped``).
+            modality with a NaN, or outside the range the model was fitted on
+            with a margin (counted in ``n_rejected``,
+            :func:`~sandbox.core.stream.observation_bounds`), is masked in this
+            row; a row with no valid modality is skipped (counted in ``n_skipped``).
 
         Returns
         -------
         Update or None
             The update this observation triggered, if any.
         """
-        t = float(t)
-        if not np.isfinite(t) or t < self._last_time:
+        t = check_time(t, "t", self.max_time)
+        previous = max(self._last_time, self._last_update)
+        if t < previous:
             raise ValueError(f"t: expected a finite time >= the previous one "
-                             f"({self._last_time:g}), got {t!r}")
+                             f"({previous:g}), got {t!r}")
         row = self.stream.accept(t, y)
         self._last_time = t
         if row is not None and self._stats is not None:
@@ -168,10 +217,8 @@ class _Predictor:
             Joint targets (rad).
         cov : ndarray, shape (Q, Q)
         """
-        t = float(t)
-        if not np.isfinite(t):
-            raise ValueError(f"t: expected a finite time, got {t!r}")
         pt = self._plan_t
+        t = min(max(check_number(t, "t"), pt[0]), pt[-1])   # the plan holds at its ends
         i = int(np.clip(np.searchsorted(pt, t, side="right"), 1, pt.size - 1))
         span = pt[i] - pt[i - 1]
         w = float(np.clip((t - pt[i - 1]) / span, 0.0, 1.0)) if span > 0 else 1.0
@@ -208,8 +255,13 @@ class _Predictor:
 
     @property
     def n_skipped(self) -> int:
-        """Rows skipped because no modality was valid in them."""
+        """Rows skipped because no modality was valid in them (NaN or rejected)."""
         return self.stream.n_skipped
+
+    @property
+    def n_rejected(self) -> int:
+        """Rows in which a modality was outside the model's range (masked like a NaN)."""
+        return self.stream.n_rejected
 
     @property
     def task_posterior(self) -> dict[str, float]:
@@ -240,10 +292,14 @@ class _Predictor:
     def update(self, t: float | None = None) -> Update | None:
         """Update now (at ``t``, default: the last observation time) with the observations kept.
 
-        Returns None if there is nothing to update from."""
-        t = self._last_time if t is None else float(t)
-        if not np.isfinite(t):
-            raise ValueError("update: no observation yet and no time given")
+        Returns None if there is nothing to update from. ``t`` earlier than the
+        last update is a ``ValueError``: the plan before it may have been executed.
+        """
+        if t is None:
+            if not np.isfinite(self._last_time):
+                raise ValueError("update: no observation yet and no time given")
+            t = self._last_time
+        t = self._check_update_time(t)
         times, values = self._window(t)
         if times.size == 0:
             return None
@@ -264,10 +320,15 @@ class _Predictor:
         With ``until_end``, once a prediction's motion ended before ``t`` (see
         :attr:`ended`), the task is held: this and later predictions condition
         the task chosen before the end (marginal likelihood: they are dropped
-        and None is returned).
+        and None is returned). ``t`` earlier than the last update is a ``ValueError``.
         """
         start = _time.perf_counter() if started is None else started
+        t = self._check_update_time(t)
+        if not isinstance(prediction, Prediction):
+            raise ValueError(f"prediction: expected a Prediction, got {type(prediction).__name__}")
+        n_observations = check_integer(n_observations, "n_observations", 0)
         held = self.ended
+        ends = False
         if held:
             if prediction.factors is None:
                 return None                      # marginal likelihood: the plan just holds
@@ -275,9 +336,10 @@ class _Predictor:
             prediction = prediction.for_task(self.model, self.model.task_index(last.task),
                                              last.task_posterior)
         elif self.until_end and prediction.ended_probability(t) >= self.end_prob:
-            self.ended = True                    # this update decides; later ones hold it
+            ends = True                          # this update decides; later ones hold it
         k = prediction.task_index
-        jump = self._blend_in(float(t), prediction.robot, prediction.duration)
+        jump = self._blend_in(t, prediction.robot, prediction.duration)
+        self.ended = self.ended or ends
         self._prediction = prediction
         upd = Update(float(t), int(n_observations), self.model.tasks[k],
                      prediction.task_posterior, prediction.alphas, prediction.durations,
@@ -289,6 +351,18 @@ class _Predictor:
 
     def _after_update(self) -> None:
         """Hook: what to forget after an update (nothing by default)."""
+
+    @property
+    def _last_update(self) -> float:
+        return self.updates[-1].time if self.updates else -np.inf
+
+    def _check_update_time(self, t) -> float:
+        t = check_time(t, "t", self.max_time)
+        if t < self._last_update:
+            raise ValueError(f"update: expected a time >= the last update's "
+                             f"({self._last_update:g} s), got {t:g} s: the plan before the last "
+                             f"update may have been executed and is never rewritten")
+        return t
 
     # ------------------------------------------------------------ internals
     def _maybe_update(self, t: float) -> Update | None:
@@ -302,6 +376,7 @@ class _Predictor:
     def _prior_plan(self):
         tasks, P, p = self.model.task_models, self.model.n_human, self.model.priors
         end = max(t.mean_duration for t in tasks)
+        self._check_steps(end / self.dt + 1, f"the prior plan to {end:g} s")
         knots = np.arange(0.0, end + self.dt, self.dt)
         means, covs = [], []
         for task in tasks:
@@ -323,6 +398,8 @@ class _Predictor:
         settled = t + self.blend_delay + 10.0 / self.blend_rate
         end = max(duration, self._plan_t[-1], t + self.horizon, settled)
         first = (np.floor(t / self.dt + 1e-9) + 1.0) * self.dt
+        self._check_steps(np.count_nonzero(keep) + (end - first) / self.dt + 2,
+                          f"an update at {t:g} s, planning to {end:g} s,")
         new_t = np.arange(first, end + self.dt, self.dt)
         new_t = new_t[new_t > t + 1e-9]
         old_mean, old_cov = self._interp(np.concatenate([[t], new_t]))
@@ -366,25 +443,29 @@ class DynamicPredictor(_Predictor):
     model : IProMP
         A fitted model.
     dow_t : float
-        Dynamic observation window (s): an update every ``dow_t`` seconds of
-        observation (the paper tests 1, 0.5, 0.2, 0.1).
+        Dynamic observation window (s, >= 1e-4): an update every ``dow_t``
+        seconds of observation (the paper tests 1, 0.5, 0.2, 0.1).
     observe : sequence of str or str, optional
         Modalities the incoming rows carry (default: all the model's); any
         subset predicts, the others are marginalised. A name the model was not
         fitted with is a ``ValueError`` listing what it has.
     subsample : int
-        Keep 1 of every ``subsample`` valid observations.
+        Keep 1 of every ``subsample`` valid observations (at most
+        :data:`~sandbox.core.limits.MAX_SUBSAMPLE`).
     window : {"all", "latest"}
         Each update uses all observations so far, or only its own window's.
     likelihood : {"joint", "marginal"}
         Joint likelihood of all observations, or product of per-step marginals.
     n_candidates : int
-        Speed candidates per task (grid over +/- ``width`` prior std).
+        Speed candidates per task (grid over +/- ``width`` prior std), 3 to
+        :data:`~sandbox.core.limits.MAX_CANDIDATES`; the whole lattice must fit
+        :data:`~sandbox.core.limits.MAX_LATTICE_FLOATS`.
     width : float
     refine_steps : int
-        Parabolic refinement steps of the speed after the grid.
+        Parabolic refinement steps of the speed after the grid (0 to 100).
     dt : float
-        Plan resolution (s).
+        Plan resolution (s); the plan holds at most
+        :data:`~sandbox.core.limits.MAX_PLAN_STEPS` knots.
     blend_rate : float
         Gradient l of the activation sigmoids (1/s).
     blend_delay : float
@@ -412,6 +493,18 @@ class DynamicPredictor(_Predictor):
         Grow the likelihood's sufficient statistics with each observation
         (:mod:`sandbox.core.statistics`) so an update only factors small
         matrices; ``False`` computes everything at the update (same results).
+    max_time : float
+        Largest time (s since the motion started) accepted by :meth:`observe`
+        and :meth:`update`; default :data:`~sandbox.core.limits.MAX_TIME_S`.
+        Larger times (an absolute clock timestamp) are a ``ValueError``.
+
+    Raises
+    ------
+    ValueError
+        For an option that is not what is described above (a string, a
+        boolean where a number is expected, ``inf``, out of range or over a limit).
+    RuntimeError
+        If the model is not fitted.
 
     Examples
     --------
@@ -429,6 +522,8 @@ class DynamicPredictor(_Predictor):
 
     def __init__(self, model, dow_t: float = 0.2, *, window: str = "all", **options) -> None:
         self.dow_t = check_positive(dow_t, "dow_t")
+        if self.dow_t < MIN_MEDIAN_DT_S:
+            raise ValueError(f"dow_t: expected at least {MIN_MEDIAN_DT_S:g} s, got {dow_t!r}")
         self.window = check_choice(window, "window", WINDOW_MODES)
         super().__init__(model, **options)
 

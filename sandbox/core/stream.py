@@ -7,6 +7,12 @@ signal modalities by the model's scale, and keeps 1 of every ``subsample``
 valid samples *of each modality* (as the paper keeps 1 of every 5). A modality
 is valid in a row when all its dims are finite; a NaN in it (a dropout) masks
 that modality in that row only. A row with no valid modality is skipped.
+
+A modality whose values lie outside the range the model was fitted on, widened
+by a generous margin (:func:`observation_bounds`), is rejected: counted in
+:attr:`ObservationStream.n_rejected` and masked like a NaN, so one wild value (a
+tracker glitch of 1e153) can never reach the likelihood of this or any later
+window. At most :data:`~sandbox.core.limits.MAX_OBSERVATIONS` rows are kept.
 """
 
 from __future__ import annotations
@@ -15,8 +21,46 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
+from sandbox.core.limits import (
+    MAX_OBSERVATIONS,
+    MAX_SUBSAMPLE,
+    POSITION_MARGIN_M,
+    SIGNAL_MARGIN,
+)
 from sandbox.core.modality import Modality, select, slices
-from sandbox.core.validation import FloatArray, check_array
+from sandbox.core.promp import trajectory_distribution
+from sandbox.core.validation import FloatArray, check_array, check_integer
+
+#: Phases at which :func:`observation_bounds` evaluates the tasks.
+_RANGE_PHASES = np.linspace(0.0, 1.0, 101)
+
+
+def observation_bounds(model) -> tuple[FloatArray, FloatArray]:
+    """Range of accepted human values, in the model's normalised units.
+
+    The range the model was fitted on is derived from the model itself (old
+    model files have it too): over every task and phase, the mean of each human
+    dim +/- 3 standard deviations of the task's trajectory distribution. It is
+    widened by :data:`~sandbox.core.limits.POSITION_MARGIN_M` (10 m) for
+    position modalities and :data:`~sandbox.core.limits.SIGNAL_MARGIN` (1e3 x
+    the training demos' standard deviation) for signal modalities.
+
+    Returns
+    -------
+    low, high : ndarray, shape (P,)
+    """
+    P = int(model.n_human)
+    low, high = np.full(P, np.inf), np.full(P, -np.inf)
+    for task in model.task_models:
+        mean, cov = trajectory_distribution(task.weights.dims(slice(0, P)), model.basis,
+                                            _RANGE_PHASES)
+        sd = 3.0 * np.sqrt(np.maximum(np.diagonal(cov, axis1=1, axis2=2), 0.0))
+        low = np.minimum(low, (mean - sd).min(axis=0))
+        high = np.maximum(high, (mean + sd).max(axis=0))
+    position = np.array([m.kind == "position" for m in model.modalities for _ in m.dims])
+    margin = np.where(position, POSITION_MARGIN_M / np.asarray(model.scale, dtype=np.float64),
+                      SIGNAL_MARGIN)
+    return low - margin, high + margin
 
 
 class ObservationStream:
@@ -30,13 +74,22 @@ class ObservationStream:
         Modalities the incoming rows carry, in this order (default: all of the
         model's). A name the model was not fitted with is a ``ValueError``.
     subsample : int
-        Keep 1 of every ``subsample`` valid samples of each modality.
+        Keep 1 of every ``subsample`` valid samples of each modality (1 to
+        :data:`~sandbox.core.limits.MAX_SUBSAMPLE`).
+
+    Attributes
+    ----------
+    n_skipped : int
+        Rows skipped because no modality was valid in them (NaN or rejected).
+    n_rejected : int
+        Rows in which a modality was rejected as outside :attr:`bounds`.
+    bounds : tuple of ndarray, shape (P,)
+        :func:`observation_bounds` of the model (normalised units).
     """
 
     def __init__(self, model, observe: Sequence[str] | str | None = None,
                  subsample: int = 5) -> None:
-        if int(subsample) != subsample or subsample < 1:
-            raise ValueError(f"subsample: expected an integer >= 1, got {subsample!r}")
+        subsample = check_integer(subsample, "subsample", 1, MAX_SUBSAMPLE)
         self.modalities: tuple[Modality, ...] = tuple(model.modalities)
         self.observed = select(self.modalities, observe,
                                f"observe (this model has {[m.name for m in self.modalities]})")
@@ -46,9 +99,11 @@ class ObservationStream:
                                      for m in self.observed])
         self._dims = [np.arange(where[m.name].start, where[m.name].stop)
                       for m in self.modalities]
+        self._starts = np.array([where[m.name].start for m in self.modalities])
         self.scale = np.asarray(model.scale, dtype=np.float64)
         self.n_human = int(model.n_human)
-        self.subsample = int(subsample)
+        self.subsample = subsample
+        self.bounds = observation_bounds(model)
         self.reset()
 
     @property
@@ -62,6 +117,7 @@ class ObservationStream:
         self._y: list[FloatArray] = []
         self._valid = np.zeros(len(self.modalities), dtype=int)
         self.n_skipped = 0
+        self.n_rejected = 0
 
     def row(self, y) -> FloatArray:
         """One incoming row as the model's human dims (normalised units, NaN if unobserved).
@@ -93,10 +149,22 @@ class ObservationStream:
         """Take a row received at ``t`` (s); return what is kept of it, or None.
 
         The kept row has NaN for every modality not kept (not observed, NaN in
-        the row, or dropped by the subsampling).
+        the row, outside :attr:`bounds`, or dropped by the subsampling).
+        Raises ``ValueError`` once :data:`~sandbox.core.limits.MAX_OBSERVATIONS`
+        rows are kept.
         """
+        if len(self._t) >= MAX_OBSERVATIONS:
+            raise ValueError(f"observations: this predictor keeps {len(self._t)} observations, "
+                             f"the most it may (limits.MAX_OBSERVATIONS); reset() it between "
+                             f"motions or raise subsample")
         full = self.row(y)
-        valid = np.array([np.isfinite(full[d]).all() for d in self._dims])
+        low, high = self.bounds
+        finite = np.isfinite(full)
+        valid = np.logical_and.reduceat(finite, self._starts)
+        inside = np.logical_and.reduceat(finite & (full >= low) & (full <= high), self._starts)
+        if np.any(valid & ~inside):
+            self.n_rejected += 1
+            valid = inside
         if not valid.any():
             self.n_skipped += 1
             return None

@@ -1,13 +1,14 @@
 """Validators for the public boundary of the core.
 
-Each ``check_*`` converts its input to a fresh float64 array (the caller's
-array is never modified or aliased), checks it, and raises ``ValueError`` saying
-what was expected and what came.
+Each ``check_*`` converts its input (arrays to a fresh float64 array: the
+caller's array is never modified or aliased; scalars to a Python float, int or
+bool), checks it, and raises ``ValueError`` saying what was expected and what
+came: never ``TypeError`` or ``OverflowError``, whatever the input.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -15,8 +16,20 @@ from numpy.typing import ArrayLike, NDArray
 FloatArray = NDArray[np.float64]
 
 
+#: Array kinds accepted as numbers: booleans (0/1), signed and unsigned
+#: integers, floats, and object arrays that convert (e.g. lists mixing ints and
+#: floats). Strings, bytes, complex numbers and dates are refused.
+_NUMERIC_KINDS = "biufO"
+
+
 def _describe(x: np.ndarray) -> str:
     return f"shape {x.shape}"
+
+
+def _show(value) -> str:
+    """A short repr of ``value`` for error messages."""
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
 
 
 def check_array(
@@ -46,9 +59,13 @@ def check_array(
         Minimum size of the first axis.
     """
     try:
-        arr = np.array(x, dtype=np.float64, copy=True)
-    except (TypeError, ValueError) as error:
-        raise ValueError(f"{name}: expected an array of numbers, got {type(x).__name__}") from error
+        raw = np.asarray(x)
+        if raw.dtype.kind not in _NUMERIC_KINDS:
+            raise TypeError(f"dtype {raw.dtype}")
+        arr = np.array(raw, dtype=np.float64, copy=True)
+    except (TypeError, ValueError, OverflowError):
+        raise ValueError(f"{name}: expected an array of numbers, got {type(x).__name__}"
+                         f"{'' if not hasattr(x, 'dtype') else f' of {x.dtype}'}") from None
     if arr.ndim != ndim:
         want = "x".join("n" if s is None else str(s) for s in shape) if shape else f"{ndim}-D"
         raise ValueError(f"{name}: expected a {ndim}-D array ({want}), got {_describe(arr)}")
@@ -78,28 +95,93 @@ def check_times(times: ArrayLike, name: str = "times", min_len: int = 2) -> Floa
     return t
 
 
-def check_positive(value: float, name: str, *, allow_zero: bool = False) -> float:
-    """Return ``value`` as a float after checking it is finite and > 0 (or >= 0)."""
+def check_number(value, name: str, *, low: float | None = None,
+                 high: float | None = None) -> float:
+    """Return ``value`` as a float after checking it is a finite real number in [low, high].
+
+    Refuses what is not a real number even when ``float()`` would take it:
+    ``None``, strings, booleans, arrays, complex numbers; ints too large for a
+    float are refused too (``ValueError``, never ``TypeError``/``OverflowError``).
+    """
+    if isinstance(value, (bool, np.bool_, str, bytes, np.ndarray)) or value is None:
+        raise ValueError(f"{name}: expected a number, got {_show(value)}")
     try:
         v = float(value)
-    except (TypeError, ValueError) as error:
-        raise ValueError(f"{name}: expected a number, got {value!r}") from error
-    if not np.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
-        bound = ">= 0" if allow_zero else "> 0"
-        raise ValueError(f"{name}: expected a finite number {bound}, got {value!r}")
+    except (TypeError, ValueError, OverflowError):
+        raise ValueError(f"{name}: expected a number, got {_show(value)}") from None
+    if not np.isfinite(v):
+        raise ValueError(f"{name}: expected a finite number, got {_show(value)}")
+    if (low is not None and v < low) or (high is not None and v > high):
+        lo = "-inf" if low is None else f"{low:g}"
+        hi = "inf" if high is None else f"{high:g}"
+        raise ValueError(f"{name}: expected a number in [{lo}, {hi}], got {_show(value)}")
     return v
+
+
+def check_positive(value: float, name: str, *, allow_zero: bool = False,
+                   high: float | None = None) -> float:
+    """Return ``value`` as a float after checking it is finite, > 0 (or >= 0) and <= ``high``."""
+    bound = (">= 0" if allow_zero else "> 0") + ("" if high is None else f" and <= {high:g}")
+    try:
+        v = check_number(value, name)
+    except ValueError:
+        raise ValueError(f"{name}: expected a finite number {bound}, got {_show(value)}") from None
+    if v < 0 or (v == 0 and not allow_zero) or (high is not None and v > high):
+        raise ValueError(f"{name}: expected a finite number {bound}, got {_show(value)}")
+    return v
+
+
+def check_integer(value, name: str, low: int, high: int | None = None) -> int:
+    """Return ``value`` as an int after checking it is an integer in [low, high].
+
+    Integral floats (``5.0``) are accepted; booleans, strings, ``None``,
+    non-integral or non-finite numbers are a ``ValueError``.
+    """
+    want = f"an integer >= {low}" if high is None else f"an integer in [{low}, {high}]"
+    if isinstance(value, (bool, np.bool_, str, bytes, np.ndarray)) or value is None:
+        raise ValueError(f"{name}: expected {want}, got {_show(value)}")
+    if isinstance(value, (int, np.integer)):
+        v = int(value)
+    else:
+        try:
+            f = float(value)
+        except (TypeError, ValueError, OverflowError):
+            raise ValueError(f"{name}: expected {want}, got {_show(value)}") from None
+        if not np.isfinite(f) or f != int(f):
+            raise ValueError(f"{name}: expected {want}, got {_show(value)}")
+        v = int(f)
+    if v < low or (high is not None and v > high):
+        raise ValueError(f"{name}: expected {want}, got {_show(value)}")
+    return v
+
+
+def check_bool(value, name: str) -> bool:
+    """Return ``value`` after checking it is a boolean (``True``/``False``, numpy's too)."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise ValueError(f"{name}: expected True or False, got {_show(value)}")
+    return bool(value)
 
 
 def check_fraction(value: float, name: str) -> float:
     """Return ``value`` after checking 0 < value <= 1."""
     v = check_positive(value, name)
     if v > 1:
-        raise ValueError(f"{name}: expected a number in (0, 1], got {value!r}")
+        raise ValueError(f"{name}: expected a number in (0, 1], got {_show(value)}")
     return v
 
 
+def check_mapping(value, name: str) -> dict:
+    """A mapping with string keys (or None: empty) as a new dict; values are not checked."""
+    if value is None:
+        return {}
+    if not isinstance(value, Mapping) or not all(isinstance(k, str) for k in value):
+        raise ValueError(f"{name}: expected a mapping of names to numbers, got "
+                         f"{type(value).__name__}")
+    return dict(value)
+
+
 def check_choice(value: str, name: str, choices: Sequence[str]) -> str:
-    """Return ``value`` after checking it is one of ``choices``."""
-    if value not in choices:
-        raise ValueError(f"{name}: expected one of {list(choices)}, got {value!r}")
+    """Return ``value`` after checking it is one of ``choices`` (strings)."""
+    if not isinstance(value, str) or value not in choices:
+        raise ValueError(f"{name}: expected one of {list(choices)}, got {_show(value)}")
     return value
