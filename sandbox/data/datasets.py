@@ -86,8 +86,9 @@ def load_dataset(
         Resample every demonstration on a uniform grid at this rate
         (:func:`resample_uniform`); default: keep the sample times.
     **options
-        Passed to the loader / preprocessing: ``columns`` (folders only),
-        and those of :data:`sandbox.data.preprocess.DEFAULTS`.
+        Passed to the loader / preprocessing: ``columns`` and ``max_duration``
+        (folders only, :func:`sandbox.data.recorded.load_trial`), and those of
+        :data:`sandbox.data.preprocess.DEFAULTS`.
 
     Returns
     -------
@@ -135,8 +136,9 @@ def _synthetic(name, seed, tasks, n_per_task, preprocess, options) -> list[Demon
     observe = check_observe(options.pop("observe"))
     if name not in synthetic_names():
         raise ValueError(f"data: expected {_spec_options()}, got 'synthetic:{name}'")
-    if "columns" in options:
-        raise ValueError("columns: only used for recorded folders, not synthetic:NAME")
+    for key in ("columns", "max_duration"):
+        if key in options:
+            raise ValueError(f"{key}: only used for recorded folders, not synthetic:NAME")
     n = DEFAULT_SYNTHETIC_PER_TASK if n_per_task is None else int(n_per_task)
     demos = make_dataset(name, n, np.random.default_rng(seed), observe=observe)
     if tasks is not None:
