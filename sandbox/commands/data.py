@@ -22,7 +22,7 @@ import json
 import sys
 from typing import Any
 
-from sandbox.commands import _observation
+from sandbox.commands import _observation, _types
 
 NAME = "data"
 HELP = "inspect a recorded dataset: summary of trials and tracker glitches, filter check."
@@ -39,10 +39,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     check = sub.add_parser("check-filter", help="held-out error of the hand filter settings")
     _common(check)
-    check.add_argument("--accel-std", type=float, default=None, help="m s^-1.5 (default 6)")
-    check.add_argument("--noise-std", type=float, default=None, help="m (default 0.003)")
-    check.add_argument("--jitter-std", type=float, default=None, help="s (default 0.01)")
-    check.add_argument("--gate-prob", type=float, default=None, help="(default 0.999)")
+    check.add_argument("--accel-std", type=_types.POSITIVE, default=None,
+                       help="m s^-1.5, > 0 (default 6)")
+    check.add_argument("--noise-std", type=_types.POSITIVE, default=None,
+                       help="m, > 0 (default 0.003)")
+    check.add_argument("--jitter-std", type=_types.number(0.0, 1.0, open_low=False),
+                       default=None, help="s, in [0, 1] (default 0.01)")
+    check.add_argument("--gate-prob", type=_types.FRACTION, default=None,
+                       help="in (0, 1] (default 0.999)")
     check.add_argument("--json", action="store_true", help="print JSON instead of text")
 
 
