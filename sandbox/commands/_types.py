@@ -16,9 +16,10 @@ option              range                 why
 ``--ratios``        (0, 1]                observed fractions
 ==================  ====================  ==========================================
 
-Output paths (``output_file``, ``output_folder``) are checked at parse time
-too: a file may not be an existing folder and its folder must exist; a
-folder may not be an existing file (it is made if missing).
+Output paths are checked at parse time too: a file may not be an existing
+folder and its folder must exist (``output_file``; ``output_file_in_new_folder``
+makes missing folders, like ``output_folder``); a folder, or a folder to be
+made, may not be or lie under an existing file.
 """
 
 from __future__ import annotations
@@ -67,14 +68,16 @@ def integer(low: int, high: int) -> Callable[[str], int]:
     return parse
 
 
-def number(low: float, high: float, *, open_low: bool = True,
-           open_high: bool = False) -> Callable[[str], float]:
+def number(low: float, high: float, *, open_low: bool = True, open_high: bool = False,
+           meaning: str = "") -> Callable[[str], float]:
     """A type accepting a finite number in the interval from ``low`` to ``high``.
 
     ``open_low``/``open_high`` exclude the bound; ``high = math.inf`` is open.
+    ``meaning`` is added to the message (e.g. the setting the option fills in).
     """
     left, right = "(" if open_low else "[", ")" if open_high or math.isinf(high) else "]"
-    what = f"a finite number in {left}{low:g}, {high:g}{right}"
+    what = f"a finite number in {left}{low:g}, {high:g}{right}" + (f" ({meaning})" if meaning
+                                                                   else "")
 
     def parse(text: str) -> float:
         value = _float(text, what)
@@ -131,15 +134,26 @@ def output_file(text: str) -> str:
     return text
 
 
+def output_file_in_new_folder(text: str) -> str:
+    """A type for a file to write whose missing folders are made: not a folder, under no file."""
+    if not text.strip() or Path(text).is_dir():
+        raise _fail(text, "a file to write, not a folder")
+    return _under_folders(text, Path(text).parent)
+
+
 def output_folder(text: str) -> str:
     """A type for a folder to write into: not an existing file; made if missing."""
-    path = Path(text)
     if not text.strip():
         raise _fail(text, "a folder name")
+    return _under_folders(text, Path(text))
+
+
+def _under_folders(text: str, path: Path) -> str:
+    """``text`` if the nearest existing one of ``path`` and its parents is a folder."""
     for part in (path, *path.parents):
         if part.exists():
             if not part.is_dir():
-                raise _fail(text, f"a folder ({str(part)!r} is a file)")
+                raise _fail(text, f"a path under folders ({str(part)!r} is a file)")
             break
     return text
 

@@ -18,7 +18,7 @@ HELP = "fit on synthetic diverging handovers and watch the robot anticipate an i
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("--out", type=_types.output_file, default="demo.html",
+    parser.add_argument("--out", type=_types.output_file_in_new_folder, default="demo.html",
                         help="replay of the dynamic episode (HTML; default: demo.html here)")
     parser.add_argument("--no-html", action="store_true", help="do not write the replay")
     parser.add_argument("--seed", type=_types.SEED, default=0,

@@ -95,6 +95,8 @@ def test_valid_defaults_parse_as_before():
     lambda d: ["plot", "r.json", "--out", str(d / "file.txt")],
     lambda d: ["results", "--figures", str(d / "file.txt")],
     lambda d: ["play", "--scenario", "waypoints", "--summary", str(d)],
+    lambda d: ["play", "--scenario", "waypoints", "--out", str(d / "file.txt" / "r.html")],
+    lambda d: ["demo", "--out", str(d / "file.txt" / "demo.html")],
 ])
 def test_output_paths_are_checked_before_any_work(make, tmp_path, capsys):
     """issue 13 finding 8: `--markdown` or `fit --out` pointing at a folder gave a traceback
