@@ -16,6 +16,8 @@ limit                          value          why
 :data:`MIN_MEDIAN_DT_S`        0.1 ms         :mod:`sandbox.core.limits` (time unit check)
 :data:`MAX_ABS_VALUE`          1e6            no metre, radian or raw EMG value comes near
 :data:`JOINT_LIMIT_TOL_RAD`    0.05 rad       robot joints may exceed the URDF limits by this
+:data:`MAX_RATE_HZ`            10 kHz         ``resample_uniform``: 1 / ``MIN_MEDIAN_DT_S``
+:data:`MAX_GRID_SAMPLES`       1,000,000      ``resample_uniform``: points of one grid
 =============================  =============  ============================================
 
 A trial whose time stamps span more than ``MAX_DURATION_S`` or whose median
@@ -46,10 +48,16 @@ MAX_LINE_BYTES = 2**20
 MAX_ABS_VALUE = 1e6
 #: How far (rad) a robot joint may go past its URDF limit before the trial is refused.
 JOINT_LIMIT_TOL_RAD = 0.05
+#: Highest rate (Hz) a demonstration is resampled at.
+MAX_RATE_HZ = 1.0 / MIN_MEDIAN_DT_S
+#: Most points of one resampling grid.
+MAX_GRID_SAMPLES = 1_000_000
 
 __all__ = [
     "JOINT_LIMIT_TOL_RAD",
     "MAX_ABS_VALUE",
+    "MAX_GRID_SAMPLES",
+    "MAX_RATE_HZ",
     "MAX_DURATION_S",
     "MAX_FIELD_BYTES",
     "MAX_FILE_BYTES",

@@ -34,8 +34,9 @@ from __future__ import annotations
 import csv
 import difflib
 import warnings
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
+from os import PathLike
 from pathlib import Path
 from typing import Any
 
@@ -350,12 +351,18 @@ def load_trial(
     max_duration = check_positive(max_duration, "max_duration")
     spec = _spec(spec, columns)
     modalities = spec.observed(observe)
-    path = Path(path)
+    path = _path(path, "path")
     try:
         return _load_trial(path, task or path.parent.name, spec, modalities, preprocess,
                            max_duration, options)
     except TrialError as error:
         raise TrialError(f"{path}: {error}") from None
+
+
+def _path(value: Any, name: str) -> Path:
+    if not isinstance(value, (str, PathLike)):
+        raise ValueError(f"{name}: expected a path, got {value!r}")
+    return Path(value)
 
 
 def _spec(spec: DataSpec | None, columns: Columns | None) -> DataSpec:
@@ -455,7 +462,13 @@ def find_trials(root: str | Path, tasks: Sequence[str] | None = None) -> list[tu
     Raises ``ValueError`` if ``root`` is not a folder in that layout or a requested
     task is not there (the message lists the tasks that are).
     """
-    root = Path(root)
+    root = _path(root, "data")
+    if tasks is not None:
+        if isinstance(tasks, (str, bytes)) or not isinstance(tasks, Iterable):
+            raise ValueError(f"tasks: expected a list of task names, got {tasks!r}")
+        tasks = list(tasks)
+        if not all(isinstance(t, str) for t in tasks):
+            raise ValueError(f"tasks: expected a list of task names, got {tasks!r}")
     if not root.is_dir():
         raise ValueError(f"data: expected a folder <root>/<task>/<trial>.csv, got {str(root)!r}")
     found = {d.name: sorted(d.glob("*.csv")) for d in sorted(root.iterdir()) if d.is_dir()}
@@ -463,7 +476,6 @@ def find_trials(root: str | Path, tasks: Sequence[str] | None = None) -> list[tu
     if not found:
         raise ValueError(f"data: no <task>/<trial>.csv files under {str(root)!r}")
     if tasks is not None:
-        tasks = list(tasks)
         unknown = [t for t in tasks if t not in found]
         if unknown:
             raise ValueError(f"tasks: expected some of {sorted(found)}, got unknown {unknown}")

@@ -18,8 +18,15 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from sandbox.data import limits
-from sandbox.data.recorded import Columns, SkippedTrialWarning, TrialError, load_recorded, load_trial
+from sandbox.data import limits, load_dataset, resample_uniform
+from sandbox.data.recorded import (
+    Columns,
+    SkippedTrialWarning,
+    TrialError,
+    load_recorded,
+    load_trial,
+)
+from sandbox.data.spec import DataSpec, resolve
 from tests.data.test_recorded import HEADER, trial_rows, write_csv
 
 #: The shortest trial of each of two tasks (fast to load).
@@ -339,3 +346,41 @@ def test_synthetic_rows_still_load_without_the_recorded_set(tmp_path):
     path = write_csv(tmp_path / "reach" / "t.csv", HEADER, trial_rows())
     demo = load_trial(path, preprocess="none")
     assert demo.times.size == 40 * 2 and demo.robot.shape == (80, 7)
+
+
+# -- finding 9: types of the data package's public entries ----------------------------------
+
+
+@pytest.mark.parametrize("call", [
+    lambda: load_recorded(None), lambda: load_recorded(3), lambda: load_trial(None),
+    lambda: load_recorded(".", tasks=3), lambda: load_recorded(".", tasks=[[1]]),
+    lambda: load_dataset("synthetic:two_task", seed="a"),
+    lambda: load_dataset("synthetic:two_task", seed=-1),
+    lambda: load_dataset("synthetic:two_task", n_per_task=float("inf")),
+    lambda: load_dataset("synthetic:two_task", n_per_task="3"),
+    lambda: load_dataset("synthetic:two_task", tasks="left"),
+    lambda: load_dataset("synthetic:two_task", spec=3),
+    lambda: load_dataset("synthetic:two_task", observe=3),
+    lambda: DataSpec(modalities=3), lambda: DataSpec(modalities=[1]), lambda: DataSpec(observe=3),
+    lambda: DataSpec().observed(3), lambda: DataSpec.load(None), lambda: resolve(3),
+    lambda: DataSpec.from_dict({"modalities": {"a": {"columns": ["x"], "units": [1]}}}),
+])
+def test_public_entries_raise_value_error_for_wrong_types(call):
+    """issue 13 finding 9: the data package's entries raised TypeError/OverflowError for
+    inputs their docstrings do not accept; they raise ValueError."""
+    with pytest.raises(ValueError, match="expected"):
+        call()
+
+
+def test_synthetic_sets_and_resampling_are_bounded():
+    """issue 13 item 1: `n_per_task=10**9` generated until memory ran out and
+    `resample_uniform(demo, 1e9)` allocated gigabytes; both are refused with the limit."""
+    with pytest.raises(ValueError, match="from 1 to 10000"):
+        load_dataset("synthetic:two_task", n_per_task=10**9)
+    demo = load_dataset("synthetic:two_task", n_per_task=2, preprocess="none")[0]
+    with pytest.raises(ValueError, match="MAX_RATE_HZ"):
+        resample_uniform(demo, 1e9)
+    long = demo.replace(times=demo.times * 200.0 / demo.duration)  # 200 s: 10 kHz is too many
+    with pytest.raises(ValueError, match="MAX_GRID_SAMPLES"):
+        resample_uniform(long, limits.MAX_RATE_HZ)
+    assert resample_uniform(demo, 50.0).meta["resampled_hz"] == 50.0
