@@ -120,6 +120,15 @@ def test_data_summary_lists_the_long_trial_as_skipped(dataset, capsys):
     assert "1 trials in 1 tasks (1 skipped)" in out and "at most 60 s" in out
 
 
+def test_check_filter_leaves_out_a_trial_with_implausible_times(dataset, capsys):
+    """issue 13 finding 1: `data check-filter` used a 1e6 s trial silently; it leaves it out."""
+    from sandbox.cli import main
+
+    _corrupt(dataset, TRIALS[0], "1000000.0")
+    assert main(["data", "check-filter", "--data", str(dataset), "--json"]) == 0
+    assert '"trials": 1,' in capsys.readouterr().out
+
+
 # -- finding 2: one huge field --------------------------------------------------------------
 
 
