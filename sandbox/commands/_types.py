@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 from collections.abc import Callable
 from pathlib import Path
 
@@ -131,7 +132,7 @@ def output_file(text: str) -> str:
     parent = path.parent if str(path.parent) else Path(".")
     if not parent.is_dir():
         raise _fail(text, f"a file in an existing folder ({str(parent)!r} is not one)")
-    return text
+    return _writable(text, parent)
 
 
 def output_file_in_new_folder(text: str) -> str:
@@ -154,7 +155,13 @@ def _under_folders(text: str, path: Path) -> str:
         if part.exists():
             if not part.is_dir():
                 raise _fail(text, f"a path under folders ({str(part)!r} is a file)")
-            break
+            return _writable(text, part)
+    return text
+
+
+def _writable(text: str, folder: Path) -> str:
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise _fail(text, f"a path in a folder this user can write to ({str(folder)!r} is not)")
     return text
 
 
