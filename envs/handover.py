@@ -28,7 +28,18 @@ SETTLE_STEPS = 100
 #: Upper bound of the observed EMG envelope (raw Myo units: hundreds in the recordings).
 EMG_MAX = 1e4
 VIEWER_KEYS = ("fps", "record", "resolution", "camera", "target", "fov", "floor_z", "realtime",
-               "open_browser")
+               "open_browser", "host")
+#: Highest control rate (Hz) and most physics steps per control step accepted.
+MAX_CONTROL_HZ = 1000.0
+MAX_SUBSTEPS = 100
+
+
+class ClosedEnvironmentError(gym.error.ClosedEnvironmentError, RuntimeError):
+    """``reset``, ``step`` or ``render`` of an environment after its :meth:`close`.
+
+    Both Gymnasium's :class:`gymnasium.error.ClosedEnvironmentError` and a
+    :class:`RuntimeError` (a call out of order).
+    """
 
 
 class BaxterHandoverEnv(gym.Env):
@@ -121,12 +132,20 @@ class BaxterHandoverEnv(gym.Env):
       (``arm``, ``arm_valid``, ``emg``, ``emg_valid``);
     * ``render_mode`` (None, "human" or "rgb_array"): "human" shows the
       episode live in the browser (meshcat, see Rendering);
-    * ``control_hz`` (50): steps per second; ``substeps`` (5): physics steps
-      per control step (physics at 250 Hz);
-    * ``grasp_radius`` (0.05 m); ``reward_weights`` (RewardWeights);
+    * ``control_hz`` (50, at most :data:`MAX_CONTROL_HZ`): steps per second;
+      ``substeps`` (5, an integer from 1 to :data:`MAX_SUBSTEPS`): physics
+      steps per control step (physics at 250 Hz);
+    * ``grasp_radius`` (0.05 m); ``reward_weights`` (a :class:`RewardWeights`,
+      or a dict of its fields, e.g. ``{"success": 5.0}``);
     * ``default_object`` ("box"): object of tasks without one (diverging tasks);
     * ``viewer_options`` (dict): arguments of :class:`sandbox.viz.Viewer` in
-      "human" mode (default ``{"realtime": True}``; e.g. ``open_browser=True``).
+      "human" mode (default ``{"realtime": True}``; e.g. ``open_browser=True``,
+      ``host="0.0.0.0"`` to serve the viewer beyond this machine).
+
+    Every argument is checked when the environment is made: a wrong type or
+    value is a ``ValueError`` naming it. ``reset``, ``step`` and ``render``
+    after :meth:`close` raise :class:`ClosedEnvironmentError` (a
+    ``RuntimeError``).
 
     ``reset(seed=..., options=...)`` options (all optional, validated):
     ``task``; ``object`` (box, glasses_case, tape, measuring_tape, screwdriver;
@@ -182,34 +201,28 @@ class BaxterHandoverEnv(gym.Env):
         if not isinstance(observe_body, bool):
             raise ValueError(f"observe_body: expected True or False, got {observe_body!r}")
         self.observe_body = observe_body
-        if family not in FAMILIES:
+        if not isinstance(family, str) or family not in FAMILIES:
             raise ValueError(f"family: expected one of {list(FAMILIES)}, got {family!r}")
         if render_mode not in (None, *self.metadata["render_modes"]):
             raise ValueError(f"render_mode: expected None, 'human' or 'rgb_array', "
                              f"got {render_mode!r}")
-        if viewer_options is not None and not isinstance(viewer_options, Mapping):
-            raise ValueError(f"viewer_options: expected a dict of Viewer arguments, "
-                             f"got {type(viewer_options).__name__}")
-        unknown = sorted(set(viewer_options or {}) - set(VIEWER_KEYS))
-        if unknown:
-            raise ValueError(f"viewer_options: expected keys among {list(VIEWER_KEYS)}, "
-                             f"got {unknown}")
-        self.viewer_options = {"realtime": True, **(viewer_options or {})}
+        self.viewer_options = {"realtime": True, **_viewer_options(viewer_options)}
         self.viewer = None
-        if isinstance(substeps, bool) or int(substeps) != substeps or substeps < 1:
-            raise ValueError(f"substeps: expected an integer >= 1, got {substeps!r}")
-        if default_object not in urdf.OBJECTS:
+        self._closed = False
+        if not isinstance(default_object, str) or default_object not in urdf.OBJECTS:
             raise ValueError(f"default_object: expected one of {list(urdf.OBJECTS)}, "
                              f"got {default_object!r}")
         self.family, self.render_mode, self.default_object = family, render_mode, default_object
-        self.dt = 1.0 / check_positive(control_hz, "control_hz")
-        self.substeps = int(substeps)
+        self.dt = 1.0 / _control_hz(control_hz)
+        self.substeps = _substeps(substeps)
         self.metadata = {**self.metadata, "render_fps": int(round(control_hz))}
+        weights = _reward_weights(reward_weights)
+        check_positive(grasp_radius, "grasp_radius")
         self.sim = Simulation(physics_hz=control_hz * self.substeps)
         self.robot = BaxterArm(self.sim)
         self.human = HumanHand(self.sim)
         self.task = HandoverTask(self.sim, self.robot, self.human, grasp_radius=grasp_radius,
-                                 weights=reward_weights or RewardWeights())
+                                 weights=weights)
         self._settle_and_save()
         self.action_space = self._action_space()
         self.observation_space = self._observation_space()
@@ -250,7 +263,11 @@ class BaxterHandoverEnv(gym.Env):
     # ------------------------------------------------------------------ API
     def reset(self, *, seed: int | None = None,
               options: Mapping[str, Any] | None = None) -> tuple[dict, dict]:
-        super().reset(seed=seed)
+        self._check_open("reset")
+        if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer))
+                                 or seed < 0):
+            raise ValueError(f"seed: expected None or an integer >= 0, got {seed!r}")
+        super().reset(seed=None if seed is None else int(seed))
         episode = parse_options(options, self.family)
         motion = self._motion(episode)
         object_name = episode.object or object_for(motion.task, self.default_object)
@@ -268,6 +285,7 @@ class BaxterHandoverEnv(gym.Env):
         return self._observation(), info
 
     def step(self, action) -> tuple[dict, float, bool, bool, dict]:
+        self._check_open("step")
         if self.motion is None:
             raise RuntimeError("step: call reset() before step()")
         action = check_array(action, "action", 1, shape=(8,))
@@ -299,6 +317,8 @@ class BaxterHandoverEnv(gym.Env):
         In ``"human"`` mode the scene is shown in the browser (also done by every
         ``reset`` and ``step``) and None is returned.
         """
+        if self.render_mode is not None:
+            self._check_open("render")
         if self.render_mode == "human":
             if self.motion is None:
                 raise RuntimeError("render: call reset() before render()")
@@ -313,6 +333,12 @@ class BaxterHandoverEnv(gym.Env):
         if self.viewer is not None:
             self.viewer.close()
         self.sim.close()
+        self._closed = True
+
+    def _check_open(self, call: str) -> None:
+        if self._closed:
+            raise ClosedEnvironmentError(f"{call}: the environment is closed; make a new one "
+                                         "with gym.make(...)")
 
     def _show(self, new_episode: bool = False) -> None:
         """Send the scene at the current time to the live viewer (made on first use)."""
@@ -392,3 +418,74 @@ class BaxterHandoverEnv(gym.Env):
         """Body name -> PyBullet body id (``baxter``, ``human_hand``, objects, ``table``...)."""
         return dict(self.sim.bodies)
 
+
+def _control_hz(value: Any) -> float:
+    hz = check_positive(value, "control_hz")
+    if hz > MAX_CONTROL_HZ:
+        raise ValueError(f"control_hz: expected at most {MAX_CONTROL_HZ:g} Hz, got {value!r}")
+    return hz
+
+
+def _substeps(value: Any) -> int:
+    number = isinstance(value, (int, float, np.integer, np.floating))
+    number = number and not isinstance(value, bool)
+    if number and np.isfinite(value) and value == int(value) and 1 <= value <= MAX_SUBSTEPS:
+        return int(value)
+    raise ValueError(f"substeps: expected an integer from 1 to {MAX_SUBSTEPS}, got {value!r}")
+
+
+def _reward_weights(value: Any) -> RewardWeights:
+    """``reward_weights`` as given: None (the defaults), a RewardWeights or a dict of its fields."""
+    if value is None:
+        return RewardWeights()
+    if isinstance(value, RewardWeights):
+        return value
+    if isinstance(value, Mapping):
+        fields = ("distance", "success", "action_rate")
+        unknown = sorted(map(str, set(value) - set(fields)))
+        if unknown:
+            raise ValueError(f"reward_weights: expected keys among {list(fields)}, got {unknown}")
+        return RewardWeights(**value)
+    raise ValueError(f"reward_weights: expected a RewardWeights or a dict of its fields, "
+                     f"got {type(value).__name__}")
+
+
+def _viewer_options(options: Any) -> dict[str, Any]:
+    """Check ``viewer_options`` (keys and the type of each value) before anything starts."""
+    if options is None:
+        return {}
+    if not isinstance(options, Mapping):
+        raise ValueError(f"viewer_options: expected a dict of Viewer arguments, "
+                         f"got {type(options).__name__}")
+    unknown = sorted(map(str, set(options) - set(VIEWER_KEYS)))
+    if unknown:
+        raise ValueError(f"viewer_options: expected keys among {list(VIEWER_KEYS)}, "
+                         f"got {unknown}")
+    out = dict(options)
+    for key in ("record", "realtime", "open_browser"):
+        if key in out and not isinstance(out[key], bool):
+            raise ValueError(f"viewer_options[{key!r}]: expected True or False, got {out[key]!r}")
+    for key in ("fps", "fov"):
+        if key in out:
+            check_positive(out[key], f"viewer_options[{key!r}]")
+    if out.get("resolution") is not None:
+        check_positive(out["resolution"], "viewer_options['resolution']")
+    if out.get("floor_z") is not None:
+        _finite(out["floor_z"], "viewer_options['floor_z']")
+    for key in ("camera", "target"):
+        if key in out:
+            check_array(out[key], f"viewer_options[{key!r}]", 1, shape=(3,))
+    if "host" in out and (not isinstance(out["host"], str) or not out["host"]):
+        raise ValueError(f"viewer_options['host']: expected an address such as '127.0.0.1', "
+                         f"got {out['host']!r}")
+    return out
+
+
+def _finite(value: Any, name: str) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        v = float("nan")
+    if isinstance(value, bool) or not np.isfinite(v):
+        raise ValueError(f"{name}: expected a finite number, got {value!r}")
+    return v

@@ -4,6 +4,12 @@ Every module in :mod:`sandbox.commands` that defines ``NAME``, ``HELP``,
 ``add_arguments(parser)`` and ``run(args) -> int`` becomes a subcommand, so a
 new command is one new file. Command modules import their heavy dependencies
 inside ``run`` so that ``--help`` stays fast.
+
+Exit status: 0 on success; 2 for bad input (argparse's own errors, and a
+``ValueError`` from a command: one line ``error: ...`` on stderr); 1 when a
+file cannot be read or written (``OSError``) or something unexpected fails;
+130 on Ctrl-C. No traceback is printed unless ``--debug`` is given (before
+or after the command name).
 """
 
 from __future__ import annotations
@@ -37,9 +43,12 @@ def build_parser() -> argparse.ArgumentParser:
         description="Anticipatory human-robot handover sandbox (Dynamic Interaction ProMPs).",
     )
     parser.add_argument("--version", action="version", version=sandbox.__version__)
+    parser.add_argument("--debug", action="store_true", help="show tracebacks of errors")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for module in _command_modules():
         child = sub.add_parser(module.NAME, help=module.HELP, description=module.HELP)
+        child.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
+                           help="show tracebacks of errors")
         module.add_arguments(child)
         child.set_defaults(_run=module.run)
     return parser
@@ -48,12 +57,35 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Parse ``argv`` and run the chosen command; return the exit status."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as stop:  # argparse printed the error (or the help, status 0)
+        if stop.code in (0, None):
+            raise
+        return int(stop.code) if isinstance(stop.code, int) else 2
     if not hasattr(args, "_run"):
         parser.print_help()
         return 2
     try:
         return int(args._run(args) or 0)
-    except ValueError as error:  # bad input: a clear message, no traceback
-        print(f"error: {error}", file=sys.stderr)
-        return 2
+    except Exception as error:  # noqa: BLE001 - every failure becomes one line and a status
+        if args.debug:
+            raise
+        status, text = _failure(error)
+    except KeyboardInterrupt:
+        if args.debug:
+            raise
+        status, text = 130, "interrupted"
+    print(f"error: {text}", file=sys.stderr)
+    return status
+
+
+def _failure(error: Exception) -> tuple[int, str]:
+    """Exit status and message of an error that ended a command."""
+    if isinstance(error, ValueError):  # bad input: a clear message, no traceback
+        return 2, str(error)
+    first = (str(error).strip().splitlines() or [""])[0]
+    if isinstance(error, OSError):  # "[Errno 13] Permission denied: 'x'"
+        return 1, first
+    return 1, (f"unexpected {type(error).__name__}: {first} (run with --debug for the "
+               "traceback, and please report it)")

@@ -5,15 +5,17 @@ from __future__ import annotations
 import json
 import os
 
+from sandbox.commands import _types
+
 NAME = "bench"
 HELP = "measure the speed of the predictor update (and of the environments, if present)"
 
 
 def add_arguments(parser) -> None:
     parser.add_argument("--json", action="store_true", help="print one JSON object")
-    parser.add_argument("--repeats", type=int, default=200,
-                        help="repetitions per timed case (default 200)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the reference data")
+    parser.add_argument("--repeats", type=_types.integer(1, 1_000_000), default=200,
+                        help="repetitions per timed case, 1 to 1e6 (default 200)")
+    parser.add_argument("--seed", type=_types.SEED, default=0, help="seed of the reference data")
     parser.add_argument("--skip-env", action="store_true",
                         help="skip the environment benchmarks")
 

@@ -22,7 +22,7 @@ import json
 import sys
 from typing import Any
 
-from sandbox.commands import _observation
+from sandbox.commands import _observation, _types
 
 NAME = "data"
 HELP = "inspect a recorded dataset: summary of trials and tracker glitches, filter check."
@@ -39,11 +39,20 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     check = sub.add_parser("check-filter", help="held-out error of the hand filter settings")
     _common(check)
-    check.add_argument("--accel-std", type=float, default=None, help="m s^-1.5 (default 6)")
-    check.add_argument("--noise-std", type=float, default=None, help="m (default 0.003)")
-    check.add_argument("--jitter-std", type=float, default=None, help="s (default 0.01)")
-    check.add_argument("--gate-prob", type=float, default=None, help="(default 0.999)")
+    check.add_argument("--accel-std", type=_filter("accel_std"), default=None,
+                       help="m s^-1.5, > 0 (default 6)")
+    check.add_argument("--noise-std", type=_filter("noise_std"), default=None,
+                       help="m, > 0 (default 0.003)")
+    check.add_argument("--jitter-std", type=_filter("time_jitter_std", 1.0, open_low=False),
+                       default=None, help="s, in [0, 1] (default 0.01)")
+    check.add_argument("--gate-prob", type=_filter("gate_prob", 1.0), default=None,
+                       help="in (0, 1] (default 0.999)")
     check.add_argument("--json", action="store_true", help="print JSON instead of text")
+
+
+def _filter(field: str, high: float = float("inf"), *, open_low: bool = True):
+    """The type of an option setting ``FilterConfig.<field>``."""
+    return _types.number(0.0, high, open_low=open_low, meaning=f"FilterConfig {field}")
 
 
 def _common(parser: argparse.ArgumentParser) -> None:
@@ -164,12 +173,36 @@ def _points(dims: tuple[str, ...]) -> list[tuple[str, ...]]:
     return [dims[i:i + width] for i in range(0, len(dims), width)]
 
 
+def _filter_table(path, columns):
+    """The trial's table if ``check-filter`` can use it: readable, at least 3 rows, times
+    finite, never going backwards and plausible (:func:`sandbox.core.limits.check_duration`);
+    None otherwise."""
+    import numpy as np
+
+    from sandbox.data.limits import check_duration
+    from sandbox.data.recorded import TrialError, read_trial_table
+
+    try:
+        table, _ = read_trial_table(path, columns)
+    except TrialError:
+        return None
+    t = table[:, 0]
+    ok = np.isfinite(t) & np.r_[True, np.diff(t) >= 0]
+    if ok.sum() < 3 or not ok.all():
+        return None
+    try:
+        check_duration(np.unique(t))
+    except ValueError:
+        return None
+    return table
+
+
 def _check_filter(args: argparse.Namespace) -> int:
     import numpy as np
 
     from sandbox.data.filtering import FilterConfig, holdout_errors
     from sandbox.data.glitches import find_glitches
-    from sandbox.data.recorded import TrialError, find_trials, read_trial_table
+    from sandbox.data.recorded import find_trials
 
     settings = {"accel_std": args.accel_std, "noise_std": args.noise_std,
                 "time_jitter_std": args.jitter_std, "gate_prob": args.gate_prob}
@@ -184,14 +217,10 @@ def _check_filter(args: argparse.Namespace) -> int:
     columns = Columns(tuple(c for cols in points for c in cols), spec.robot, spec.time)
     smooth, causal, frames, rejected, trials = [], [], 0, 0, 0
     for _, path in find_trials(args.data, _split(args.tasks)):
-        try:
-            table, _ = read_trial_table(path, columns)
-        except TrialError:
+        table = _filter_table(path, columns)
+        if table is None:
             continue
         t = table[:, 0]
-        ok = np.isfinite(t) & np.r_[True, np.diff(t) >= 0]
-        if ok.sum() < 3 or not ok.all():
-            continue
         start = 1
         for cols in points:
             human = table[:, start:start + len(cols)]

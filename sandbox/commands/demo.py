@@ -11,24 +11,28 @@ scene with the predictions, a self-contained HTML file: no network needed).
 
 from __future__ import annotations
 
+from sandbox.commands import _types
+
 NAME = "demo"
 HELP = "fit on synthetic diverging handovers and watch the robot anticipate an intent switch"
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("--out", default="demo.html",
+    parser.add_argument("--out", type=_types.output_file_in_new_folder, default="demo.html",
                         help="replay of the dynamic episode (HTML; default: demo.html here)")
     parser.add_argument("--no-html", action="store_true", help="do not write the replay")
-    parser.add_argument("--seed", type=int, default=0,
+    parser.add_argument("--seed", type=_types.SEED, default=0,
                         help="seed of the training demos and of the episode")
     parser.add_argument("--from-task", default="up", help="task the human starts with")
     parser.add_argument("--to-task", default="right", help="task the human switches to")
-    parser.add_argument("--switch", type=float, default=0.55,
+    parser.add_argument("--switch", type=_types.number(0.0, 1.0, open_high=True), default=0.55,
                         help="when the human switches, as a fraction of the motion")
-    parser.add_argument("--dow", type=float, default=0.2, help="dynamic window dow_t (s)")
-    parser.add_argument("--ratio", type=float, default=0.3,
+    parser.add_argument("--dow", type=_types.SECONDS, default=0.2,
+                        help="dynamic window dow_t (s), in (0, 60]")
+    parser.add_argument("--ratio", type=_types.FRACTION, default=0.3,
                         help="observed fraction of the static baseline")
-    parser.add_argument("--demos", type=int, default=20, help="training demos per task")
+    parser.add_argument("--demos", type=_types.DEMOS, default=20,
+                        help="training demos per task (at least 2)")
 
 
 def _check(args) -> None:

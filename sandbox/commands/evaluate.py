@@ -2,20 +2,10 @@
 
 from __future__ import annotations
 
-from sandbox.commands import _observation
+from sandbox.commands import _observation, _types
 
 NAME = "evaluate"
 HELP = "leave-one-out evaluation of the static and dynamic formulations (paper sec. 5)"
-
-
-def _floats(text: str) -> tuple[float, ...]:
-    try:
-        values = tuple(float(x) for x in text.split(",") if x.strip())
-    except ValueError:
-        raise ValueError(f"expected comma-separated numbers, got {text!r}") from None
-    if not values or any(v <= 0 for v in values):
-        raise ValueError(f"expected positive numbers, got {text!r}")
-    return values
 
 
 def add_arguments(parser) -> None:
@@ -24,16 +14,22 @@ def add_arguments(parser) -> None:
                              "(diverging, objects, two_task)")
     parser.add_argument("--tasks", default=None, help="comma-separated subset of tasks")
     _observation.add_arguments(parser)
-    parser.add_argument("--windows", default="1,0.5,0.2,0.1", help="dynamic windows dow_t (s)")
-    parser.add_argument("--ratios", default="0.1,0.2,0.3,0.4,0.5,0.6,0.7,0.8,0.9",
-                        help="observed ratios of the static formulation")
-    parser.add_argument("--workers", type=int, default=2, help="processes (default 2)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of synthetic data")
-    parser.add_argument("--n-per-task", type=int, default=None,
+    parser.add_argument("--windows", type=_types.WINDOWS, default="1,0.5,0.2,0.1",
+                        help="dynamic windows dow_t (s), each in (0, 60]")
+    parser.add_argument("--ratios", type=_types.RATIOS,
+                        default="0.1,0.2,0.3,0.4,0.5,0.6,0.7,0.8,0.9",
+                        help="observed ratios of the static formulation, each in (0, 1]")
+    parser.add_argument("--workers", type=_types.WORKERS, default=2,
+                        help=f"processes, 1 to {_types.MAX_WORKERS} (default 2)")
+    parser.add_argument("--seed", type=_types.SEED, default=0, help="seed of synthetic data")
+    parser.add_argument("--n-per-task", type=_types.PER_TASK, default=None,
                         help="trials per task (synthetic: generated; folder: first N)")
-    parser.add_argument("--out", required=True, help="report.json to write")
-    parser.add_argument("--plots", default=None, help="folder for the PNG figures")
-    parser.add_argument("--markdown", default=None, help="report.md to write")
+    parser.add_argument("--out", type=_types.output_file, required=True,
+                        help="report.json to write")
+    parser.add_argument("--plots", type=_types.output_folder, default=None,
+                        help="folder for the PNG figures")
+    parser.add_argument("--markdown", type=_types.output_file, default=None,
+                        help="report.md to write")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
@@ -47,16 +43,15 @@ def run(args) -> int:
 
     spec = _observation.data_spec(args)
     observe = _observation.observe(args, spec)
-    config = EvalConfig(ratios=_floats(args.ratios), windows=_floats(args.windows),
-                        observe=observe)
-    if any(r > 1 for r in config.ratios):
-        raise ValueError(f"--ratios: expected fractions in (0, 1], got {args.ratios!r}")
+    config = EvalConfig(ratios=args.ratios, windows=args.windows, observe=observe)
     train, test, skipped = load_pair(args.data, seed=args.seed,
                                      tasks=_observation.split(args.tasks),
                                      n_per_task=args.n_per_task, spec=spec, observe=observe)
     for reason in skipped:
         print(f"skipped: {reason}")
-    trials, runtime = run_loocv(train, test, config, workers=max(1, args.workers),
+    if not train:
+        raise ValueError(f"--data: no usable trial in {args.data} ({len(skipped)} skipped)")
+    trials, runtime = run_loocv(train, test, config, workers=args.workers,
                                 progress=not args.no_progress)
     report = build_report(trials, config.to_dict(), str(args.data), runtime)
     Path(args.out).write_text(json.dumps(report, indent=1))

@@ -15,7 +15,7 @@ import argparse
 import json
 from pathlib import Path
 
-from sandbox.commands import _observation
+from sandbox.commands import _observation, _types
 
 NAME = "fit"
 HELP = "fit one Interaction ProMP per task on a dataset and save the model (.npz)."
@@ -24,15 +24,17 @@ HELP = "fit one Interaction ProMP per task on a dataset and save the model (.npz
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--data", required=True, metavar="DIR|synthetic:NAME",
                         help="dataset folder <DIR>/<task>/<trial>.csv or synthetic:NAME")
-    parser.add_argument("--out", required=True, metavar="PATH", help="model file to write (.npz)")
+    parser.add_argument("--out", type=_types.output_file, required=True, metavar="PATH",
+                        help="model file to write (.npz)")
     parser.add_argument("--tasks", default=None, help="comma-separated subset of tasks")
-    parser.add_argument("--n-basis", type=int, default=None,
-                        help="basis functions per dim (default: IProMP's, 21)")
-    parser.add_argument("--regularizer", type=float, default=None,
-                        help="relative weight-covariance regulariser (core default)")
-    parser.add_argument("--n-per-task", type=int, default=None,
+    parser.add_argument("--n-basis", type=_types.N_BASIS, default=None,
+                        help=f"basis functions per dim, 2 to {_types.MAX_N_BASIS} "
+                             "(default: IProMP's, 21)")
+    parser.add_argument("--regularizer", type=_types.POSITIVE, default=None,
+                        help="relative weight-covariance regulariser, > 0 (core default)")
+    parser.add_argument("--n-per-task", type=_types.PER_TASK, default=None,
                         help="demos per task (folder: the first N; synthetic: generated, 20)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of a synthetic set (0)")
+    parser.add_argument("--seed", type=_types.SEED, default=0, help="seed of a synthetic set (0)")
     parser.add_argument("--preprocess", choices=("none", "causal", "smooth"), default="smooth",
                         help="human-track preprocessing of the demos (smooth)")
     _observation.add_arguments(parser)

@@ -15,6 +15,8 @@ the policy observes (and its model is fitted on) in both modes.
 
 from __future__ import annotations
 
+from sandbox.commands import _types
+
 NAME = "play"
 HELP = ("drive the human hand from the keyboard while the robot anticipates live in the "
         "browser, or run a scripted scenario file")
@@ -24,9 +26,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--scenario", metavar="FILE", default=None,
                         help="run a scenario file (.json/.yaml) or a shipped example "
                              "(intent_switch, waypoints) instead of the keyboard teleop")
-    parser.add_argument("--out", default=None,
+    parser.add_argument("--out", type=_types.output_file_in_new_folder, default=None,
                         help="scenario replay (HTML; default: <file name>.html here)")
-    parser.add_argument("--summary", default=None,
+    parser.add_argument("--summary", type=_types.output_file_in_new_folder, default=None,
                         help="scenario summary (JSON; default: <file name>.summary.json here)")
     parser.add_argument("--observe", default=None, metavar="NAMES",
                         help="modalities the policy observes, comma-separated: hand, arm, emg "
@@ -34,25 +36,36 @@ def add_arguments(parser) -> None:
                              "the model is fitted on them; default hand)")
     parser.add_argument("--family", default="diverging", choices=["diverging", "objects"],
                         help="teleop: the synthetic tasks the robot knows")
-    parser.add_argument("--dow", type=float, default=0.2, help="teleop: dynamic window (s)")
-    parser.add_argument("--demos", type=int, default=20, help="teleop: training demos per task")
-    parser.add_argument("--seed", type=int, default=0, help="teleop: seed of demos and episodes")
-    parser.add_argument("--time-limit", type=float, default=20.0,
-                        help="teleop: episode length limit (s)")
+    parser.add_argument("--dow", type=_types.SECONDS, default=0.2,
+                        help="teleop: dynamic window (s), in (0, 60]")
+    parser.add_argument("--demos", type=_types.DEMOS, default=20,
+                        help="teleop: training demos per task (at least 2)")
+    parser.add_argument("--seed", type=_types.SEED, default=0,
+                        help="teleop: seed of demos and episodes")
+    parser.add_argument("--time-limit", type=_types.EPISODE, default=20.0,
+                        help=f"teleop: episode length limit (s), in (0, {_types.MAX_EPISODE_S:g}]")
     parser.add_argument("--start", action="store_true",
                         help="teleop: start the clock at once (default: press space)")
     parser.add_argument("--open", action="store_true", help="teleop: open the browser")
+    parser.add_argument("--host", default="127.0.0.1", metavar="ADDRESS",
+                        help="teleop: address the live viewer listens on (default 127.0.0.1, "
+                             "this machine only; 0.0.0.0 lets anyone on the network watch)")
 
 
 def run(args) -> int:
     if args.scenario is not None:
         return _scenario(args)
     from sandbox.core.validation import check_positive
+    from sandbox.viz.server import check_host
 
     check_positive(args.dow, "--dow")
     check_positive(args.time_limit, "--time-limit")
     if args.demos < 2:
         raise ValueError(f"--demos: expected at least 2 demos per task, got {args.demos}")
+    try:
+        check_host(args.host)
+    except ValueError as error:
+        raise ValueError(f"--{error}") from None
     return _teleop(args)
 
 
@@ -73,7 +86,7 @@ def _teleop(args) -> int:
           flush=True)
     env = gym.make(env_id, render_mode="human",
                    max_episode_steps=max(1, round(args.time_limit * 50)),
-                   viewer_options={"open_browser": args.open})
+                   viewer_options={"open_browser": args.open, "host": args.host})
     try:
         with Keyboard() as keyboard:
             episodes = run_teleop(env, policy, keyboard, seed=args.seed, running=args.start,

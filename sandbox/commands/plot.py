@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+from sandbox.commands import _types
+
 NAME = "plot"
 HELP = "draw the evaluation figures (PNG) of one report, or compare two"
 
 
 def add_arguments(parser) -> None:
     parser.add_argument("reports", nargs="+", help="report.json (a second one to compare)")
-    parser.add_argument("--out", required=True, help="folder for the PNG files")
+    parser.add_argument("--out", type=_types.output_folder, required=True,
+                        help="folder for the PNG files")
 
 
 def run(args) -> int:

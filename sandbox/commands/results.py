@@ -12,7 +12,7 @@ Nothing in those tables is typed by hand.
 
 from __future__ import annotations
 
-from sandbox.commands import _observation
+from sandbox.commands import _observation, _types
 
 NAME = "results"
 HELP = "regenerate the README's results tables and figures from fresh evaluations"
@@ -23,11 +23,12 @@ START, END = "<!-- results:start -->", "<!-- results:end -->"
 def add_arguments(parser) -> None:
     parser.add_argument("--data", default=None,
                         help="recorded set folder (e.g. ../shared/data/birl-handover-20180329)")
-    parser.add_argument("--figures", default="notebooks/figures",
+    parser.add_argument("--figures", type=_types.output_folder, default="notebooks/figures",
                         help="folder for reports and figures (default notebooks/figures)")
     parser.add_argument("--readme", default="README.md", help="README to update")
-    parser.add_argument("--workers", type=int, default=2, help="processes")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the synthetic sets")
+    parser.add_argument("--workers", type=_types.WORKERS, default=2,
+                        help=f"processes, 1 to {_types.MAX_WORKERS} (default 2)")
+    parser.add_argument("--seed", type=_types.SEED, default=0, help="seed of the synthetic sets")
     parser.add_argument("--compare", default="hand;hand,arm;hand,arm,emg", metavar="SETS",
                         help="observation sets compared on the recorded set, ';'-separated "
                              "(default hand;hand,arm;hand,arm,emg; 'none' to skip)")
@@ -60,7 +61,7 @@ def run(args) -> int:
         config = EvalConfig(observe=observe if recorded else None)
         train, test, _ = load_pair(data, seed=args.seed, spec=spec if recorded else None,
                                    observe=observe if recorded else None)
-        trials, runtime = run_loocv(train, test, config, workers=max(1, args.workers),
+        trials, runtime = run_loocv(train, test, config, workers=args.workers,
                                     progress=True)
         rep = build_report(trials, config.to_dict(), data, runtime)
         rep["dataset"] = data if name != "recorded" else Path(data).name
@@ -73,7 +74,7 @@ def run(args) -> int:
     body = [START, "", _summary_table(reports), ""]
     compare = _compare_sets(args.compare)
     if args.data and compare:
-        table = compare_modalities(args.data, spec, compare, workers=max(1, args.workers),
+        table = compare_modalities(args.data, spec, compare, workers=args.workers,
                                    figures=out / "recorded")
         (out / "modalities.md").write_text(table)
         rel = (out / "recorded").as_posix()

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from sandbox.commands import _observation
+from sandbox.commands import _observation, _types
 
 NAME = "tune"
 HELP = ("cross-validate likelihood, window mode, regulariser, noise floors, motion end and "
@@ -12,12 +12,16 @@ HELP = ("cross-validate likelihood, window mode, regulariser, noise floors, moti
 def add_arguments(parser) -> None:
     parser.add_argument("--data", required=True, help="a folder in the shared layout or "
                                                       "synthetic:NAME")
-    parser.add_argument("--window", type=float, default=0.2, help="dynamic window scored (s)")
+    parser.add_argument("--window", type=_types.SECONDS, default=0.2,
+                        help="dynamic window scored (s), in (0, 60]")
     _observation.add_arguments(parser)
-    parser.add_argument("--workers", type=int, default=2, help="processes (default 2)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of synthetic data")
-    parser.add_argument("--out", default=None, help="write the table (Markdown) here too")
-    parser.add_argument("--json", default=None, help="write all rows and the choice as JSON")
+    parser.add_argument("--workers", type=_types.WORKERS, default=2,
+                        help=f"processes, 1 to {_types.MAX_WORKERS} (default 2)")
+    parser.add_argument("--seed", type=_types.SEED, default=0, help="seed of synthetic data")
+    parser.add_argument("--out", type=_types.output_file, default=None,
+                        help="write the table (Markdown) here too")
+    parser.add_argument("--json", type=_types.output_file, default=None,
+                        help="write all rows and the choice as JSON")
 
 
 def run(args) -> int:
@@ -27,8 +31,6 @@ def run(args) -> int:
     from sandbox.eval.datasets import load_pair
     from sandbox.eval.tune import HEADER, grid_for, table, tune
 
-    if args.window <= 0:
-        raise ValueError(f"--window: expected a positive number of seconds, got {args.window}")
     spec = _observation.data_spec(args)
     observe = _observation.observe(args, spec)
     train, test, _ = load_pair(args.data, seed=args.seed, spec=spec, observe=observe)
@@ -37,7 +39,7 @@ def run(args) -> int:
 
     grid = grid_for(spec.observed(observe))
     best, rows = tune(train, test, base=EvalConfig(observe=observe), window=args.window,
-                      workers=max(1, args.workers), grid=grid)
+                      workers=args.workers, grid=grid)
     chosen = {k: getattr(best, k) for k in grid}
     print(f"\nchosen: {chosen}")
     if args.out:

@@ -15,7 +15,7 @@ samples received so far shape each value) or ``"none"`` and filter online with
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -23,11 +23,14 @@ import numpy as np
 
 from sandbox.core.validation import check_array, check_choice, check_positive
 from sandbox.data.demonstration import Demonstration, stack_tasks
+from sandbox.data.limits import MAX_GRID_SAMPLES, MAX_RATE_HZ
 from sandbox.data.spec import DataSpec, resolve
 
 SYNTHETIC_PREFIX = "synthetic:"
 #: Demonstrations per task of a synthetic set when ``n_per_task`` is not given.
 DEFAULT_SYNTHETIC_PER_TASK = 20
+#: Most demonstrations per task ``n_per_task`` accepts (a synthetic set generates them all).
+MAX_SYNTHETIC_PER_TASK = 10_000
 PREPROCESS = ("none", "causal", "smooth")
 
 
@@ -70,15 +73,16 @@ def load_dataset(
         Modalities to load (default the spec's: ``hand``); synthetic sets carry
         ``hand`` and ``arm`` (e.g. ``"hand,arm"``), no ``emg``.
     seed : int
-        Seed of the synthetic generator (``np.random.default_rng(seed)``);
+        Seed (>= 0) of the synthetic generator (``np.random.default_rng(seed)``);
         unused for folders.
     tasks : sequence of str, optional
         Keep only these tasks (default all); an unknown task is a ``ValueError``
         listing the available ones.
     n_per_task : int, optional
-        Demonstrations per task: for a folder the first ``n_per_task`` trials of
-        each task in file order (all if None); for a synthetic set the number
-        generated (default :data:`DEFAULT_SYNTHETIC_PER_TASK`).
+        Demonstrations per task, 1 to :data:`MAX_SYNTHETIC_PER_TASK`: for a
+        folder the first ``n_per_task`` trials of each task in file order (all
+        if None); for a synthetic set the number generated (default
+        :data:`DEFAULT_SYNTHETIC_PER_TASK`).
     preprocess : {"none", "causal", "smooth"}
         Human-track preprocessing (see :mod:`sandbox.data.recorded`); applied to
         synthetic sets too, whose tracker artefacts mimic the recordings.
@@ -86,8 +90,9 @@ def load_dataset(
         Resample every demonstration on a uniform grid at this rate
         (:func:`resample_uniform`); default: keep the sample times.
     **options
-        Passed to the loader / preprocessing: ``columns`` (folders only),
-        and those of :data:`sandbox.data.preprocess.DEFAULTS`.
+        Passed to the loader / preprocessing: ``columns`` and ``max_duration``
+        (folders only, :func:`sandbox.data.recorded.load_trial`), and those of
+        :data:`sandbox.data.preprocess.DEFAULTS`.
 
     Returns
     -------
@@ -96,8 +101,13 @@ def load_dataset(
         :class:`sandbox.data.recorded.SkippedTrialWarning`.
     """
     check_choice(preprocess, "preprocess", PREPROCESS)
-    if n_per_task is not None and (int(n_per_task) != n_per_task or n_per_task < 1):
-        raise ValueError(f"n_per_task: expected an integer >= 1, got {n_per_task!r}")
+    _check_int(seed, "seed", 0)
+    if n_per_task is not None:
+        _check_int(n_per_task, "n_per_task", 1, MAX_SYNTHETIC_PER_TASK)
+    if tasks is not None:
+        if isinstance(tasks, (str, bytes)) or not isinstance(tasks, Iterable):
+            raise ValueError(f"tasks: expected a list of task names, got {tasks!r}")
+        tasks = list(tasks)
     layout = resolve(spec)
     if isinstance(data, str) and data.startswith(SYNTHETIC_PREFIX):
         observed = [m.name for m in layout.observed(observe)]
@@ -115,6 +125,15 @@ def load_dataset(
     if rate_hz is not None:
         demos = [resample_uniform(d, rate_hz) for d in demos]
     return demos
+
+
+def _check_int(value: Any, name: str, low: int, high: int | None = None) -> int:
+    """``value`` as an int after checking it is an integer in ``[low, high]``."""
+    ok = isinstance(value, (int, np.integer)) and not isinstance(value, bool)
+    if not ok or value < low or (high is not None and value > high):
+        bound = f">= {low}" if high is None else f"from {low} to {high}"
+        raise ValueError(f"{name}: expected an integer {bound}, got {value!r}")
+    return int(value)
 
 
 def _recorded(root, tasks, n_per_task, preprocess, options) -> list[Demonstration]:
@@ -135,8 +154,9 @@ def _synthetic(name, seed, tasks, n_per_task, preprocess, options) -> list[Demon
     observe = check_observe(options.pop("observe"))
     if name not in synthetic_names():
         raise ValueError(f"data: expected {_spec_options()}, got 'synthetic:{name}'")
-    if "columns" in options:
-        raise ValueError("columns: only used for recorded folders, not synthetic:NAME")
+    for key in ("columns", "max_duration"):
+        if key in options:
+            raise ValueError(f"{key}: only used for recorded folders, not synthetic:NAME")
     n = DEFAULT_SYNTHETIC_PER_TASK if n_per_task is None else int(n_per_task)
     demos = make_dataset(name, n, np.random.default_rng(seed), observe=observe)
     if tasks is not None:
@@ -169,7 +189,8 @@ def resample_uniform(
     demo : Demonstration
         The demonstration.
     rate_hz : float
-        Grid rate (Hz).
+        Grid rate (Hz), at most :data:`sandbox.data.limits.MAX_RATE_HZ`; the
+        grid has at most :data:`~sandbox.data.limits.MAX_GRID_SAMPLES` points.
     max_gap_s : float
         Longest gap (s) between valid human samples that is interpolated.
 
@@ -179,9 +200,18 @@ def resample_uniform(
         With ``meta["resampled_hz"] = rate_hz``; ``meta["human_measured"]`` is
         dropped (the grid carries no raw samples).
     """
+    if not isinstance(demo, Demonstration):
+        raise ValueError(f"demo: expected a Demonstration, got {type(demo).__name__}")
     rate_hz = check_positive(rate_hz, "rate_hz")
     max_gap_s = check_positive(max_gap_s, "max_gap_s", allow_zero=True)
+    if rate_hz > MAX_RATE_HZ:
+        raise ValueError(f"rate_hz: expected at most {MAX_RATE_HZ:g} Hz "
+                         f"(sandbox.data.limits.MAX_RATE_HZ), got {rate_hz:g}")
     n = int(round(demo.duration * rate_hz)) + 1
+    if n > MAX_GRID_SAMPLES:
+        raise ValueError(f"rate_hz: {rate_hz:g} Hz over {demo.duration:g} s gives {n} samples, "
+                         f"expected at most {MAX_GRID_SAMPLES} (sandbox.data.limits."
+                         "MAX_GRID_SAMPLES)")
     t = np.linspace(demo.times[0], demo.times[-1], max(n, 2))
     robot = np.column_stack([np.interp(t, demo.times, q) for q in demo.robot.T])
     human = np.column_stack([_interp_gaps(t, demo.times, y, max_gap_s) for y in demo.human.T])

@@ -34,16 +34,28 @@ from __future__ import annotations
 import csv
 import difflib
 import warnings
-from collections.abc import Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
+from os import PathLike
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from sandbox.core.modality import Modality
-from sandbox.core.validation import FloatArray
+from sandbox.core.validation import FloatArray, check_positive
 from sandbox.data.demonstration import Demonstration
+from sandbox.data.limits import (
+    JOINT_LIMIT_TOL_RAD,
+    MAX_ABS_VALUE,
+    MAX_DURATION_S,
+    MAX_FIELD_BYTES,
+    MAX_FILE_BYTES,
+    MAX_LINE_BYTES,
+    MAX_ROWS_PER_FILE,
+    check_duration,
+    joint_limits,
+)
 from sandbox.data.preprocess import (  # noqa: F401 - preprocess_rows/_demonstration re-exported
     PREPROCESS,
     check_options,
@@ -88,8 +100,14 @@ class Columns:
     time: str = TIME_COLUMN
 
     def __post_init__(self) -> None:
+        if not isinstance(self.time, str) or not self.time:
+            raise ValueError(f"time column: expected a non-empty name, got {self.time!r}")
         for name in ("human", "robot"):
-            cols = tuple(getattr(self, name))
+            given = getattr(self, name)
+            if isinstance(given, (str, bytes)) or not isinstance(given, Sequence):
+                raise ValueError(f"{name} columns: expected a sequence of names such as "
+                                 f"('x', 'y', 'z'), got {given!r}")
+            cols = tuple(given)
             if not cols or not all(isinstance(c, str) and c for c in cols):
                 raise ValueError(f"{name} columns: expected non-empty names, got {cols!r}")
             object.__setattr__(self, name, cols)
@@ -180,28 +198,76 @@ def read_trial_table(path: str | Path, columns: Columns = Columns(),
     ------
     TrialError
         Empty file, no data rows, missing or duplicated columns, a row with the
-        wrong number of fields (other than a truncated last row), non-numeric text.
+        wrong number of fields (other than a truncated last row), non-numeric
+        text, malformed CSV, a file, row count or field beyond the limits of
+        :mod:`sandbox.data.limits`, a file that cannot be read.
     """
     path = Path(path)
     if not path.is_file():
         raise TrialError(f"no such file: {path}")
-    with path.open(newline="", encoding="utf-8", errors="replace") as fh:
-        rows = [r for r in csv.reader(fh) if r and any(c.strip() for c in r)]
-    if not rows:
-        raise TrialError("empty file")
-    header, body = rows[0], rows[1:]
-    index = _column_index(header, columns, owners)
-    if not body:
-        raise TrialError("no data rows (only a header)")
-    truncated = len(body[-1]) < len(header)
-    if truncated:
-        body = body[:-1]
-    for n, row in enumerate(body, start=2):
-        if len(row) != len(header):
-            raise TrialError(f"row {n} has {len(row)} fields, the header has {len(header)}")
-    cells = [[row[i] for i in index] for row in body]
-    table = _to_float(cells, columns.all, 2) if cells else np.empty((0, len(index)))
+    try:
+        size = path.stat().st_size
+        if size > MAX_FILE_BYTES:
+            raise TrialError(f"file of {size} bytes, expected at most {MAX_FILE_BYTES} "
+                             f"(sandbox.data.limits.MAX_FILE_BYTES)")
+        with path.open(newline="", encoding="utf-8", errors="replace") as fh:
+            body, truncated = _read_rows(_rows(csv.reader(_lines(fh))), columns, owners)
+    except csv.Error as error:
+        raise TrialError(f"malformed CSV ({error}; a stray quote?)") from None
+    except OSError as error:
+        raise TrialError(f"cannot read the file ({type(error).__name__}: {error})") from None
+    table = _to_float(body, columns.all, 2) if body else np.empty((0, len(columns.all)))
     return table, {"truncated_last_row": truncated}
+
+
+def _read_rows(rows: Iterator[list[str]], columns: Columns, owners: dict | None
+               ) -> tuple[list[list[str]], bool]:
+    """The chosen cells of every data row, and whether a short last row was left out.
+
+    Only the chosen cells are kept, so a file is never held in memory whole;
+    the row limit is checked as rows arrive.
+    """
+    header = next(rows, None)
+    if header is None:
+        raise TrialError("empty file")
+    index = _column_index(header, columns, owners)
+    body: list[list[str]] = []
+    short: list[str] | None = None
+    for n, row in enumerate(rows, start=2):
+        if short is not None or len(row) > len(header):
+            bad, k = (short, n - 1) if short is not None else (row, n)
+            raise TrialError(f"row {k} has {len(bad)} fields, the header has {len(header)}")
+        if len(row) < len(header):
+            short = row  # allowed as the last row only (a recording cut off mid-row)
+            continue
+        if len(body) >= MAX_ROWS_PER_FILE:
+            raise TrialError(f"more than {MAX_ROWS_PER_FILE} data rows "
+                             "(sandbox.data.limits.MAX_ROWS_PER_FILE)")
+        body.append([row[i] for i in index])
+    if not body and short is None:
+        raise TrialError("no data rows (only a header)")
+    return body, short is not None
+
+
+def _rows(reader: Iterator[list[str]]) -> Iterator[list[str]]:
+    """The non-blank rows of a CSV reader, each field checked against the size limit."""
+    for row in reader:
+        long = max(map(len, row), default=0)
+        if long > MAX_FIELD_BYTES:
+            raise TrialError(f"line {reader.line_num}: a field of {long} characters, expected "
+                             f"at most {MAX_FIELD_BYTES} (sandbox.data.limits.MAX_FIELD_BYTES;"
+                             " a stray quote?)")
+        if any(c.strip() for c in row):
+            yield row
+
+
+def _lines(fh) -> Iterator[str]:
+    """The lines of a text file, refusing one longer than :data:`MAX_LINE_BYTES`."""
+    for n, line in enumerate(iter(lambda: fh.readline(MAX_LINE_BYTES + 1), ""), start=1):
+        if len(line) > MAX_LINE_BYTES:
+            raise TrialError(f"line {n} is longer than {MAX_LINE_BYTES} characters "
+                             "(sandbox.data.limits.MAX_LINE_BYTES)")
+        yield line
 
 
 def _usable_rows(table: FloatArray, n_human: int) -> tuple[np.ndarray, dict[str, int]]:
@@ -226,6 +292,7 @@ def load_trial(
     observe: Sequence[str] | str | None = None,
     columns: Columns | None = None,
     preprocess: str = "smooth",
+    max_duration: float = MAX_DURATION_S,
     **options: Any,
 ) -> Demonstration:
     """Load one trial file as a :class:`Demonstration`.
@@ -245,6 +312,11 @@ def load_trial(
         Shorthand for a hand-only spec with these columns (instead of ``spec``).
     preprocess : {"none", "causal", "smooth"}
         What to do with the human samples (:mod:`sandbox.data.preprocess`).
+    max_duration : float
+        Longest time span (s) accepted (default
+        :data:`sandbox.core.limits.MAX_DURATION_S`, 60 s); a longer trial, or
+        one sampled faster than 10 kHz, is refused with a hint at the unit its
+        times look like.
     **options
         Preprocessing options (:data:`sandbox.data.preprocess.DEFAULTS`):
         ``config`` (:class:`FilterConfig`), ``freeze_s`` (a stretch without a
@@ -270,16 +342,27 @@ def load_trial(
     ------
     ValueError
         (:class:`TrialError`) the file cannot be used; the message says why and
-        names the file (a missing column: also the option that fixes it).
+        names the file (a missing column: also the option that fixes it). The
+        limits of :mod:`sandbox.data.limits` apply: file, line, field and row
+        counts, the time span and unit, value magnitudes and, for columns named
+        after Baxter's joints, the URDF joint limits.
     """
     check_options(preprocess, **options)
+    max_duration = check_positive(max_duration, "max_duration")
     spec = _spec(spec, columns)
     modalities = spec.observed(observe)
-    path = Path(path)
+    path = _path(path, "path")
     try:
-        return _load_trial(path, task or path.parent.name, spec, modalities, preprocess, options)
+        return _load_trial(path, task or path.parent.name, spec, modalities, preprocess,
+                           max_duration, options)
     except TrialError as error:
         raise TrialError(f"{path}: {error}") from None
+
+
+def _path(value: Any, name: str) -> Path:
+    if not isinstance(value, (str, PathLike)):
+        raise ValueError(f"{name}: expected a path, got {value!r}")
+    return Path(value)
 
 
 def _spec(spec: DataSpec | None, columns: Columns | None) -> DataSpec:
@@ -295,7 +378,7 @@ def _spec(spec: DataSpec | None, columns: Columns | None) -> DataSpec:
 
 
 def _load_trial(path: Path, task: str, spec: DataSpec, modalities: Sequence[Modality],
-                preprocess: str, options: dict[str, Any]) -> Demonstration:
+                preprocess: str, max_duration: float, options: dict[str, Any]) -> Demonstration:
     columns = Columns.from_spec(spec, modalities)
     owners = {c: m.name for m in modalities for c in m.dims}
     table, notes = read_trial_table(path, columns, owners)
@@ -313,6 +396,7 @@ def _load_trial(path: Path, task: str, spec: DataSpec, modalities: Sequence[Moda
             f"only {last.size} usable time stamp(s) out of {n_rows} rows, need at least 2"
             + (f" ({why})" if why else "")
         )
+    _check_plausible(times[last], human, robot, columns, max_duration)
     out, measured, counts = preprocess_human(times, human, modalities, preprocess, **options)
     _check_usable(modalities, measured, counts)
     report = {
@@ -326,6 +410,35 @@ def _load_trial(path: Path, task: str, spec: DataSpec, modalities: Sequence[Moda
         robot_names=columns.robot, source=str(path),
         meta={"report": report, **measured_meta(measured)},
     )
+
+
+def _check_plausible(times: FloatArray, human: FloatArray, robot: FloatArray, columns: Columns,
+                     max_duration: float) -> None:
+    """Refuse a trial whose times, robot joints or values are implausible (issue 13).
+
+    ``times`` are the distinct time stamps; ``human`` and ``robot`` the kept rows.
+    """
+    try:
+        check_duration(times, f"time column {columns.time!r}", max_duration)
+    except ValueError as error:
+        raise TrialError(str(error).replace("raise max_duration=", "pass max_duration=")
+                         ) from None
+    lower, upper = joint_limits(columns.robot)
+    outside = (robot < lower - JOINT_LIMIT_TOL_RAD) | (robot > upper + JOINT_LIMIT_TOL_RAD)
+    if outside.any():
+        r, c = np.argwhere(outside)[0]
+        raise TrialError(
+            f"robot column {columns.robot[c]!r} = {robot[r, c]:g} rad at data row {r + 1}, "
+            f"outside its URDF limits [{lower[c]:g}, {upper[c]:g}] rad (+/- "
+            f"{JOINT_LIMIT_TOL_RAD:g} rad, sandbox.data.limits.JOINT_LIMIT_TOL_RAD); "
+            f"{int(outside[:, c].sum())} value(s) outside")
+    for name, values, names in (("robot", robot, columns.robot), ("human", human, columns.human)):
+        huge = np.abs(np.nan_to_num(values)) > MAX_ABS_VALUE
+        if huge.any():
+            r, c = np.argwhere(huge)[0]
+            raise TrialError(f"{name} column {names[c]!r} = {values[r, c]:g} at data row {r + 1}, "
+                             f"expected a magnitude of at most {MAX_ABS_VALUE:g} "
+                             "(sandbox.data.limits.MAX_ABS_VALUE)")
 
 
 def _check_usable(modalities, measured, counts) -> None:
@@ -349,7 +462,13 @@ def find_trials(root: str | Path, tasks: Sequence[str] | None = None) -> list[tu
     Raises ``ValueError`` if ``root`` is not a folder in that layout or a requested
     task is not there (the message lists the tasks that are).
     """
-    root = Path(root)
+    root = _path(root, "data")
+    if tasks is not None:
+        if isinstance(tasks, (str, bytes)) or not isinstance(tasks, Iterable):
+            raise ValueError(f"tasks: expected a list of task names, got {tasks!r}")
+        tasks = list(tasks)
+        if not all(isinstance(t, str) for t in tasks):
+            raise ValueError(f"tasks: expected a list of task names, got {tasks!r}")
     if not root.is_dir():
         raise ValueError(f"data: expected a folder <root>/<task>/<trial>.csv, got {str(root)!r}")
     found = {d.name: sorted(d.glob("*.csv")) for d in sorted(root.iterdir()) if d.is_dir()}
@@ -357,7 +476,6 @@ def find_trials(root: str | Path, tasks: Sequence[str] | None = None) -> list[tu
     if not found:
         raise ValueError(f"data: no <task>/<trial>.csv files under {str(root)!r}")
     if tasks is not None:
-        tasks = list(tasks)
         unknown = [t for t in tasks if t not in found]
         if unknown:
             raise ValueError(f"tasks: expected some of {sorted(found)}, got unknown {unknown}")
@@ -373,6 +491,7 @@ def load_recorded(
     observe: Sequence[str] | str | None = None,
     columns: Columns | None = None,
     preprocess: str = "smooth",
+    max_duration: float = MAX_DURATION_S,
     **options: Any,
 ) -> tuple[list[Demonstration], list[tuple[str, str]]]:
     """Load every trial of ``<root>/<task>/<trial>.csv`` (optionally only ``tasks``).
@@ -383,7 +502,7 @@ def load_recorded(
         The dataset folder.
     tasks : sequence of str, optional
         Tasks to load (folder names); default all.
-    spec, observe, columns, preprocess, **options
+    spec, observe, columns, preprocess, max_duration, **options
         As in :func:`load_trial`.
 
     Returns
@@ -392,18 +511,24 @@ def load_recorded(
         In task then file order.
     skipped : list of (str, str)
         ``(file, reason)`` of every trial that could not be used; each also
-        raises a :class:`SkippedTrialWarning`.
+        raises a :class:`SkippedTrialWarning`. Whatever goes wrong with one
+        file skips that file only: an error other than :class:`TrialError`
+        (a bug) is listed with its type.
     """
     check_options(preprocess, **options)
+    check_positive(max_duration, "max_duration")
     spec = _spec(spec, columns)
     spec.observed(observe)
     demos, skipped = [], []
     for task, path in find_trials(root, tasks):
         try:
             demos.append(load_trial(path, task=task, spec=spec, observe=observe,
-                                    preprocess=preprocess, **options))
-        except TrialError as error:
+                                    preprocess=preprocess, max_duration=max_duration,
+                                    **options))
+        except Exception as error:  # noqa: BLE001 - one file never stops the others
             reason = str(error).removeprefix(f"{path}: ")
+            if not isinstance(error, TrialError):
+                reason = f"unexpected {type(error).__name__}: {reason}"
             skipped.append((str(path), reason))
             warnings.warn(f"skipped {path}: {reason}", SkippedTrialWarning, stacklevel=2)
     return demos, skipped

@@ -33,6 +33,7 @@ from __future__ import annotations
 import json
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
+from os import PathLike
 from pathlib import Path
 from typing import Any
 
@@ -77,12 +78,15 @@ class DataSpec:
         if not isinstance(self.time, str) or not self.time:
             raise ValueError(f"time: expected a column name, got {self.time!r}")
         robot = _names(self.robot, "robot")
+        if not isinstance(self.modalities, Mapping):
+            raise ValueError(f"modalities: expected a mapping name -> Modality, "
+                             f"got {type(self.modalities).__name__}")
         mods = dict(self.modalities)
         for name, m in mods.items():
             if not isinstance(m, Modality) or m.name != name:
                 raise ValueError(f"modalities: expected {name!r} to map to Modality {name!r}, "
                                  f"got {m!r}")
-        observe = tuple(m.name for m in select(mods.values(), self.observe, "observe"))
+        observe = tuple(m.name for m in select(mods.values(), _choice(self.observe), "observe"))
         object.__setattr__(self, "robot", robot)
         object.__setattr__(self, "modalities", mods)
         object.__setattr__(self, "observe", observe)
@@ -92,8 +96,8 @@ class DataSpec:
 
         Their columns may not be used twice, nor be the time or a robot column.
         """
-        mods = select(self.modalities.values(), self.observe if observe is None else observe,
-                      "observe")
+        mods = select(self.modalities.values(),
+                      self.observe if observe is None else _choice(observe), "observe")
         check_modalities(mods)
         clash = sorted({c for m in mods for c in m.dims} & {self.time, *self.robot})
         if clash:
@@ -116,6 +120,8 @@ class DataSpec:
     @classmethod
     def load(cls, path: str | Path) -> DataSpec:
         """Read a spec file (YAML or JSON, see the module docstring)."""
+        if not isinstance(path, (str, PathLike)):
+            raise ValueError(f"--spec: expected the path of a YAML or JSON file, got {path!r}")
         path = Path(path)
         if not path.is_file():
             raise ValueError(f"--spec: expected an existing YAML or JSON file, got {str(path)!r}")
@@ -166,6 +172,11 @@ class DataSpec:
                                for n, m in self.modalities.items()}}
 
 
+def _choice(observe: Any) -> Sequence[str] | str:
+    """``observe`` as given after checking it is ``"a,b"`` or a list of names."""
+    return observe if isinstance(observe, str) else _names(observe, "observe")
+
+
 def _names(values: Any, what: str) -> tuple[str, ...]:
     if isinstance(values, str) or not isinstance(values, Sequence):
         raise ValueError(f"{what}: expected a list of names, got {values!r}")
@@ -185,9 +196,12 @@ def _modality(name: str, entry: Any) -> Modality:
                          f"{sorted(_MODALITY_KEYS)}")
     if "columns" not in entry:
         raise ValueError(f"modalities.{name}: 'columns' is missing")
+    units = entry.get("units", "") or ""
+    if not isinstance(units, str):
+        raise ValueError(f"modalities.{name}.units: expected text such as 'm', got {units!r}")
     try:
         return Modality(name, _names(entry["columns"], f"modalities.{name}.columns"),
-                        entry.get("kind", "position"), str(entry.get("units", "") or ""))
+                        entry.get("kind", "position"), units)
     except ValueError as error:
         raise ValueError(f"modalities.{name}: {error}") from None
 

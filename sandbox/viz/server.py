@@ -14,6 +14,12 @@ sandbox.viz.server --parent PID``) that
 
 Commands go over meshcat's ZeroMQ request/reply socket with a timeout: a dead
 server turns the viewer offline (a warning) instead of hanging the simulation.
+
+Addresses: the web server (what a browser opens) listens on ``host``, by
+default :data:`DEFAULT_HOST` (127.0.0.1, this machine only; meshcat itself
+listens on every interface); another address, e.g. ``"0.0.0.0"`` for every
+interface, is an explicit choice (``play --host``). The command socket always
+listens on 127.0.0.1: only this process talks to it.
 """
 
 from __future__ import annotations
@@ -22,6 +28,7 @@ import argparse
 import atexit
 import os
 import selectors
+import socket
 import subprocess
 import sys
 import time
@@ -31,6 +38,40 @@ import weakref
 START_TIMEOUT = 30.0
 #: Seconds the server waits for a command's reply before the viewer goes offline.
 REPLY_TIMEOUT = 10.0
+#: Address the web server listens on unless told otherwise: this machine only.
+DEFAULT_HOST = "127.0.0.1"
+#: Addresses meaning "every interface".
+WILDCARD_HOSTS = ("0.0.0.0", "::", "")
+
+
+def check_host(host: str) -> str:
+    """Return ``host`` after checking this machine can listen on it.
+
+    Raises
+    ------
+    ValueError
+        If ``host`` is not a non-empty string, or no socket can be bound to it
+        (an unknown name, an address of another machine).
+    """
+    if not isinstance(host, str) or not host.strip():
+        raise ValueError(f"host: expected an address to listen on such as {DEFAULT_HOST!r} or "
+                         f"'0.0.0.0' (every interface), got {host!r}")
+    try:
+        with socket.create_server((host, 0), family=_family(host)):
+            pass
+    except (OSError, OverflowError) as error:
+        raise ValueError(f"host: cannot listen on {host!r} ({error})") from None
+    return host
+
+
+def _family(host: str) -> socket.AddressFamily:
+    return socket.AF_INET6 if ":" in host else socket.AF_INET
+
+
+def web_url(host: str, port: int) -> str:
+    """The URL a browser on this machine opens (127.0.0.1 for a wildcard address)."""
+    shown = DEFAULT_HOST if host in WILDCARD_HOSTS else host
+    return f"http://{f'[{shown}]' if ':' in shown else shown}:{port}/static/"
 
 
 def _stop_process(proc: subprocess.Popen, grace: float = 3.0) -> None:
@@ -79,6 +120,9 @@ class LiveServer:
 
     Parameters
     ----------
+    host : str
+        Address the web server listens on (default 127.0.0.1, this machine
+        only; ``"0.0.0.0"``: every interface, reachable from the network).
     start_timeout : float
         Seconds to wait for the server to report its URLs.
     reply_timeout : float
@@ -88,6 +132,8 @@ class LiveServer:
     ----------
     web_url : str
         Address to open in a browser (``http://127.0.0.1:<port>/static/``).
+    host : str
+        Address the web server listens on.
     zmq_url : str
         The server's command socket.
     pid : int
@@ -96,12 +142,14 @@ class LiveServer:
         False once closed or after the server stopped answering.
     """
 
-    def __init__(self, *, start_timeout: float = START_TIMEOUT,
+    def __init__(self, *, host: str = DEFAULT_HOST, start_timeout: float = START_TIMEOUT,
                  reply_timeout: float = REPLY_TIMEOUT) -> None:
         import zmq
 
+        self.host = check_host(host)
         self._proc = subprocess.Popen(
-            [sys.executable, "-u", "-m", "sandbox.viz.server", "--parent", str(os.getpid())],
+            [sys.executable, "-u", "-m", "sandbox.viz.server", "--parent", str(os.getpid()),
+             "--host", self.host],
             stdin=subprocess.DEVNULL,
             stdout=subprocess.PIPE,
             stderr=subprocess.DEVNULL,
@@ -184,17 +232,39 @@ def _parent_gone(parent: int) -> bool:
     return False
 
 
+def _bridge(host: str, zmq_url: str | None):
+    """meshcat's ZeroMQ/WebSocket bridge, its web server listening on ``host`` only.
+
+    meshcat binds the command socket to its ``host`` argument but starts the
+    web server with tornado's default address, every interface. Here the
+    bridge gets 127.0.0.1 (the command socket) and its web server ``host``.
+    """
+    from meshcat.servers.zmqserver import ZMQWebSocketBridge
+
+    class Bridge(ZMQWebSocketBridge):
+        def make_app(self):
+            app = super().make_app()
+            listen = app.listen
+            app.listen = lambda port, **kw: listen(port, address=host, **kw)
+            return app
+
+    bridge = Bridge(zmq_url=zmq_url, host=DEFAULT_HOST)
+    bridge.web_url = web_url(host, bridge.fileserver_port)
+    return bridge
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run meshcat's ZeroMQ/WebSocket bridge until the parent process goes away."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--parent", type=int, required=True, help="pid to watch")
     parser.add_argument("--zmq-url", default=None)
+    parser.add_argument("--host", default=DEFAULT_HOST,
+                        help="address the web server listens on (default 127.0.0.1)")
     args = parser.parse_args(argv)
 
     import tornado.ioloop
-    from meshcat.servers.zmqserver import ZMQWebSocketBridge
 
-    bridge = ZMQWebSocketBridge(zmq_url=args.zmq_url)
+    bridge = _bridge(args.host, args.zmq_url)
     print(f"zmq_url={bridge.zmq_url}")
     print(f"web_url={bridge.web_url}", flush=True)
     sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - the parent closed its end of the pipe

@@ -28,7 +28,7 @@ from sandbox.core.validation import check_array, check_positive
 from sandbox.viz.meshes import DEFAULT_RESOLUTION
 from sandbox.viz.mirror import BodyMirror
 from sandbox.viz.scene import Scene
-from sandbox.viz.server import LiveServer
+from sandbox.viz.server import DEFAULT_HOST, LiveServer
 from sandbox.viz.skeleton import TrackedArm
 
 #: Default camera position and the point it looks at, in the world (m).
@@ -71,6 +71,9 @@ class Viewer:
         after the first update (for live viewing of a fast simulation).
     open_browser : bool
         Open the URL in the default browser (live only).
+    host : str
+        Address the live server's web page is served on (live only): default
+        127.0.0.1, this machine only; ``"0.0.0.0"`` lets other machines watch.
 
     Attributes
     ----------
@@ -91,11 +94,12 @@ class Viewer:
                  resolution: float | None = DEFAULT_RESOLUTION,
                  camera: ArrayLike = DEFAULT_CAMERA, target: ArrayLike = DEFAULT_TARGET,
                  fov: float = 45.0, floor_z: float | None = FLOOR_Z,
-                 realtime: bool = False, open_browser: bool = False) -> None:
+                 realtime: bool = False, open_browser: bool = False,
+                 host: str = DEFAULT_HOST) -> None:
         camera = check_array(camera, "camera", 1, shape=(3,))
         target = check_array(target, "target", 1, shape=(3,))
         fov, fps = check_positive(fov, "fov"), check_positive(fps, "fps")
-        self.server = LiveServer() if live else None  # after every check: nothing to leak
+        self.server = LiveServer(host=host) if live else None  # after every check: no leak
         self.scene = Scene(self.server, fps)
         self.vis = meshcat.Visualizer(window=self.scene)
         self.record = bool(record)
@@ -110,7 +114,9 @@ class Viewer:
         self._wall_start: float | None = None
         self._setup(floor_z)
         if self.server is not None:
-            print(f"meshcat viewer: {self.server.web_url}", flush=True)
+            where = ("" if self.server.host == DEFAULT_HOST else
+                     f" (listening on {self.server.host}: other machines can watch)")
+            print(f"meshcat viewer: {self.server.web_url}{where}", flush=True)
             if open_browser:
                 import webbrowser
 
