@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from sandbox.commands import _observation
+from sandbox.commands import _executor, _observation
 
 NAME = "tune"
 HELP = ("cross-validate likelihood, window mode, regulariser, noise floors, motion end and "
@@ -14,7 +14,7 @@ def add_arguments(parser) -> None:
                                                       "synthetic:NAME")
     parser.add_argument("--window", type=float, default=0.2, help="dynamic window scored (s)")
     _observation.add_arguments(parser)
-    parser.add_argument("--workers", type=int, default=2, help="processes (default 2)")
+    _executor.add_arguments(parser)
     parser.add_argument("--seed", type=int, default=0, help="seed of synthetic data")
     parser.add_argument("--out", default=None, help="write the table (Markdown) here too")
     parser.add_argument("--json", default=None, help="write all rows and the choice as JSON")
@@ -25,10 +25,12 @@ def run(args) -> int:
     from pathlib import Path
 
     from sandbox.eval.datasets import load_pair
+    from sandbox.eval.executors import check_workers
     from sandbox.eval.tune import HEADER, grid_for, table, tune
 
     if args.window <= 0:
         raise ValueError(f"--window: expected a positive number of seconds, got {args.window}")
+    check_workers(args.workers)
     spec = _observation.data_spec(args)
     observe = _observation.observe(args, spec)
     train, test, _ = load_pair(args.data, seed=args.seed, spec=spec, observe=observe)
@@ -37,7 +39,7 @@ def run(args) -> int:
 
     grid = grid_for(spec.observed(observe))
     best, rows = tune(train, test, base=EvalConfig(observe=observe), window=args.window,
-                      workers=max(1, args.workers), grid=grid)
+                      grid=grid, **_executor.options(args))
     chosen = {k: getattr(best, k) for k in grid}
     print(f"\nchosen: {chosen}")
     if args.out:
