@@ -20,9 +20,10 @@ retries a failed task (its worker died, or it raised) once, then reports it as
 failed and goes on with the others.
 
 Test hook: a worker running a task whose configuration key starts with
-``$SANDBOX_TEST_SWEEP_CRASH`` kills its own process (``os._exit``); with
-``KEY@FILE``, only if ``FILE`` does not exist yet (it creates it first), so
-the retry succeeds.
+``$SANDBOX_TEST_SWEEP_CRASH`` kills its own process (``os._exit``). With
+``KEY@FILE`` it dies only while ``FILE`` has no line yet, with ``KEY*N@FILE``
+while it has fewer than N lines, appending one line before dying (so the
+file counts the deaths). Several entries are separated by commas.
 """
 
 from __future__ import annotations
@@ -36,6 +37,7 @@ from concurrent.futures.process import BrokenProcessPool
 from contextlib import contextmanager
 from dataclasses import dataclass
 from multiprocessing import get_context
+from pathlib import Path
 
 from sandbox.eval.loocv import EvalConfig, fold, prepare
 
@@ -46,6 +48,8 @@ RETRIES = 1
 #: Default wait (s) for a Dask scheduler to answer.
 TIMEOUT = 10.0
 CRASH_HOOK = "SANDBOX_TEST_SWEEP_CRASH"
+#: The error of a task not run because its configuration had already failed.
+DROPPED = "not run: another part of its configuration failed"
 
 
 @dataclass(frozen=True)
@@ -115,14 +119,19 @@ def run_task(task: Task) -> tuple[list[dict], float]:
 
 
 def _maybe_crash(key: str) -> None:
-    prefix, _, marker = os.environ.get(CRASH_HOOK, "").partition("@")
-    if not prefix or not key.startswith(prefix):
-        return
-    if marker:
-        if os.path.exists(marker):
-            return
-        open(marker, "w").close()
-    os._exit(3)
+    """The test hook (see the module docstring)."""
+    for entry in filter(None, os.environ.get(CRASH_HOOK, "").split(",")):
+        head, _, marker = entry.partition("@")
+        prefix, _, times = head.partition("*")
+        if not key.startswith(prefix):
+            continue
+        if marker:
+            deaths = Path(marker).read_text().count("\n") if Path(marker).exists() else 0
+            if deaths >= int(times or 1):
+                continue
+            with open(marker, "a") as f:
+                f.write(f"{os.getpid()}\n")
+        os._exit(3)
 
 
 # ---------------------------------------------------------------- driver
@@ -162,17 +171,23 @@ def open_executor(workers: int = 1, scheduler: str | None = None, timeout: float
     return DaskExecutor(scheduler, workers=workers, timeout=timeout)
 
 
-def run_tasks(executor, tasks: Iterable[Task], *, retries: int = RETRIES) -> Iterator[Outcome]:
+def run_tasks(executor, tasks: Iterable[Task], *, retries: int = RETRIES,
+              dropped: set[str] | None = None) -> Iterator[Outcome]:
     """Run ``tasks`` on ``executor``; yield each one's :class:`Outcome` as it finishes.
 
     A task that fails is resubmitted ``retries`` times before its failure is
-    yielded; the other tasks are not affected.
+    yielded; the other tasks are not affected. A task not yet submitted whose
+    key the caller has put in ``dropped`` is not run: it is yielded failed (:data:`DROPPED`).
     """
     pending, running, failures = deque(tasks), {}, {}
+    dropped = set() if dropped is None else dropped
     while pending or running:
         room = executor.slots() - len(running)
         while pending and room > 0:
             task = pending.popleft()
+            if task.key in dropped:
+                yield Outcome(task, None, error=DROPPED)
+                continue
             running[executor.submit(task)] = task
             room -= 1
         for future in executor.wait(list(running)):

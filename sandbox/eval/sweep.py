@@ -35,7 +35,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 import sandbox
-from sandbox.eval.executors import Task, open_executor, run_tasks
+from sandbox.eval.executors import DROPPED, Task, open_executor, run_tasks
 from sandbox.eval.grid import config_for, label
 from sandbox.eval.loocv import EvalConfig
 from sandbox.eval.report import build_report
@@ -142,14 +142,17 @@ class Evaluation:
         expected = {key: sum(t.key == key for t in tasks) for key, _ in jobs}
         configs = {key: config for key, (config, _) in jobs}
         parts: dict[str, list] = {key: [] for key, _ in jobs}
-        for outcome in run_tasks(self.executor, tasks):
+        failed: set[str] = set()     # configurations whose other tasks need not run
+        for outcome in run_tasks(self.executor, tasks, dropped=failed):
             key = outcome.task.key
             parts[key].append(outcome)
+            if outcome.error is not None:
+                failed.add(key)
             if len(parts[key]) == expected[key]:
                 yield self._assemble(key, configs[key], parts.pop(key))
 
     def _assemble(self, key: str, config: EvalConfig, outcomes: list) -> Evaluated:
-        errors = sorted({o.error for o in outcomes if o.error is not None})
+        errors = sorted({o.error for o in outcomes if o.error not in (None, DROPPED)})
         if errors:
             return Evaluated(key, config, None, "; ".join(errors))
         outcomes = sorted(outcomes, key=lambda o: o.task.folds[0])
@@ -183,8 +186,10 @@ def manifest(points: list[dict], base: EvalConfig, data: dict) -> dict:
     return body
 
 
-def claim_out(out: str | Path, content: dict, *, force: bool = False) -> Path:
-    """Check that ``out`` is empty or holds this sweep (unless ``force``), and mark it so.
+def claim_out(out: str | Path, content: dict, *, force: bool = False,
+              write: bool = True) -> Path:
+    """Check that ``out`` is empty or holds this sweep (unless ``force``); mark it so
+    (``sweep.json``) if ``write``.
 
     Raises
     ------
@@ -205,7 +210,8 @@ def claim_out(out: str | Path, content: dict, *, force: bool = False) -> Path:
             raise ValueError(f"--out {str(out)!r}: expected an empty folder or one of an "
                              f"earlier run of this sweep (same grid and data), got {what}; "
                              f"use --force to write there anyway")
-    write_atomic(path, json.dumps(content, indent=1))
+    if write:
+        write_atomic(path, json.dumps(content, indent=1))
     return out
 
 
@@ -325,8 +331,8 @@ def sweep(data: str, grid: str | Path, out: str | Path, *, workers: int = 2,
     configs = [config_for(p, base) for p in points]
     described = {"data": _where(data), "seed": seed, "tasks": list(tasks) if tasks else None,
                  "n_per_task": n_per_task, "spec": _where(spec) if spec else None}
+    claim_out(out, manifest(points, base, described), force=force, write=False)
     with open_executor(workers, scheduler, TIMEOUT if timeout is None else timeout) as ex:
-        claim_out(out, manifest(points, base, described), force=force)
         trials = {}
         for obs in dict.fromkeys(c.observe for c in configs):
             train, test, skipped = load_pair(data, seed=seed, tasks=tasks,
