@@ -29,6 +29,7 @@ file counts the deaths). Several entries are separated by commas.
 from __future__ import annotations
 
 import os
+import threading
 import time
 from collections import deque
 from collections.abc import Iterable, Iterator
@@ -77,6 +78,7 @@ _DATA: dict[str, tuple[list, list]] = {}
 _PREPARED: dict = {}
 _KEEP = 4   # configurations whose prepared trials a worker keeps
 _FK: list = []
+_LOCK = threading.Lock()   # a Dask worker may run tasks on several threads
 
 
 def install(token: str, train, test) -> None:
@@ -106,14 +108,15 @@ def run_task(task: Task) -> tuple[list[dict], float]:
         raise RuntimeError(f"trials {task.data[:12]} are not installed in this worker "
                            f"(pid {os.getpid()})")
     ident = (task.data, task.config)
-    if ident not in _PREPARED:
-        while len(_PREPARED) >= _KEEP:
-            _PREPARED.pop(next(iter(_PREPARED)))
-        _PREPARED[ident] = prepare(*_DATA[task.data], task.config)
-    train, test, fits = _PREPARED[ident]
-    if not _FK:
-        _FK.append(BaxterKinematics().fk)
-    fk = _FK[0]
+    with _LOCK:
+        if ident not in _PREPARED:
+            while len(_PREPARED) >= _KEEP:
+                _PREPARED.pop(next(iter(_PREPARED)))
+            _PREPARED[ident] = prepare(*_DATA[task.data], task.config)
+        train, test, fits = _PREPARED[ident]
+        if not _FK:
+            _FK.append(BaxterKinematics().fk)
+        fk = _FK[0]
     trials = [fold(train, test, fits, task.config, i, fk) for i in task.folds]
     return trials, time.perf_counter() - start
 
