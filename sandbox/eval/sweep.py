@@ -28,6 +28,7 @@ import math
 import os
 import sys
 import tempfile
+from collections import Counter
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any, NamedTuple
@@ -123,8 +124,10 @@ class Evaluation:
         if len(train) != len(test) or any(a.source != b.source or a.task != b.task
                                           for a, b in zip(train, test)):
             raise ValueError("train and test: expected the same trials in the same order")
-        if len(train) < 2:
-            raise ValueError(f"expected at least 2 trials for leave-one-out, got {len(train)}")
+        counts = Counter(d.task for d in train)
+        if not counts or min(counts.values()) < 3:
+            raise ValueError(f"trials: expected at least 3 per task for leave-one-out (each fold "
+                             f"fits on the 2 or more others), got {dict(counts)}")
         token = data_token(train, test)
         if token not in self._folds:
             self.executor.load(token, train, test)

@@ -268,3 +268,16 @@ def test_a_task_runs_in_a_worker_with_its_trials_installed(trials):
     assert [r["task"] for r in results] == [train[0].task, train[1].task] and seconds > 0
     with pytest.raises(RuntimeError, match="not installed"):
         run_task(Task("k", config, (0,), "other"))
+
+
+@pytest.mark.slow
+def test_the_sweep_benchmark_reports_wall_times_ratios_and_cores(worker_env):
+    from sandbox.bench.sweep import run_sweep_benchmark
+
+    grid = {"n_basis": [15], "likelihood": ["joint", "marginal"], "n_candidates": [10],
+            "subsample": [4], "dow_t": [1.0]}
+    result = run_sweep_benchmark("synthetic:two_task", n_per_task=3, dask=False, grid=grid)
+    assert result["cores"] == os.cpu_count() and result["folds"] == 6
+    assert result["configurations"] == 2 and result["identical"]
+    assert result["speedup"] == pytest.approx(
+        result["sweep_1_worker_s"] / result["sweep_2_workers_s"], rel=0.01)
