@@ -167,6 +167,21 @@ def test_a_rerun_skips_what_is_done_and_a_changed_grid_is_refused(trials, tmp_pa
     assert [e["point"] for e in summary["ranked"]] == [{"n_basis": 15, "end_prob": 0.8}]
 
 
+def test_an_interrupted_sweep_rerun_computes_only_what_is_missing(trials, tmp_path):
+    def interrupt(line):
+        if line.startswith("[1/2]"):
+            raise KeyboardInterrupt
+
+    out = tmp_path / "out"
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(Inline(), trials, POINTS, out, base=BASE, log=interrupt)
+    assert len(list((out / "results").glob("*.json"))) == 1 and not (out / "summary.md").exists()
+    rerun = Inline()
+    summary = _sweep(rerun, trials, POINTS, out)
+    assert {t.key for t in rerun.submitted} == {_key(trials, POINTS[1])}
+    assert len(summary["ranked"]) == 2
+
+
 def test_a_folder_of_other_files_is_refused(trials, tmp_path):
     (tmp_path / "notes.txt").write_text("mine")
     with pytest.raises(ValueError, match="files that are not a sweep's"):
