@@ -139,30 +139,33 @@ def resolve(path: str | Path) -> Path:
                      f"({', '.join(names)}), got {str(path)!r}")
 
 
-def read_mapping(path: Path) -> Any:
-    """Parse a JSON or YAML file (by suffix); syntax errors become ``ValueError``."""
+def read_mapping(path: Path, what: str = "scenario") -> Any:
+    """Parse a JSON or YAML file (by suffix); syntax errors become ``ValueError``.
+
+    ``what`` names the file in messages (``"scenario"``, ``"grid"``, ...).
+    """
     if path.suffix.lower() not in SUFFIXES:
-        raise ValueError(f"scenario {path}: expected a .json, .yaml or .yml file, "
+        raise ValueError(f"{what} {path}: expected a .json, .yaml or .yml file, "
                          f"got suffix {path.suffix!r}")
     text = path.read_text(encoding="utf-8")
     if path.suffix.lower() == ".json":
         try:
             return json.loads(text)
         except json.JSONDecodeError as error:
-            raise ValueError(f"scenario {path}: invalid JSON at line {error.lineno}, column "
+            raise ValueError(f"{what} {path}: invalid JSON at line {error.lineno}, column "
                              f"{error.colno}: {error.msg}") from error
     try:
         import yaml
     except ImportError as error:  # pragma: no cover - pyyaml is a dependency
-        raise ValueError(f"scenario {path}: YAML files need PyYAML (pip install pyyaml); "
-                         "or write the scenario as JSON") from error
+        raise ValueError(f"{what} {path}: YAML files need PyYAML (pip install pyyaml); "
+                         f"or write the {what} as JSON") from error
     try:
         return yaml.safe_load(text)
     except yaml.YAMLError as error:
         mark = getattr(error, "problem_mark", None)
         where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
         problem = getattr(error, "problem", None) or str(error)
-        raise ValueError(f"scenario {path}: invalid YAML{where}: {problem}") from error
+        raise ValueError(f"{what} {path}: invalid YAML{where}: {problem}") from error
 
 
 def load_scenario(path: str | Path, *, observe: list[str] | str | None = None) -> Scenario:

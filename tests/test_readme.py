@@ -22,10 +22,24 @@ def test_python_snippets_run(index, tmp_path):
     assert out.returncode == 0, out.stderr
 
 
+TEST_COMMAND = 'pip install -e ".[test,dask]" && pytest'
+
+
 def test_the_two_commands_are_there():
     bash = "\n".join(_blocks("bash"))
     assert "python -m sandbox demo" in bash
-    assert 'pip install -e ".[test]" && pytest' in bash
+    assert TEST_COMMAND in bash
+
+
+def test_ci_runs_the_readme_test_command_exactly():
+    """Optional extras are part of the test command, so CI installs and tests them too."""
+    ci = README.parent / ".ci" / "run"
+    assert ci.read_text().rstrip().splitlines()[-1] == TEST_COMMAND
+    if sys.version_info >= (3, 11):
+        import tomllib
+
+        project = tomllib.loads((README.parent / "pyproject.toml").read_text())["project"]
+        assert {"test", "dask"} <= set(project["optional-dependencies"])
 
 
 def test_demo_command_runs(tmp_path):

@@ -20,6 +20,7 @@ HELP = "handover success of policies side by side in seeded scenario episodes"
 
 
 def add_arguments(parser) -> None:
+    from sandbox.commands import _types
     from sandbox.scenarios import POLICIES, SCENARIOS
 
     parser.add_argument("--scenario", default="diverging", choices=sorted(SCENARIOS),
@@ -31,15 +32,16 @@ def add_arguments(parser) -> None:
     parser.add_argument("--observe", default=None, metavar="NAMES",
                         help="modalities the policies observe: hand, arm, emg (default: the "
                              "hand; synthetic scenarios: the model's)")
-    parser.add_argument("--episodes", type=int, default=20,
+    parser.add_argument("--episodes", type=_types.integer(1, 100_000), default=20,
                         help="episodes per policy (recorded: the number of held-out trials; "
                              "the set's size replays each trial once) (default 20)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of episode 0 (default 0)")
-    parser.add_argument("--dow", type=float, default=0.2,
+    parser.add_argument("--seed", type=_types.SEED, default=0,
+                        help="seed of episode 0 (default 0)")
+    parser.add_argument("--dow", type=_types.SECONDS, default=0.2,
                         help="dynamic window dow_t (s) (default 0.2)")
-    parser.add_argument("--ratio", type=float, default=0.3,
+    parser.add_argument("--ratio", type=_types.FRACTION, default=0.3,
                         help="static observed ratio (default 0.3)")
-    parser.add_argument("--json", default=None, metavar="FILE",
+    parser.add_argument("--json", type=_types.output_file, default=None, metavar="FILE",
                         help="write the summaries and every episode's outcome as JSON")
 
 
@@ -55,8 +57,6 @@ def run(args) -> int:
     if not policies or unknown or len(set(policies)) != len(policies):
         raise ValueError(f"--policies: expected distinct names among {list(POLICIES)}, "
                          f"got {args.policies!r}")
-    if args.json and Path(args.json).is_dir():
-        raise ValueError(f"--json: expected a file to write, got the folder {args.json!r}")
     out = {name: _run_policy(name, args) for name in policies}
     print(table(out))
     if args.json:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from sandbox.commands import _observation, _types
+from sandbox.commands import _executor, _observation, _types
 
 NAME = "tune"
 HELP = ("cross-validate likelihood, window mode, regulariser, noise floors, motion end and "
@@ -15,8 +15,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--window", type=_types.SECONDS, default=0.2,
                         help="dynamic window scored (s), in (0, 60]")
     _observation.add_arguments(parser)
-    parser.add_argument("--workers", type=_types.WORKERS, default=2,
-                        help=f"processes, 1 to {_types.MAX_WORKERS} (default 2)")
+    _executor.add_arguments(parser)
     parser.add_argument("--seed", type=_types.SEED, default=0, help="seed of synthetic data")
     parser.add_argument("--out", type=_types.output_file, default=None,
                         help="write the table (Markdown) here too")
@@ -39,7 +38,7 @@ def run(args) -> int:
 
     grid = grid_for(spec.observed(observe))
     best, rows = tune(train, test, base=EvalConfig(observe=observe), window=args.window,
-                      workers=args.workers, grid=grid)
+                      grid=grid, **_executor.options(args))
     chosen = {k: getattr(best, k) for k in grid}
     print(f"\nchosen: {chosen}")
     if args.out:

@@ -225,13 +225,34 @@ def _init(train, test, fits, config) -> None:
     _STATE.update(train=train, test=test, fits=fits, config=config)
 
 
+def prepare(train, test, config: EvalConfig) -> tuple[list, list, list]:
+    """The trials as the models see them (``config.observe`` selected) and each one's fit.
+
+    Returns ``(train, test, fits)``, ``fits[i]`` the
+    :meth:`~sandbox.core.IProMP.demo_fit` of ``train[i]`` that :func:`fold` combines.
+    """
+    if config.observe is not None:
+        train = [d.select(config.observe) for d in train]
+        test = [d.select(config.observe) for d in test]
+    return list(train), list(test), [config.model().demo_fit(d) for d in train]
+
+
+def fold(train, test, fits, config: EvalConfig, i: int, fk) -> dict:
+    """Fold ``i`` of the leave-one-out: trial ``i`` predicted by models fitted on all others.
+
+    ``train, test, fits`` come from :func:`prepare`; ``fk`` maps joints to the
+    gripper position (:meth:`~sandbox.robot.BaxterKinematics.fk`).
+    """
+    model = config.model().fit_demo_fits(fits[:i] + fits[i + 1:], train[0])   # trial i unseen
+    return evaluate_trial(model, test[i], config, fk, train[i])
+
+
 def _run_one(i: int) -> dict:
     from sandbox.robot import BaxterKinematics
 
     train, test, fits, config = (_STATE[k] for k in ("train", "test", "fits", "config"))
     fk = _STATE.setdefault("fk", BaxterKinematics().fk)
-    model = config.model().fit_demo_fits(fits[:i] + fits[i + 1:], train[0])   # trial i unseen
-    return evaluate_trial(model, test[i], config, fk, train[i])
+    return fold(train, test, fits, config, i, fk)
 
 
 def run_loocv(train, test, config: EvalConfig, *, workers: int = 1,
@@ -252,11 +273,8 @@ def run_loocv(train, test, config: EvalConfig, *, workers: int = 1,
     if len(train) != len(test) or any(a.source != b.source or a.task != b.task
                                       for a, b in zip(train, test)):
         raise ValueError("train and test: expected the same trials in the same order")
-    if config.observe is not None:
-        train = [d.select(config.observe) for d in train]
-        test = [d.select(config.observe) for d in test]
     start = time.perf_counter()
-    fits = [config.model().demo_fit(d) for d in train]
+    train, test, fits = prepare(train, test, config)
     _init(train, test, fits, config)
     indices = range(len(test))
     bar = _bar(len(test), progress)

@@ -12,6 +12,8 @@ notebook leaves its inline backend alone.
   against the observed ratio (static).
 * :func:`plot_curves` (``modalities.png``): recognition over the recording for
   several reports (e.g. observation sets), with bootstrap bands.
+* :func:`plot_sweep` (``summary.png``): the objective J of every configuration
+  of a sweep, best first.
 """
 
 from __future__ import annotations
@@ -150,6 +152,22 @@ def plot_curves(reports: dict[str, dict], path, window: str = "0.2",
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="lower right")
     fig.suptitle(title)
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    return _save(fig, Path(path))
+
+
+def plot_sweep(summary: dict, path) -> Path:
+    """The objective J of each configuration of a sweep's summary, one bar each, best on top."""
+    ranked = summary["ranked"]
+    fig, ax = _figure(1, (8, 1.5 + 0.3 * max(1, len(ranked))))
+    y = np.arange(len(ranked))[::-1]
+    ax.barh(y, [e["J"] for e in ranked], color="tab:blue")
+    ax.set_yticks(y, [f"{e['rank']}. {e['label']}" for e in ranked], fontsize=8)
+    ax.set_xlabel("objective J (lower is better)")
+    ax.grid(axis="x", alpha=0.3)
+    failed = len(summary["failed"])
+    fig.suptitle(f"Sweep: {len(ranked)} configurations ranked"
+                 + (f", {failed} failed" if failed else ""))
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     return _save(fig, Path(path))
 

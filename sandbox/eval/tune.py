@@ -13,14 +13,17 @@ at updates (the command must stay continuous). Each option is swept in turn
 with the others at their best so far; a value replaces the current one only if
 it lowers J by more than ``tol`` (0.05, about the trial-to-trial noise of J),
 so the defaults do not chase noise. The table of every run is returned.
+
+The configurations of each step are evaluated together by
+:class:`~sandbox.eval.sweep.Evaluation`, on local processes or a Dask cluster
+(``scheduler``, see :func:`~sandbox.eval.executors.open_executor`).
 """
 
 from __future__ import annotations
 
 from dataclasses import replace
 
-from sandbox.eval.loocv import EvalConfig, run_loocv
-from sandbox.eval.report import build_report
+from sandbox.eval.loocv import EvalConfig
 
 #: Options swept, in order, with their candidate values.
 GRID: dict[str, tuple] = {
@@ -32,6 +35,11 @@ GRID: dict[str, tuple] = {
     "blend_rate": (20.0, 50.0, 100.0),
 }
 TARGETS = {"e_p": 0.05, "e_phi": 0.20, "miss": 0.30, "jump": 0.01}
+#: Dynamic window dow_t (s) scored by J, and observed ratio reported for the static formulation.
+WINDOW = 0.2
+RATIO = 0.3
+#: Bootstrap resamples of the reports tuning and sweeps compute.
+BOOTSTRAP = 200
 #: Floors (normalised units) tried for signal modalities, and (m) for position
 #: modalities other than the hand, when they are observed.
 SIGNAL_FLOORS = (0.1, 0.3, 0.5, 1.0)
@@ -65,37 +73,75 @@ def objective(entry: dict, jump_p95: float = 0.0) -> float:
 
 
 def tune(train, test, *, base: EvalConfig | None = None, grid: dict | None = None,
-         window: float = 0.2, ratio: float = 0.3, workers: int = 2, tol: float = 0.05,
-         log=print) -> tuple:
-    """Sweep ``grid`` from ``base``; returns (best config, rows of the table)."""
+         window: float = WINDOW, ratio: float = RATIO, workers: int = 2, tol: float = 0.05,
+         log=print, scheduler: str | None = None, timeout: float | None = None) -> tuple:
+    """Sweep ``grid`` from ``base``; returns (best config, rows of the table).
+
+    ``workers``, ``scheduler`` and ``timeout`` choose where the leave-one-out
+    runs (:func:`~sandbox.eval.executors.open_executor`). A configuration whose
+    evaluation failed (its worker died twice) is logged and is not a candidate.
+    """
+    from sandbox.eval.executors import TIMEOUT, open_executor
+    from sandbox.eval.sweep import Evaluation
+
     grid = GRID if grid is None else grid
     best = replace(base or EvalConfig(), windows=(window,), ratios=(ratio,))
     seen: dict = {}
     rows = []
-    for name, values in grid.items():
-        scores = {}
-        for value in values:
-            cfg = replace(best, **{name: value})
-            key = tuple(sorted(cfg.to_dict().items()))
-            if key not in seen:
-                trials, runtime = run_loocv(train, test, cfg, workers=workers)
-                rep = build_report(trials, cfg.to_dict(), "", runtime, n_boot=200)
-                seen[key] = _row(rep, cfg, window, ratio, name, value)
-                rows.append(seen[key])
-                log(_format(seen[key]))
-            scores[value] = seen[key]["J"]
-        current = getattr(best, name)
-        winner = min(scores, key=scores.get)
-        if current not in scores or scores[winner] < scores[current] - tol:
-            best = replace(best, **{name: winner})
+    with open_executor(workers, scheduler, TIMEOUT if timeout is None else timeout) as ex:
+        evaluation = Evaluation(ex)
+        token = evaluation.add(train, test)
+        for name, values in grid.items():
+            configs = [replace(best, **{name: value}) for value in values]
+            fresh = [(c, token) for c in configs if _key(c) not in seen]
+            done = {_key(e.config): (e.report, e.error) for e in evaluation.run(fresh)}
+            scores = {}
+            for value, cfg in zip(values, configs):
+                key = _key(cfg)
+                if key not in seen:
+                    rep, error = done[key]
+                    seen[key] = None if rep is None else _row(rep, cfg, window, ratio, name,
+                                                              value)
+                    if seen[key] is None:
+                        log(f"failed: {name}={value} ({error})")
+                    else:
+                        rows.append(seen[key])
+                        log(_format(seen[key]))
+                if seen[key] is not None:
+                    scores[value] = seen[key]["J"]
+            best = _step(best, name, scores, tol)
     return best, rows
 
 
+def _key(cfg: EvalConfig) -> tuple:
+    return tuple(sorted(cfg.to_dict().items()))
+
+
+def _step(best: EvalConfig, name: str, scores: dict, tol: float) -> EvalConfig:
+    """``best`` with ``name`` set to the value of lowest J if it beats the current by ``tol``."""
+    if not scores:
+        return best
+    current = getattr(best, name)
+    winner = min(scores, key=scores.get)
+    if current not in scores or scores[winner] < scores[current] - tol:
+        best = replace(best, **{name: winner})
+    return best
+
+
 def _row(rep: dict, cfg: EvalConfig, window: float, ratio: float, name: str, value) -> dict:
+    return {"swept": name, "value": value, **config_row(rep, cfg, window, ratio)}
+
+
+def config_row(rep: dict, cfg: EvalConfig, window: float = WINDOW, ratio: float = RATIO) -> dict:
+    """The options and measures of one configuration's report, with its objective ``J``.
+
+    ``rep`` is the :func:`~sandbox.eval.report.build_report` of ``cfg``, which
+    evaluated the dynamic formulation at ``window`` and the static one at ``ratio``.
+    """
     d = rep["dynamic"][f"{window:.1f}"]["mean"]
     s = rep["static"][f"{ratio:.1f}"]["mean"]
     return {
-        "swept": name, "value": value, "observe": ",".join(cfg.observe or ("hand",)),
+        "observe": ",".join(cfg.observe or ("hand",)),
         "noise_floor": cfg.noise_floor, "signal_floor": cfg.signal_floor,
         "noise_floors": ",".join(f"{n}:{f:g}" for n, f in cfg.noise_floors) or "-",
         "settle_tol": cfg.settle_tol, "regularizer": cfg.regularizer,

@@ -47,22 +47,33 @@ def test_report_keys_and_known_means():
 
 
 def test_tune_keeps_the_current_value_unless_clearly_better(monkeypatch):
+    from contextlib import nullcontext
+
+    from sandbox.eval import executors, sweep
     from sandbox.eval import tune as tune_mod
 
     fake = {0.01: 3.00, 0.02: 2.98, 0.04: 2.80}     # J by noise_floor
 
-    def run(train, test, cfg, workers):
-        return [], 0.0
-
-    def report(trials, cfg, name, runtime, n_boot):
-        J = fake[cfg["noise_floor"]]
+    def report(cfg):
+        J = fake[cfg.noise_floor]
         entry = {"e_p": J * 0.05, "e_q": 0.0, "e_phi": 0.0, "recognition": 1.0, "coverage": 1.0}
         return {"dynamic": {"0.2": {"mean": entry}}, "static": {"0.3": {"mean": entry}},
                 "oracle": {"mean": entry}, "jumps": {"0.2": {"p95": 0.0}}, "runtime_s": 0.0,
                 "recognition_over_time": {"0.2": [1.0] * 10}}
 
-    monkeypatch.setattr(tune_mod, "run_loocv", run)
-    monkeypatch.setattr(tune_mod, "build_report", report)
+    class Evaluation:               # the leave-one-out replaced by the fake objective
+        def __init__(self, executor):
+            pass
+
+        def add(self, train, test):
+            return "trials"
+
+        def run(self, jobs):
+            for cfg, token in jobs:
+                yield sweep.Evaluated(sweep.config_key(cfg, token), cfg, report(cfg), None)
+
+    monkeypatch.setattr(executors, "open_executor", lambda *a: nullcontext())
+    monkeypatch.setattr(sweep, "Evaluation", Evaluation)
     best, rows = tune_mod.tune([], [], grid={"noise_floor": (0.01, 0.02, 0.04)},
                                log=lambda _: None)
     assert best.noise_floor == 0.04 and len(rows) == 3

@@ -1,0 +1,43 @@
+"""``python -m sandbox sweep``: leave-one-out of every configuration of a grid, ranked."""
+
+from __future__ import annotations
+
+from sandbox.commands import _executor, _observation, _types
+
+NAME = "sweep"
+HELP = ("leave-one-out of every configuration of a grid (YAML) on local processes or a Dask "
+        "cluster; results ranked by the tuning objective")
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("--data", required=True,
+                        help="a folder in the shared layout or synthetic:NAME")
+    parser.add_argument("--grid", required=True, metavar="GRID.yaml",
+                        help="options and their values: lists (Cartesian product) or "
+                             "'points:' (see sandbox.eval.grid)")
+    parser.add_argument("--out", required=True, metavar="DIR",
+                        help="folder of the results (results/<key>.json, summary.md, "
+                             "summary.json, summary.png); a re-run skips what is done")
+    _executor.add_arguments(parser)
+    parser.add_argument("--force", action="store_true",
+                        help="write into an --out folder that holds another sweep")
+    parser.add_argument("--tasks", default=None, help="comma-separated subset of tasks")
+    parser.add_argument("--n-per-task", type=_types.PER_TASK, default=None,
+                        help="trials per task (synthetic: generated; folder: first N)")
+    parser.add_argument("--seed", type=_types.SEED, default=0, help="seed of synthetic data")
+    _observation.add_arguments(parser)
+
+
+def run(args) -> int:
+    from sandbox.eval.sweep import sweep
+
+    spec = _observation.data_spec(args)
+    summary = sweep(args.data, args.grid, args.out, force=args.force, seed=args.seed,
+                    tasks=_observation.split(args.tasks), n_per_task=args.n_per_task,
+                    spec=spec, observe=_observation.observe(args, spec),
+                    **_executor.options(args))
+    ranked, failed = summary["ranked"], summary["failed"]
+    for entry in ranked[:5]:
+        print(f"{entry['rank']:3d}. J = {entry['J']:.3f}  {entry['label']}")
+    print(f"{len(ranked)} configurations ranked, {len(failed)} failed -> {args.out}/summary.md")
+    return 1 if failed else 0

@@ -1,0 +1,290 @@
+"""Where a sweep's tasks run: local worker processes or a Dask cluster, one retry per task.
+
+A task is one configuration and a chunk of its leave-one-out folds
+(:class:`Task`); :func:`run_task` computes it in a worker from the trials
+installed there once (:func:`install`). Two executors run tasks:
+
+* :class:`ProcessExecutor` (default): ``workers`` single-process
+  :class:`~concurrent.futures.ProcessPoolExecutor` lanes (``spawn`` start
+  method), one task per lane at a time. A lane whose process dies is replaced,
+  and the task it ran is known exactly: only that task is lost.
+* :class:`~sandbox.eval.dask_executor.DaskExecutor` (``scheduler="local"`` or
+  an address; needs ``pip install -e ".[dask]"``).
+
+Both give each worker one BLAS thread (Dask's nanny does so by default; the
+lanes are started with ``OMP_NUM_THREADS``, ``MKL_NUM_THREADS`` and
+``OPENBLAS_NUM_THREADS`` set to 1), so every executor computes the same bits.
+
+:func:`run_tasks` submits at most as many tasks as there are worker threads,
+retries a failed task (its worker died, or it raised) once, then reports it as
+failed and goes on with the others.
+
+Test hook: a worker running a task whose configuration key starts with
+``$SANDBOX_TEST_SWEEP_CRASH`` kills its own process (``os._exit``). With
+``KEY@FILE`` it dies only while ``FILE`` has no line yet, with ``KEY*N@FILE``
+while it has fewer than N lines, appending one line before dying (so the
+file counts the deaths). Several entries are separated by commas.
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+import time
+from collections import deque
+from collections.abc import Iterable, Iterator
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
+from contextlib import contextmanager
+from dataclasses import dataclass
+from multiprocessing import get_context
+from pathlib import Path
+
+from sandbox.eval.loocv import EvalConfig, fold, prepare
+
+#: Environment of the worker processes: one BLAS thread each, as Dask's nanny sets.
+WORKER_ENV = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
+#: Attempts after the first one for a failed task.
+RETRIES = 1
+#: Default wait (s) for a Dask scheduler to answer.
+TIMEOUT = 10.0
+CRASH_HOOK = "SANDBOX_TEST_SWEEP_CRASH"
+#: The error of a task not run because its configuration had already failed.
+DROPPED = "not run: another part of its configuration failed"
+
+
+@dataclass(frozen=True)
+class Task:
+    """One unit of work: folds ``folds`` of the configuration keyed ``key`` on trials ``data``."""
+
+    key: str
+    config: EvalConfig
+    folds: tuple[int, ...]
+    data: str
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What came of a task: its per-fold results and compute time (s), or why it failed."""
+
+    task: Task
+    trials: list | None
+    seconds: float = 0.0
+    error: str | None = None
+
+
+# ---------------------------------------------------------------- worker side
+_DATA: dict[str, tuple[list, list]] = {}
+_PREPARED: dict = {}
+_KEEP = 4   # configurations whose prepared trials a worker keeps
+_FK: list = []
+_LOCK = threading.Lock()   # a Dask worker may run tasks on several threads
+
+
+def install(token: str, train, test) -> None:
+    """Keep the trials ``token`` names in this process (workers call it once)."""
+    _DATA[token] = (list(train), list(test))
+
+
+def _install_all(data: dict[str, tuple[list, list]]) -> None:
+    for token, (train, test) in data.items():
+        install(token, train, test)
+
+
+def uninstall(token: str) -> None:
+    """Forget the trials ``token`` names, and what was prepared from them."""
+    _DATA.pop(token, None)
+    for ident in [k for k in _PREPARED if k[0] == token]:
+        del _PREPARED[ident]
+
+
+def run_task(task: Task) -> tuple[list[dict], float]:
+    """The results of the task's folds, in order, and the seconds they took (in a worker)."""
+    from sandbox.robot import BaxterKinematics
+
+    _maybe_crash(task.key)
+    start = time.perf_counter()
+    if task.data not in _DATA:
+        raise RuntimeError(f"trials {task.data[:12]} are not installed in this worker "
+                           f"(pid {os.getpid()})")
+    ident = (task.data, task.config)
+    with _LOCK:
+        if ident not in _PREPARED:
+            while len(_PREPARED) >= _KEEP:
+                _PREPARED.pop(next(iter(_PREPARED)))
+            _PREPARED[ident] = prepare(*_DATA[task.data], task.config)
+        train, test, fits = _PREPARED[ident]
+        if not _FK:
+            _FK.append(BaxterKinematics().fk)
+        fk = _FK[0]
+    trials = [fold(train, test, fits, task.config, i, fk) for i in task.folds]
+    return trials, time.perf_counter() - start
+
+
+def _maybe_crash(key: str) -> None:
+    """The test hook (see the module docstring)."""
+    for entry in filter(None, os.environ.get(CRASH_HOOK, "").split(",")):
+        head, _, marker = entry.partition("@")
+        prefix, _, times = head.partition("*")
+        if not key.startswith(prefix):
+            continue
+        if marker:
+            deaths = Path(marker).read_text().count("\n") if Path(marker).exists() else 0
+            if deaths >= int(times or 1):
+                continue
+            with open(marker, "a") as f:
+                f.write(f"{os.getpid()}\n")
+        os._exit(3)
+
+
+# ---------------------------------------------------------------- driver
+def check_workers(workers) -> int:
+    """``workers`` as an int after checking it is a positive integer."""
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise ValueError(f"--workers: expected a positive integer, got {workers!r}")
+    return workers
+
+
+def open_executor(workers: int = 1, scheduler: str | None = None, timeout: float = TIMEOUT):
+    """An executor (a context manager): local processes, or Dask if ``scheduler`` is given.
+
+    Parameters
+    ----------
+    workers : int
+        Worker processes (local processes, or the workers of ``scheduler="local"``).
+    scheduler : str, optional
+        ``"local"`` (a Dask ``LocalCluster`` of ``workers`` single-threaded
+        processes) or the address of a running Dask scheduler (``tcp://host:8786``).
+    timeout : float
+        Seconds to wait for the scheduler to answer.
+
+    Raises
+    ------
+    ValueError
+        ``workers`` < 1, ``timeout`` <= 0, Dask missing, or no scheduler at the address.
+    """
+    check_workers(workers)
+    if not timeout > 0:
+        raise ValueError(f"--scheduler-timeout: expected a positive number of seconds, "
+                         f"got {timeout!r}")
+    if scheduler is None:
+        return ProcessExecutor(workers)
+    from sandbox.eval.dask_executor import DaskExecutor
+
+    return DaskExecutor(scheduler, workers=workers, timeout=timeout)
+
+
+def run_tasks(executor, tasks: Iterable[Task], *, retries: int = RETRIES,
+              dropped: set[str] | None = None) -> Iterator[Outcome]:
+    """Run ``tasks`` on ``executor``; yield each one's :class:`Outcome` as it finishes.
+
+    A task that fails is resubmitted ``retries`` times before its failure is
+    yielded; the other tasks are not affected. A task not yet submitted whose
+    key the caller has put in ``dropped`` is not run: it is yielded failed (:data:`DROPPED`).
+    """
+    pending, running, failures = deque(tasks), {}, {}
+    dropped = set() if dropped is None else dropped
+    while pending or running:
+        room = executor.slots() - len(running)
+        while pending and room > 0:
+            task = pending.popleft()
+            if task.key in dropped:
+                yield Outcome(task, None, error=DROPPED)
+                continue
+            running[executor.submit(task)] = task
+            room -= 1
+        for future in executor.wait(list(running)):
+            task = running.pop(future)
+            try:
+                trials, seconds = executor.result(future)
+            except Exception as error:  # a dead worker or the task's own exception
+                failures[task] = failures.get(task, 0) + 1
+                if failures[task] <= retries:
+                    pending.appendleft(task)
+                else:
+                    yield Outcome(task, None, error=describe(error))
+            else:
+                yield Outcome(task, trials, seconds)
+
+
+def describe(error: BaseException) -> str:
+    """One line saying why a task failed."""
+    name = type(error).__name__
+    if isinstance(error, BrokenProcessPool) or name == "KilledWorker":
+        return f"its worker process died ({name})"
+    return f"{name}: {error}"
+
+
+# ---------------------------------------------------------------- local processes
+@contextmanager
+def _environment(values: dict[str, str]):
+    """Set environment variables for processes started inside the block."""
+    saved = {k: os.environ.get(k) for k in values}
+    os.environ.update(values)
+    try:
+        yield
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+
+
+class ProcessExecutor:
+    """Tasks on ``workers`` local processes (see the module docstring)."""
+
+    def __init__(self, workers: int) -> None:
+        self.workers = check_workers(workers)
+        self._context = get_context("spawn")
+        self._data: dict[str, tuple[list, list]] = {}
+        self._idle: list[ProcessPoolExecutor] = []
+        self._busy: dict = {}
+
+    def __enter__(self) -> ProcessExecutor:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def load(self, token: str, train, test) -> None:
+        """Install these trials too in every worker (lanes restart with all of them)."""
+        if token not in self._data:
+            self.close()
+            self._data[token] = (list(train), list(test))
+
+    def slots(self) -> int:
+        return self.workers
+
+    def submit(self, task: Task):
+        if not self._data:
+            raise RuntimeError("load the trials (load()) before submitting tasks")
+        lane = self._idle.pop() if self._idle else ProcessPoolExecutor(
+            1, mp_context=self._context, initializer=_install_all, initargs=(self._data,))
+        with _environment(WORKER_ENV):   # a new lane's process starts at its first submit
+            future = lane.submit(run_task, task)
+        self._busy[future] = lane
+        return future
+
+    def wait(self, futures: list) -> set:
+        return wait(futures, return_when=FIRST_COMPLETED).done
+
+    def result(self, future):
+        lane = self._busy.pop(future)
+        try:
+            value = future.result()
+        except BrokenProcessPool:
+            lane.shutdown(wait=True, cancel_futures=True)
+            raise
+        except BaseException:
+            self._idle.append(lane)
+            raise
+        self._idle.append(lane)
+        return value
+
+    def close(self) -> None:
+        for lane in self._idle:
+            lane.shutdown(wait=True)
+        for lane in self._busy.values():    # interrupted: do not wait for the running tasks
+            lane.shutdown(wait=False, cancel_futures=True)
+        self._idle, self._busy = [], {}

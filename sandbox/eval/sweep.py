@@ -1,0 +1,357 @@
+"""Leave-one-out of every configuration of a grid, on local processes or a Dask cluster.
+
+:func:`sweep` is ``python -m sandbox sweep``: it reads a grid
+(:mod:`sandbox.eval.grid`), loads the trials once, and evaluates every
+configuration on every leave-one-out fold. The work is split into tasks of one
+configuration and a chunk of its folds (:func:`chunk_folds`), run by an
+executor (:mod:`sandbox.eval.executors`). A configuration's results do not
+depend on the executor, the number of workers or the chunks.
+
+The output folder holds:
+
+* ``sweep.json``: what was swept (the grid's points, the base configuration,
+  the data options); a folder holding another sweep is refused unless ``force``;
+* ``results/<key>.json``: one file per configuration, written atomically when
+  it finishes, with its options, report and objective. The key hashes the full
+  configuration, the trials themselves and the package version, so a re-run
+  skips what is done and never reuses a result of other options or data;
+* ``summary.json``, ``summary.md``, ``summary.png``: the configurations ranked
+  by tuning's objective J (:func:`~sandbox.eval.tune.objective`, lower is
+  better), and the ones that failed.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+import sys
+import tempfile
+from collections import Counter
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from pathlib import Path
+from typing import Any, NamedTuple
+
+import numpy as np
+
+import sandbox
+from sandbox.eval.executors import DROPPED, Task, open_executor, run_tasks
+from sandbox.eval.grid import config_for, label
+from sandbox.eval.loocv import EvalConfig
+from sandbox.eval.report import build_report
+from sandbox.eval.tune import BOOTSTRAP, config_row
+
+#: Tasks per worker thread the folds are split into (more balance the load better).
+TASKS_PER_SLOT = 8
+MANIFEST = "sweep.json"
+
+
+def _stderr(text: str) -> None:
+    print(text, file=sys.stderr, flush=True)
+
+
+def data_token(train, test) -> str:
+    """A hash of the trials' contents (times, values, labels, modalities, meta)."""
+    digest = hashlib.sha256()
+    for demo in list(train) + list(test):
+        for array in (demo.times, demo.human, demo.robot):
+            digest.update(np.ascontiguousarray(array, dtype=float).tobytes())
+        digest.update(repr((demo.task, demo.source, demo.human_names, demo.robot_names,
+                            [(m.name, m.kind) for m in demo.modalities])).encode())
+        for name in sorted(demo.meta):
+            value = demo.meta[name]
+            digest.update(name.encode())
+            digest.update(np.asarray(value).tobytes() if isinstance(value, np.ndarray)
+                          else repr(value).encode())
+    return digest.hexdigest()
+
+
+def _canonical(value: Any) -> str:
+    return json.dumps(value, sort_keys=True, default=str)
+
+
+def config_key(config: EvalConfig, token: str) -> str:
+    """The key of a configuration's result: its full options, the trials, the version."""
+    text = _canonical({"config": config.to_dict(), "data": token,
+                       "version": sandbox.__version__})
+    return hashlib.sha256(text.encode()).hexdigest()[:32]
+
+
+def chunk_folds(n_folds: int, n_configs: int, slots: int,
+                chunk_size: int | None = None) -> list[tuple[int, ...]]:
+    """The folds split into consecutive chunks, about :data:`TASKS_PER_SLOT` tasks per slot."""
+    if chunk_size is None:
+        per_config = math.ceil(TASKS_PER_SLOT * slots / max(1, n_configs))
+        chunk_size = math.ceil(n_folds / max(1, min(n_folds, per_config)))
+    if chunk_size < 1:
+        raise ValueError(f"chunk_size: expected a positive integer, got {chunk_size!r}")
+    return [tuple(range(i, min(i + chunk_size, n_folds))) for i in range(0, n_folds, chunk_size)]
+
+
+class Evaluated(NamedTuple):
+    """A configuration's evaluation: its key and report, or why it failed."""
+
+    key: str
+    config: EvalConfig
+    report: dict | None
+    error: str | None
+
+
+class Evaluation:
+    """Leave-one-out of configurations on sets of trials, on an executor.
+
+    Parameters
+    ----------
+    executor : ProcessExecutor or DaskExecutor
+        Where the tasks run (:func:`~sandbox.eval.executors.open_executor`).
+    dataset : str
+        The ``dataset`` label of the reports.
+    chunk_size : int, optional
+        Folds per task (default: see :func:`chunk_folds`).
+    """
+
+    def __init__(self, executor, *, dataset: str = "", chunk_size: int | None = None) -> None:
+        self.executor, self.dataset, self.chunk_size = executor, dataset, chunk_size
+        self._folds: dict[str, int] = {}
+
+    def add(self, train, test) -> str:
+        """Install a set of trials in the executor's workers; returns its token.
+
+        ``train`` and ``test`` are the same trials preprocessed for training and as
+        test streams (:func:`~sandbox.eval.datasets.load_pair`).
+        """
+        if len(train) != len(test) or any(a.source != b.source or a.task != b.task
+                                          for a, b in zip(train, test)):
+            raise ValueError("train and test: expected the same trials in the same order")
+        counts = Counter(d.task for d in train)
+        if not counts or min(counts.values()) < 3:
+            raise ValueError(f"trials: expected at least 3 per task for leave-one-out (each fold "
+                             f"fits on the 2 or more others), got {dict(counts)}")
+        token = data_token(train, test)
+        if token not in self._folds:
+            self.executor.load(token, train, test)
+            self._folds[token] = len(train)
+        return token
+
+    def run(self, jobs: Sequence[tuple[EvalConfig, str]]) -> Iterator[Evaluated]:
+        """Evaluate each ``(config, token)``; yield each distinct one as its last task ends."""
+        jobs = list({config_key(c, t): (c, t) for c, t in jobs}.items())
+        tasks: list[Task] = []
+        for key, (config, token) in jobs:
+            n_folds = self._folds[token]
+            for folds in chunk_folds(n_folds, len(jobs), self.executor.slots(), self.chunk_size):
+                tasks.append(Task(key, config, folds, token))
+        expected = {key: sum(t.key == key for t in tasks) for key, _ in jobs}
+        configs = {key: config for key, (config, _) in jobs}
+        parts: dict[str, list] = {key: [] for key, _ in jobs}
+        failed: set[str] = set()     # configurations whose other tasks need not run
+        for outcome in run_tasks(self.executor, tasks, dropped=failed):
+            key = outcome.task.key
+            parts[key].append(outcome)
+            if outcome.error is not None:
+                failed.add(key)
+            if len(parts[key]) == expected[key]:
+                yield self._assemble(key, configs[key], parts.pop(key))
+
+    def _assemble(self, key: str, config: EvalConfig, outcomes: list) -> Evaluated:
+        errors = sorted({o.error for o in outcomes if o.error not in (None, DROPPED)})
+        if errors:
+            return Evaluated(key, config, None, "; ".join(errors))
+        outcomes = sorted(outcomes, key=lambda o: o.task.folds[0])
+        trials = [t for o in outcomes for t in o.trials]
+        seconds = sum(o.seconds for o in outcomes)
+        report = build_report(trials, config.to_dict(), self.dataset, seconds, n_boot=BOOTSTRAP)
+        return Evaluated(key, config, report, None)
+
+
+# ---------------------------------------------------------------- the output folder
+def write_atomic(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` through a temporary file in the same folder."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w") as f:
+            f.write(text)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def manifest(points: list[dict], base: EvalConfig, data: dict) -> dict:
+    """What a sweep is (``sweep.json``): the points, the base configuration, the data options."""
+    body = {"points": json.loads(_canonical(points)), "base": json.loads(_canonical(
+        base.to_dict())), "data": json.loads(_canonical(data))}
+    body["fingerprint"] = hashlib.sha256(_canonical(body).encode()).hexdigest()[:32]
+    return body
+
+
+def claim_out(out: str | Path, content: dict, *, force: bool = False,
+              write: bool = True) -> Path:
+    """Check that ``out`` is empty or holds this sweep (unless ``force``); mark it so
+    (``sweep.json``) if ``write``.
+
+    Raises
+    ------
+    ValueError
+        ``out`` is a file, or holds another sweep's results or other files.
+    """
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"--out: expected a folder, got the file {str(out)!r}")
+    path = out / MANIFEST
+    if not force and out.is_dir() and any(out.iterdir()):
+        try:
+            held = json.loads(path.read_text()).get("fingerprint")
+        except (OSError, ValueError, AttributeError):
+            held = None
+        if held != content["fingerprint"]:
+            what = "another sweep's results" if held else "files that are not a sweep's"
+            raise ValueError(f"--out {str(out)!r}: expected an empty folder or one of an "
+                             f"earlier run of this sweep (same grid and data), got {what}; "
+                             f"use --force to write there anyway")
+    if write:
+        write_atomic(path, json.dumps(content, indent=1))
+    return out
+
+
+def _result_path(out: Path, key: str) -> Path:
+    return out / "results" / f"{key}.json"
+
+
+def load_result(out: str | Path, key: str) -> dict | None:
+    """The stored result of configuration ``key`` (None if absent or unreadable)."""
+    try:
+        result = json.loads(_result_path(Path(out), key).read_text())
+    except (OSError, ValueError):
+        return None
+    return result if isinstance(result, dict) and result.get("key") == key else None
+
+
+def run_sweep(executor, trials: Mapping, points: list[dict], out: str | Path, *,
+              base: EvalConfig | None = None, data: dict | None = None, dataset: str = "",
+              force: bool = False, chunk_size: int | None = None,
+              log: Callable[[str], None] = _stderr) -> dict:
+    """Evaluate every point of a grid; write results and summary to ``out``.
+
+    Parameters
+    ----------
+    executor : ProcessExecutor or DaskExecutor
+        From :func:`~sandbox.eval.executors.open_executor`.
+    trials : mapping
+        ``trials[observe]`` is the pair ``(train, test)`` of trials loaded with
+        the modalities ``observe`` (a tuple, as in :class:`EvalConfig`) that some
+        point observes (:func:`~sandbox.eval.datasets.load_pair`).
+    points : list of dict
+        From :func:`~sandbox.eval.grid.read_grid`.
+    out : str or Path
+        The output folder (see the module docstring).
+    base : EvalConfig, optional
+        The options the points do not set.
+    data : dict, optional
+        How the trials were obtained, for ``sweep.json`` (default: their hashes).
+    dataset : str
+        Label of the data in the reports.
+    force : bool
+        Write into a folder holding another sweep.
+    chunk_size : int, optional
+        Folds per task (default: see :func:`chunk_folds`).
+    log : callable
+        Receives one line per finished configuration.
+
+    Returns
+    -------
+    dict
+        The summary (``summary.json``).
+    """
+    from sandbox.eval.sweep_summary import write_summary
+
+    base = base or EvalConfig()
+    configs = [config_for(p, base) for p in points]
+    missing = sorted({str(c.observe) for c in configs if c.observe not in trials})
+    if missing:
+        raise ValueError(f"trials: expected trials for every observe of the grid, "
+                         f"missing {missing}")
+    evaluation = Evaluation(executor, dataset=dataset, chunk_size=chunk_size)
+    tokens = {obs: evaluation.add(*trials[obs]) for obs in dict.fromkeys(c.observe
+                                                                         for c in configs)}
+    out = claim_out(out, manifest(points, base, data or {"trials": sorted(tokens.values())}),
+                    force=force)
+    jobs = [(c, tokens[c.observe]) for c in configs]
+    keys = [config_key(c, t) for c, t in jobs]
+    results = {k: r for k in keys if (r := load_result(out, k)) is not None}
+    todo = [job for job, k in zip(jobs, keys) if k not in results]
+    if results:
+        log(f"{len(results)} of {len(set(keys))} configurations already done in {out}")
+    failed: dict[str, str] = {}
+    for n, done in enumerate(evaluation.run(todo), 1):
+        point = points[keys.index(done.key)]
+        if done.report is None:
+            failed[done.key] = done.error
+            log(f"[{n}/{len(todo)}] failed: {label(point)}: {done.error}")
+            continue
+        results[done.key] = _result(done.key, point, done.config, done.report)
+        write_atomic(_result_path(out, done.key), json.dumps(results[done.key], indent=1))
+        log(f"[{n}/{len(todo)}] {label(point)}: J = {results[done.key]['row']['J']:.3f} "
+            f"({done.report['runtime_s']:.1f} s of work)")
+    return write_summary(out, points, keys, results, failed, data or {})
+
+
+def _result(key: str, point: dict, config: EvalConfig, report: dict) -> dict:
+    return {"key": key, "point": json.loads(_canonical(point)), "config": config.to_dict(),
+            "version": sandbox.__version__,
+            "row": config_row(report, config, config.windows[0], config.ratios[0]),
+            "report": report}
+
+
+def sweep(data: str, grid: str | Path, out: str | Path, *, workers: int = 2,
+          scheduler: str | None = None, timeout: float | None = None, force: bool = False,
+          seed: int = 0, tasks: Sequence[str] | None = None, n_per_task: int | None = None,
+          spec=None, observe: Sequence[str] | None = None,
+          log: Callable[[str], None] = _stderr) -> dict:
+    """``python -m sandbox sweep``: check everything, load the trials, run the grid.
+
+    The grid, ``workers``, the output folder and the scheduler are checked (a
+    ``ValueError`` saying what was expected) before any trial is loaded.
+    ``data``, ``seed``, ``tasks``, ``n_per_task`` and ``spec`` are those of
+    :func:`~sandbox.eval.datasets.load_pair`; ``observe`` the modalities of the
+    points that do not set ``observe`` (default the spec's). The trials are
+    loaded once per distinct ``observe`` (the trials kept can depend on it).
+    Returns the summary.
+    """
+    from sandbox.data.spec import resolve
+    from sandbox.eval.datasets import load_pair
+    from sandbox.eval.executors import TIMEOUT
+    from sandbox.eval.grid import read_grid
+
+    points = read_grid(grid)
+    if observe is None:
+        observe = [m.name for m in resolve(spec).observed(None)]
+    base = EvalConfig(observe=tuple(observe))
+    configs = [config_for(p, base) for p in points]
+    described = {"data": _where(data), "seed": seed, "tasks": list(tasks) if tasks else None,
+                 "n_per_task": n_per_task, "spec": _where(spec) if spec else None}
+    claim_out(out, manifest(points, base, described), force=force, write=False)
+    with open_executor(workers, scheduler, TIMEOUT if timeout is None else timeout) as ex:
+        trials = {}
+        for obs in dict.fromkeys(c.observe for c in configs):
+            train, test, skipped = load_pair(data, seed=seed, tasks=tasks,
+                                             n_per_task=n_per_task, spec=spec, observe=obs)
+            for reason in skipped:
+                log(f"skipped ({','.join(obs)}): {reason}")
+            trials[obs] = (train, test)
+        return run_sweep(ex, trials, points, out, base=base, data=described,
+                         dataset=str(data), force=force, log=log)
+
+
+def _where(value) -> str:
+    """A data folder or spec file as an absolute path (other values as their text)."""
+    if isinstance(value, str | Path):
+        try:
+            return str(Path(value).resolve(strict=True))
+        except OSError:
+            pass
+    return str(value)
