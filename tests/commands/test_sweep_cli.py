@@ -102,7 +102,7 @@ class _Stop:
 
 def test_tune_takes_the_same_executor_options(capsys, no_loading):
     assert main(["tune", "--data", "synthetic:two_task", "--workers", "0"]) == 2
-    assert "--workers: expected a positive integer, got 0" in capsys.readouterr().err
+    assert "--workers: expected a positive integer <= 256, got '0'" in capsys.readouterr().err
     with pytest.raises(SystemExit):
         main(["tune", "--help"])
     assert "--scheduler ADDRESS|local" in capsys.readouterr().out
