@@ -41,9 +41,10 @@ MAX_WORKERS = 256
 MAX_SEED = 2**63 - 1
 #: Most demonstrations per task (``--n-per-task``, ``--demos``).
 MAX_PER_TASK = 10_000
-#: Basis functions per dim accepted by ``fit --n-basis`` (the paper uses 21; more than a
-#: few dozen over a seconds-long motion fits noise, and the fit grows as its square).
-MAX_N_BASIS = 200
+#: Basis functions per dim accepted by ``fit --n-basis``: the core's
+#: ``sandbox.core.limits.MAX_N_BASIS`` (the paper uses 21; more than a few dozen over a
+#: seconds-long motion fits noise, and the fit grows as its square).
+MAX_N_BASIS = 100
 
 
 def _fail(text: str, what: str) -> argparse.ArgumentTypeError:

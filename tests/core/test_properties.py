@@ -10,6 +10,7 @@ run is reproducible.
 
 import io
 import json
+import os
 import tempfile
 import zipfile
 from pathlib import Path
@@ -23,6 +24,15 @@ from sandbox.core.model import IProMP
 from sandbox.core.predictor import DynamicPredictor, StaticPredictor
 
 from . import synth
+
+#: Examples per property test; ``SANDBOX_FUZZ_EXAMPLES`` sets them all for a longer campaign.
+_CAMPAIGN = int(os.environ.get("SANDBOX_FUZZ_EXAMPLES", "0"))
+
+
+def examples(n: int) -> int:
+    """``n`` examples in the suite, or the campaign's number."""
+    return _CAMPAIGN or n
+
 
 SETTINGS = settings(deadline=None, derandomize=True, database=None,
                     suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
@@ -64,7 +74,7 @@ OPTION_VALUES = st.one_of(NUMBER, st.sampled_from(["joint", "marginal", "all", "
                                                    "hand", "emg", True, False]))
 
 
-@settings(SETTINGS, max_examples=80)
+@settings(SETTINGS, max_examples=examples(80))
 @given(st.dictionaries(st.sampled_from(OPTIONS), OPTION_VALUES, max_size=3))
 def test_dynamic_predictor_options(options):
     try:
@@ -74,7 +84,7 @@ def test_dynamic_predictor_options(options):
     _check_outputs(pred)
 
 
-@settings(SETTINGS, max_examples=60)
+@settings(SETTINGS, max_examples=examples(60))
 @given(st.sampled_from(["ratio", "expected_duration", "subsample", "n_candidates"]), NUMBER)
 def test_static_predictor_options(name, value):
     try:
@@ -119,7 +129,7 @@ def _run(pred, steps) -> float:
     return now
 
 
-@settings(SETTINGS, max_examples=40)
+@settings(SETTINGS, max_examples=examples(40))
 @given(st.lists(STEP, max_size=25), st.sampled_from(["dynamic", "static", "latest",
                                                      "marginal"]))
 def test_predictors_observe_and_update(steps, kind):
@@ -161,7 +171,7 @@ def demo_sets(draw):
     return demos
 
 
-@settings(SETTINGS, max_examples=80)
+@settings(SETTINGS, max_examples=examples(80))
 @given(demo_sets(), st.sampled_from([5, 9]))
 def test_fit_any_demonstrations(demos, n_basis):
     try:
@@ -274,7 +284,7 @@ def _mutated(kind, where, what) -> bytes:
     return bytes(raw)
 
 
-@settings(SETTINGS, max_examples=100)
+@settings(SETTINGS, max_examples=examples(100))
 @given(MUTATION)
 def test_load_mutated_model_files(tmp_path_factory, mutation):
     path = tmp_path_factory.getbasetemp() / "mutated.npz"
