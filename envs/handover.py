@@ -13,6 +13,13 @@ from numpy.typing import NDArray
 from sandbox import urdf
 from sandbox.core.validation import check_array, check_positive
 from sandbox.data.synthetic.base import Q_HOME
+from sandbox.envs.arguments import (  # noqa: F401 - VIEWER_KEYS re-exported
+    VIEWER_KEYS,
+    check_control_hz,
+    check_reward_weights,
+    check_substeps,
+    check_viewer_options,
+)
 from sandbox.envs.human import BODY_DIMS, HumanHand, HumanMotion
 from sandbox.envs.options import EpisodeOptions, parse_options
 from sandbox.envs.pybullet import Simulation
@@ -24,14 +31,8 @@ from sandbox.envs.teleop import TeleopMotion
 FloatArray = NDArray[np.float64]
 #: Physics steps run before the initial state is saved (lets the parked objects settle).
 SETTLE_STEPS = 100
-#: Arguments of :class:`sandbox.viz.Viewer` accepted in ``viewer_options`` ("human" mode).
 #: Upper bound of the observed EMG envelope (raw Myo units: hundreds in the recordings).
 EMG_MAX = 1e4
-VIEWER_KEYS = ("fps", "record", "resolution", "camera", "target", "fov", "floor_z", "realtime",
-               "open_browser", "host")
-#: Highest control rate (Hz) and most physics steps per control step accepted.
-MAX_CONTROL_HZ = 1000.0
-MAX_SUBSTEPS = 100
 
 
 class ClosedEnvironmentError(gym.error.ClosedEnvironmentError, RuntimeError):
@@ -132,8 +133,8 @@ class BaxterHandoverEnv(gym.Env):
       (``arm``, ``arm_valid``, ``emg``, ``emg_valid``);
     * ``render_mode`` (None, "human" or "rgb_array"): "human" shows the
       episode live in the browser (meshcat, see Rendering);
-    * ``control_hz`` (50, at most :data:`MAX_CONTROL_HZ`): steps per second;
-      ``substeps`` (5, an integer from 1 to :data:`MAX_SUBSTEPS`): physics
+    * ``control_hz`` (50, at most :data:`~sandbox.envs.arguments.MAX_CONTROL_HZ`): steps per second;
+      ``substeps`` (5, an integer from 1 to :data:`~sandbox.envs.arguments.MAX_SUBSTEPS`): physics
       steps per control step (physics at 250 Hz);
     * ``grasp_radius`` (0.05 m); ``reward_weights`` (a :class:`RewardWeights`,
       or a dict of its fields, e.g. ``{"success": 5.0}``);
@@ -206,17 +207,17 @@ class BaxterHandoverEnv(gym.Env):
         if render_mode not in (None, *self.metadata["render_modes"]):
             raise ValueError(f"render_mode: expected None, 'human' or 'rgb_array', "
                              f"got {render_mode!r}")
-        self.viewer_options = {"realtime": True, **_viewer_options(viewer_options)}
+        self.viewer_options = {"realtime": True, **check_viewer_options(viewer_options)}
         self.viewer = None
         self._closed = False
         if not isinstance(default_object, str) or default_object not in urdf.OBJECTS:
             raise ValueError(f"default_object: expected one of {list(urdf.OBJECTS)}, "
                              f"got {default_object!r}")
         self.family, self.render_mode, self.default_object = family, render_mode, default_object
-        self.dt = 1.0 / _control_hz(control_hz)
-        self.substeps = _substeps(substeps)
+        self.dt = 1.0 / check_control_hz(control_hz)
+        self.substeps = check_substeps(substeps)
         self.metadata = {**self.metadata, "render_fps": int(round(control_hz))}
-        weights = _reward_weights(reward_weights)
+        weights = check_reward_weights(reward_weights)
         check_positive(grasp_radius, "grasp_radius")
         self.sim = Simulation(physics_hz=control_hz * self.substeps)
         self.robot = BaxterArm(self.sim)
@@ -417,75 +418,3 @@ class BaxterHandoverEnv(gym.Env):
     def body_ids(self) -> dict[str, int]:
         """Body name -> PyBullet body id (``baxter``, ``human_hand``, objects, ``table``...)."""
         return dict(self.sim.bodies)
-
-
-def _control_hz(value: Any) -> float:
-    hz = check_positive(value, "control_hz")
-    if hz > MAX_CONTROL_HZ:
-        raise ValueError(f"control_hz: expected at most {MAX_CONTROL_HZ:g} Hz, got {value!r}")
-    return hz
-
-
-def _substeps(value: Any) -> int:
-    number = isinstance(value, (int, float, np.integer, np.floating))
-    number = number and not isinstance(value, bool)
-    if number and np.isfinite(value) and value == int(value) and 1 <= value <= MAX_SUBSTEPS:
-        return int(value)
-    raise ValueError(f"substeps: expected an integer from 1 to {MAX_SUBSTEPS}, got {value!r}")
-
-
-def _reward_weights(value: Any) -> RewardWeights:
-    """``reward_weights`` as given: None (the defaults), a RewardWeights or a dict of its fields."""
-    if value is None:
-        return RewardWeights()
-    if isinstance(value, RewardWeights):
-        return value
-    if isinstance(value, Mapping):
-        fields = ("distance", "success", "action_rate")
-        unknown = sorted(map(str, set(value) - set(fields)))
-        if unknown:
-            raise ValueError(f"reward_weights: expected keys among {list(fields)}, got {unknown}")
-        return RewardWeights(**value)
-    raise ValueError(f"reward_weights: expected a RewardWeights or a dict of its fields, "
-                     f"got {type(value).__name__}")
-
-
-def _viewer_options(options: Any) -> dict[str, Any]:
-    """Check ``viewer_options`` (keys and the type of each value) before anything starts."""
-    if options is None:
-        return {}
-    if not isinstance(options, Mapping):
-        raise ValueError(f"viewer_options: expected a dict of Viewer arguments, "
-                         f"got {type(options).__name__}")
-    unknown = sorted(map(str, set(options) - set(VIEWER_KEYS)))
-    if unknown:
-        raise ValueError(f"viewer_options: expected keys among {list(VIEWER_KEYS)}, "
-                         f"got {unknown}")
-    out = dict(options)
-    for key in ("record", "realtime", "open_browser"):
-        if key in out and not isinstance(out[key], bool):
-            raise ValueError(f"viewer_options[{key!r}]: expected True or False, got {out[key]!r}")
-    for key in ("fps", "fov"):
-        if key in out:
-            check_positive(out[key], f"viewer_options[{key!r}]")
-    if out.get("resolution") is not None:
-        check_positive(out["resolution"], "viewer_options['resolution']")
-    if out.get("floor_z") is not None:
-        _finite(out["floor_z"], "viewer_options['floor_z']")
-    for key in ("camera", "target"):
-        if key in out:
-            check_array(out[key], f"viewer_options[{key!r}]", 1, shape=(3,))
-    if "host" in out and (not isinstance(out["host"], str) or not out["host"]):
-        raise ValueError(f"viewer_options['host']: expected an address such as '127.0.0.1', "
-                         f"got {out['host']!r}")
-    return out
-
-
-def _finite(value: Any, name: str) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        v = float("nan")
-    if isinstance(value, bool) or not np.isfinite(v):
-        raise ValueError(f"{name}: expected a finite number, got {value!r}")
-    return v

@@ -164,9 +164,9 @@ def test_the_field_limit_holds_when_csv_allows_more(dataset):
 def test_file_row_and_line_limits_skip_the_trial(dataset, monkeypatch, limit, value, words):
     """issue 13 item 1: rows per file, bytes per line and per file are bounded; the reason
     names the limit."""
-    import sandbox.data.recorded as recorded
+    import sandbox.data.trialfile as trialfile
 
-    monkeypatch.setattr(recorded, limit, value)
+    monkeypatch.setattr(trialfile, limit, value)
     demos, skipped = _load(dataset)
     assert not demos
     for reason in skipped.values():

@@ -1,0 +1,95 @@
+"""Arguments of the handover environment's constructor, checked before anything is made.
+
+Each ``check_*`` returns the argument as the environment uses it or raises a
+``ValueError`` that names the argument and says what was expected (issue 13:
+a wrong type is never a ``TypeError`` later, at ``reset``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from sandbox.core.validation import check_array, check_positive
+from sandbox.envs.task import RewardWeights
+
+#: Arguments of :class:`sandbox.viz.Viewer` accepted in ``viewer_options`` ("human" mode).
+VIEWER_KEYS = ("fps", "record", "resolution", "camera", "target", "fov", "floor_z", "realtime",
+               "open_browser", "host")
+#: Highest control rate (Hz) and most physics steps per control step accepted.
+MAX_CONTROL_HZ = 1000.0
+MAX_SUBSTEPS = 100
+
+
+def check_control_hz(value: Any) -> float:
+    hz = check_positive(value, "control_hz")
+    if hz > MAX_CONTROL_HZ:
+        raise ValueError(f"control_hz: expected at most {MAX_CONTROL_HZ:g} Hz, got {value!r}")
+    return hz
+
+
+def check_substeps(value: Any) -> int:
+    number = isinstance(value, (int, float, np.integer, np.floating))
+    number = number and not isinstance(value, bool)
+    if number and np.isfinite(value) and value == int(value) and 1 <= value <= MAX_SUBSTEPS:
+        return int(value)
+    raise ValueError(f"substeps: expected an integer from 1 to {MAX_SUBSTEPS}, got {value!r}")
+
+
+def check_reward_weights(value: Any) -> RewardWeights:
+    """``reward_weights`` as given: None (the defaults), a RewardWeights or a dict of its fields."""
+    if value is None:
+        return RewardWeights()
+    if isinstance(value, RewardWeights):
+        return value
+    if isinstance(value, Mapping):
+        fields = ("distance", "success", "action_rate")
+        unknown = sorted(map(str, set(value) - set(fields)))
+        if unknown:
+            raise ValueError(f"reward_weights: expected keys among {list(fields)}, got {unknown}")
+        return RewardWeights(**value)
+    raise ValueError(f"reward_weights: expected a RewardWeights or a dict of its fields, "
+                     f"got {type(value).__name__}")
+
+
+def check_viewer_options(options: Any) -> dict[str, Any]:
+    """Check ``viewer_options`` (keys and the type of each value) before anything starts."""
+    if options is None:
+        return {}
+    if not isinstance(options, Mapping):
+        raise ValueError(f"viewer_options: expected a dict of Viewer arguments, "
+                         f"got {type(options).__name__}")
+    unknown = sorted(map(str, set(options) - set(VIEWER_KEYS)))
+    if unknown:
+        raise ValueError(f"viewer_options: expected keys among {list(VIEWER_KEYS)}, "
+                         f"got {unknown}")
+    out = dict(options)
+    for key in ("record", "realtime", "open_browser"):
+        if key in out and not isinstance(out[key], bool):
+            raise ValueError(f"viewer_options[{key!r}]: expected True or False, got {out[key]!r}")
+    for key in ("fps", "fov"):
+        if key in out:
+            check_positive(out[key], f"viewer_options[{key!r}]")
+    if out.get("resolution") is not None:
+        check_positive(out["resolution"], "viewer_options['resolution']")
+    if out.get("floor_z") is not None:
+        _finite(out["floor_z"], "viewer_options['floor_z']")
+    for key in ("camera", "target"):
+        if key in out:
+            check_array(out[key], f"viewer_options[{key!r}]", 1, shape=(3,))
+    if "host" in out and (not isinstance(out["host"], str) or not out["host"]):
+        raise ValueError(f"viewer_options['host']: expected an address such as '127.0.0.1', "
+                         f"got {out['host']!r}")
+    return out
+
+
+def _finite(value: Any, name: str) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        v = float("nan")
+    if isinstance(value, bool) or not np.isfinite(v):
+        raise ValueError(f"{name}: expected a finite number, got {value!r}")
+    return v
