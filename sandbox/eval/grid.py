@@ -53,6 +53,11 @@ ALIASES = {"window": "window_mode"}
 def _number(name: str, value: Any, *, allow_zero: bool = False) -> float:
     if isinstance(value, bool):
         raise ValueError(f"{name}: expected a number, got {value!r}")
+    if isinstance(value, str):  # YAML 1.1 reads 1e-3 (no dot) as a string
+        try:
+            value = float(value)
+        except ValueError:
+            raise ValueError(f"{name}: expected a number, got {value!r}") from None
     return check_positive(value, name, allow_zero=allow_zero)
 
 
