@@ -30,3 +30,14 @@ def test_run_env_benchmarks_merges_and_rounds(monkeypatch):
     assert bench.run_env_benchmarks() == {"env_steps_per_s": 500.1,
                                           "raw_pybullet_steps_per_s": 800.0,
                                           "env_raw_ratio": 0.625, "policy_steps_per_s": 300.1}
+
+
+def test_soak_reports_memory_and_descriptors_over_steps_and_resets():
+    from sandbox.bench.soak import soak
+
+    result = soak(steps=60, reset_every=20)
+    assert result["resets"] >= 3 and result["steps"] == 60
+    assert [s["step"] for s in result["samples"]] == [0, 6, 12, 18, 24, 30, 36, 42, 48, 54, 60]
+    assert all(s["rss_mib"] > 0 and s["fds"] > 0 for s in result["samples"])
+    assert result["fd_growth"] == result["samples"][-1]["fds"] - result["samples"][1]["fds"]
+    assert result["finite_actions"]
