@@ -137,7 +137,31 @@ def _fit_family_model(family: str, n_per_task: int, seed: int, n_basis: int | No
     return model.fit(demos)
 
 
-class IProMPPolicy:
+class _Steering:
+    """From a goal pose to an action: the speed-limited target and the gripper rule."""
+
+    def _setup_steering(self, control_hz: float, close_radius: float, max_velocity) -> None:
+        from sandbox.robot import BaxterKinematics
+
+        self.dt = 1.0 / check_positive(control_hz, "control_hz")
+        self.close_radius = check_positive(close_radius, "close_radius")
+        limits = MAX_VELOCITY if max_velocity is None else max_velocity
+        self.max_velocity = check_array(limits, "max_velocity", 1, shape=(7,))
+        check_positive(float(self.max_velocity.min()), "max_velocity")
+        self.kinematics = BaxterKinematics()
+
+    def _act(self, q: FloatArray, goal: FloatArray, obs: Mapping[str, FloatArray]) -> FloatArray:
+        """Action (8,): ``goal`` (7,) rad approached at most ``max_velocity * dt`` from the
+        previous target (from ``q`` at first); the gripper closed near the object."""
+        previous = q if self._target is None else self._target
+        step = self.max_velocity * self.dt
+        self._target = previous + np.clip(goal - previous, -step, step)
+        tip = self.kinematics.fk(q, link="left_gripper")
+        close = np.linalg.norm(tip - np.asarray(obs["object"], dtype=float)) < self.close_radius
+        return np.append(self._target, 1.0 if close else -1.0)
+
+
+class IProMPPolicy(_Steering):
     """Dynamic Interaction ProMP controller: re-predict every ``dow_t`` seconds, follow the plan.
 
     Parameters
@@ -193,17 +217,9 @@ class IProMPPolicy:
 
     def _setup(self, model, observe, control_hz: float, close_radius: float,
                max_velocity) -> None:
-        from sandbox.robot import BaxterKinematics
-
         self.observe, self._required = _observed(model, observe)
-
-        self.dt = 1.0 / check_positive(control_hz, "control_hz")
-        self.subsample = max(1, int(round(control_hz / PREDICTOR_HZ)))
-        self.close_radius = check_positive(close_radius, "close_radius")
-        limits = MAX_VELOCITY if max_velocity is None else max_velocity
-        self.max_velocity = check_array(limits, "max_velocity", 1, shape=(7,))
-        check_positive(float(self.max_velocity.min()), "max_velocity")
-        self.kinematics = BaxterKinematics()
+        self._setup_steering(control_hz, close_radius, max_velocity)
+        self.subsample = max(1, int(round(float(control_hz) / PREDICTOR_HZ)))
 
     def reset(self) -> None:
         """Forget the episode (called automatically when the observed time goes back)."""
@@ -222,12 +238,7 @@ class IProMPPolicy:
         self.predictor.observe(t, modality_values(obs, self.observe, required=self._required))
         self.history.append((t, self.predictor.task))
         mean, _ = self.predictor.command(t + self.dt)
-        previous = q if self._target is None else self._target
-        step = self.max_velocity * self.dt
-        self._target = previous + np.clip(mean - previous, -step, step)
-        tip = self.kinematics.fk(q, link="left_gripper")
-        close = np.linalg.norm(tip - np.asarray(obs["object"], dtype=float)) < self.close_radius
-        return np.append(self._target, 1.0 if close else -1.0)
+        return self._act(q, mean, obs)
 
     @property
     def task(self) -> str:
@@ -287,7 +298,7 @@ def _observed(model: IProMP, observe) -> tuple[tuple[str, ...] | None, bool]:
     return names, True
 
 
-class RecordedRobotPolicy:
+class RecordedRobotPolicy(_Steering):
     """The recorded robot's own motion as a controller: the reference for recorded replays.
 
     Commands, at each step, the robot's recorded joint positions at the next
@@ -312,7 +323,6 @@ class RecordedRobotPolicy:
     def __init__(self, times, robot, task: str, *, control_hz: float = 50.0,
                  close_radius: float = 0.045, max_velocity=None) -> None:
         from sandbox.core.validation import check_times
-        from sandbox.robot import BaxterKinematics
 
         t = check_times(times, "times")
         self._times = t - t[0]
@@ -320,12 +330,7 @@ class RecordedRobotPolicy:
         if not isinstance(task, str) or not task:
             raise ValueError(f"task: expected a task name, got {task!r}")
         self.task = task
-        self.dt = 1.0 / check_positive(control_hz, "control_hz")
-        self.close_radius = check_positive(close_radius, "close_radius")
-        limits = MAX_VELOCITY if max_velocity is None else max_velocity
-        self.max_velocity = check_array(limits, "max_velocity", 1, shape=(7,))
-        check_positive(float(self.max_velocity.min()), "max_velocity")
-        self.kinematics = BaxterKinematics()
+        self._setup_steering(control_hz, close_radius, max_velocity)
         self.reset()
 
     @classmethod
@@ -347,9 +352,4 @@ class RecordedRobotPolicy:
         t = float(np.asarray(obs["time"]).reshape(-1)[0])
         q = check_array(obs["q"], "obs['q']", 1, shape=(7,))
         goal = np.array([np.interp(t + self.dt, self._times, joint) for joint in self._robot.T])
-        previous = q if self._target is None else self._target
-        step = self.max_velocity * self.dt
-        self._target = previous + np.clip(goal - previous, -step, step)
-        tip = self.kinematics.fk(q, link="left_gripper")
-        close = np.linalg.norm(tip - np.asarray(obs["object"], dtype=float)) < self.close_radius
-        return np.append(self._target, 1.0 if close else -1.0)
+        return self._act(q, goal, obs)
