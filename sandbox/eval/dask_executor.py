@@ -15,7 +15,8 @@ gives up on a task after ``distributed.scheduler.allowed-failures`` deaths
 then retries it once. The local cluster sets that limit to 0 and sends each
 worker one task at a time (``worker-saturation`` 1.0), so a task is retried
 once in all, as with local processes; a running scheduler applies its own
-configuration first (3 by default).
+configuration first (3 by default). The local cluster's workers do not run
+Dask's statistical profiler (it samples the running task every 10 ms).
 """
 
 from __future__ import annotations
@@ -28,7 +29,8 @@ from sandbox.eval.executors import Task, check_workers, install, run_task, unins
 INSTALL_HINT = 'pip install -e ".[dask]"'
 #: Configuration of the scheduler of ``scheduler="local"`` (see the module docstring).
 LOCAL_CONFIG = {"distributed.scheduler.allowed-failures": 0,
-                "distributed.scheduler.worker-saturation": 1.0}
+                "distributed.scheduler.worker-saturation": 1.0,
+                "distributed.worker.profile.enabled": False}
 
 try:
     import dask
