@@ -112,13 +112,16 @@ class DaskExecutor:
         return max(1, sum(self.client.nthreads().values()))
 
     def submit(self, task: Task):
+        """Start ``task`` on the cluster (a fresh key per attempt); returns its future."""
         key = f"sandbox-sweep-{task.key[:12]}-{task.folds[0]}-{uuid.uuid4().hex[:8]}"
         return self.client.submit(run_task, task, key=key, pure=False)
 
     def wait(self, futures: list) -> set:
+        """Block until one of ``futures`` is done; returns those that are."""
         return set(distributed.wait(futures, return_when="FIRST_COMPLETED").done)
 
     def result(self, future):
+        """The task's ``(trials, seconds)``, or its error (``KilledWorker`` if workers died)."""
         try:
             return future.result()
         finally:
@@ -133,6 +136,7 @@ class DaskExecutor:
         self._plugins = []
 
     def close(self) -> None:
+        """Remove the trials from the workers, disconnect, stop a local cluster."""
         self._unload()
         self.client.close()
         if self.cluster is not None:
