@@ -1,4 +1,8 @@
-"""``python -m sandbox sweep``: leave-one-out of every configuration of a grid, ranked."""
+"""``python -m sandbox sweep``: leave-one-out of every configuration of a grid, ranked.
+
+Prints the five best configurations; the exit status is 1 if a configuration
+failed (its worker died twice), 2 for bad input. See :mod:`sandbox.eval.sweep`.
+"""
 
 from __future__ import annotations
 

@@ -15,7 +15,8 @@ gives up on a task after ``distributed.scheduler.allowed-failures`` deaths
 then retries it once. The local cluster sets that limit to 0 and sends each
 worker one task at a time (``worker-saturation`` 1.0), so a task is retried
 once in all, as with local processes; a running scheduler applies its own
-configuration first (3 by default).
+configuration first (3 by default). The local cluster's workers do not run
+Dask's statistical profiler (it samples the running task every 10 ms).
 """
 
 from __future__ import annotations
@@ -28,7 +29,8 @@ from sandbox.eval.executors import Task, check_workers, install, run_task, unins
 INSTALL_HINT = 'pip install -e ".[dask]"'
 #: Configuration of the scheduler of ``scheduler="local"`` (see the module docstring).
 LOCAL_CONFIG = {"distributed.scheduler.allowed-failures": 0,
-                "distributed.scheduler.worker-saturation": 1.0}
+                "distributed.scheduler.worker-saturation": 1.0,
+                "distributed.worker.profile.enabled": False}
 
 try:
     import dask
@@ -110,13 +112,16 @@ class DaskExecutor:
         return max(1, sum(self.client.nthreads().values()))
 
     def submit(self, task: Task):
+        """Start ``task`` on the cluster (a fresh key per attempt); returns its future."""
         key = f"sandbox-sweep-{task.key[:12]}-{task.folds[0]}-{uuid.uuid4().hex[:8]}"
         return self.client.submit(run_task, task, key=key, pure=False)
 
     def wait(self, futures: list) -> set:
+        """Block until one of ``futures`` is done; returns those that are."""
         return set(distributed.wait(futures, return_when="FIRST_COMPLETED").done)
 
     def result(self, future):
+        """The task's ``(trials, seconds)``, or its error (``KilledWorker`` if workers died)."""
         try:
             return future.result()
         finally:
@@ -131,6 +136,7 @@ class DaskExecutor:
         self._plugins = []
 
     def close(self) -> None:
+        """Remove the trials from the workers, disconnect, stop a local cluster."""
         self._unload()
         self.client.close()
         if self.cluster is not None:

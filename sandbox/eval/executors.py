@@ -254,9 +254,11 @@ class ProcessExecutor:
             self._data[token] = (list(train), list(test))
 
     def slots(self) -> int:
+        """How many tasks may run at once."""
         return self.workers
 
     def submit(self, task: Task):
+        """Start ``task`` on an idle lane (a new one if none); returns its future."""
         if not self._data:
             raise RuntimeError("load the trials (load()) before submitting tasks")
         lane = self._idle.pop() if self._idle else ProcessPoolExecutor(
@@ -267,9 +269,11 @@ class ProcessExecutor:
         return future
 
     def wait(self, futures: list) -> set:
+        """Block until one of ``futures`` is done; returns those that are."""
         return wait(futures, return_when=FIRST_COMPLETED).done
 
     def result(self, future):
+        """The task's ``(trials, seconds)``, or its error (a lane whose process died is dropped)."""
         lane = self._busy.pop(future)
         try:
             value = future.result()
@@ -283,6 +287,7 @@ class ProcessExecutor:
         return value
 
     def close(self) -> None:
+        """Stop every lane's process."""
         for lane in self._idle:
             lane.shutdown(wait=True)
         for lane in self._busy.values():    # interrupted: do not wait for the running tasks

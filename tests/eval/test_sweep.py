@@ -133,7 +133,7 @@ def test_the_folds_are_split_into_consecutive_chunks():
                                     (1, 9, 2, None)]:
         chunks = chunk_folds(n, configs, slots, size)
         assert [i for c in chunks for i in c] == list(range(n))
-    assert len(chunk_folds(174, 8, 2)) == 2
+    assert len(chunk_folds(174, 8, 2)) == 8          # 64 tasks for 2 workers
 
 
 def test_the_key_changes_with_any_option_the_trials_or_the_version(trials, monkeypatch):
