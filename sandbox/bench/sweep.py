@@ -37,17 +37,6 @@ TARGETS = {"speedup": ">= 1.7", "dask_vs_processes": "<= 1.15"}
 OBSERVE = ("hand",)
 
 
-def _stored(out: Path) -> dict:
-    """The results a sweep stored, without their timings."""
-    found = {}
-    for path in sorted((out / "results").glob("*.json")):
-        result = json.loads(path.read_text())
-        result["report"].pop("runtime_s")
-        result["row"].pop("runtime_s")
-        found[path.name] = result
-    return found
-
-
 def _timed_sweep(trials, points, out: Path, workers: int, scheduler: str | None) -> float:
     from sandbox.eval.executors import open_executor
     from sandbox.eval.loocv import EvalConfig
@@ -93,6 +82,7 @@ def run_sweep_benchmark(data: str, *, n_per_task: int | None = None, workers: in
     """
     from sandbox.eval.datasets import load_pair
     from sandbox.eval.grid import parse_grid
+    from sandbox.eval.sweep import stored_results
 
     points = parse_grid(GRID if grid is None else grid)
     start = time.perf_counter()
@@ -108,7 +98,7 @@ def run_sweep_benchmark(data: str, *, n_per_task: int | None = None, workers: in
         for name, (n, scheduler) in runs.items():
             out[name] = round(_timed_sweep({OBSERVE: (train, test)}, points, Path(tmp) / name,
                                            n, scheduler), 2)
-            stored[name] = _stored(Path(tmp) / name)
+            stored[name] = stored_results(Path(tmp) / name)
             log(f"{name}: {out[name]} s")
     out["speedup"] = round(out["sweep_1_worker_s"] / out["sweep_2_workers_s"], 3)
     if "sweep_dask_s" in out:

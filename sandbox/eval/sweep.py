@@ -233,6 +233,20 @@ def load_result(out: str | Path, key: str) -> dict | None:
     return result if isinstance(result, dict) and result.get("key") == key else None
 
 
+def stored_results(out: str | Path) -> dict[str, dict]:
+    """Every result a sweep stored in ``out``, by file name, without its timings.
+
+    Two sweeps of the same grid and data agree on this whatever their executor.
+    """
+    found = {}
+    for path in sorted((Path(out) / "results").glob("*.json")):
+        result = json.loads(path.read_text())
+        result["report"].pop("runtime_s")
+        result["row"].pop("runtime_s")
+        found[path.name] = result
+    return found
+
+
 def run_sweep(executor, trials: Mapping, points: list[dict], out: str | Path, *,
               base: EvalConfig | None = None, data: dict | None = None, dataset: str = "",
               force: bool = False, chunk_size: int | None = None,

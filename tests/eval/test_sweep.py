@@ -1,6 +1,5 @@
 """Sweeps: grid files, keys, the output folder, and the same results on every executor."""
 
-import json
 import os
 from concurrent.futures import Future
 from pathlib import Path
@@ -12,7 +11,14 @@ from sandbox.eval import executors
 from sandbox.eval.executors import ProcessExecutor, Task, run_task
 from sandbox.eval.grid import config_for, parse_grid, read_grid
 from sandbox.eval.loocv import EvalConfig
-from sandbox.eval.sweep import chunk_folds, config_key, data_token, load_result, run_sweep
+from sandbox.eval.sweep import (
+    chunk_folds,
+    config_key,
+    data_token,
+    load_result,
+    run_sweep,
+    stored_results,
+)
 
 REPO = Path(__file__).resolve().parents[2]
 BASE = EvalConfig(observe=("hand",), n_candidates=10, subsample=4)   # quick folds
@@ -67,17 +73,6 @@ class Inline:
 
 def _key(trials, point):
     return config_key(config_for(point, BASE), data_token(*trials[("hand",)]))
-
-
-def _results(out: Path) -> dict:
-    """Stored results without their timings."""
-    found = {}
-    for path in sorted((out / "results").glob("*.json")):
-        result = json.loads(path.read_text())
-        result["report"].pop("runtime_s")
-        result["row"].pop("runtime_s")
-        found[path.name] = result
-    return found
 
 
 def _sweep(executor, trials, points, out, **kw):
@@ -220,12 +215,12 @@ def _deaths(path: Path) -> int:
 
 
 @pytest.mark.slow
-def test_one_worker_and_one_fold_per_task_give_the_same_results(trials, tmp_path, worker_env):
+def test_one_worker_and_one_fold_per_task_give_the_samestored_results(trials, tmp_path, worker_env):
     _sweep(Inline(), trials, POINTS, tmp_path / "inline")
     with ProcessExecutor(1) as ex:
         _sweep(ex, trials, POINTS, tmp_path / "one", chunk_size=1)
-    assert len(_results(tmp_path / "inline")) == 2
-    assert _results(tmp_path / "one") == _results(tmp_path / "inline")
+    assert len(stored_results(tmp_path / "inline")) == 2
+    assert stored_results(tmp_path / "one") == stored_results(tmp_path / "inline")
 
 
 @pytest.mark.slow
@@ -239,8 +234,8 @@ def test_two_workers_give_the_same_results_and_a_dying_worker_loses_only_its_tas
     [failed] = summary["failed"]
     assert failed["label"] == "n_basis=15, blend_rate=20, dow_t=1" and "died" in failed["error"]
     assert len(summary["ranked"]) == 3 and "Failed" in (tmp_path / "two" / "summary.md").read_text()
-    two = _results(tmp_path / "two")
-    assert {k: two[k] for k in _results(tmp_path / "inline")} == _results(tmp_path / "inline")
+    two, inline = stored_results(tmp_path / "two"), stored_results(tmp_path / "inline")
+    assert {k: two[k] for k in inline} == inline
 
 
 @pytest.mark.slow
@@ -255,7 +250,7 @@ def test_dask_gives_the_same_results_and_retries_a_dead_worker_once(trials, tmp_
         summary = _sweep(ex, trials, POINTS + [ALWAYS], tmp_path / "dask")
     assert _deaths(always) == 2 and len(summary["ranked"]) == 2
     assert [f["label"] for f in summary["failed"]] == ["n_basis=15, blend_rate=20, dow_t=1"]
-    assert _results(tmp_path / "dask") == _results(tmp_path / "inline")
+    assert stored_results(tmp_path / "dask") == stored_results(tmp_path / "inline")
 
 
 def test_without_dask_the_scheduler_option_says_how_to_install_it(monkeypatch):
