@@ -23,12 +23,13 @@ Run ``python -m sandbox.bench.sweep --data ../shared/data/birl-handover-20180329
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 import tempfile
 import time
 from pathlib import Path
+
+from sandbox.bench import print_result, restart_single_threaded
 
 #: The eight configurations swept.
 GRID = {"noise_floor": [0.01, 0.02], "regularizer": [0.001, 0.01],
@@ -120,23 +121,13 @@ def main(argv=None) -> int:
     parser.add_argument("--no-dask", action="store_true", help="skip the Dask run")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     args = parser.parse_args(argv)
-    if argv is None and os.environ.get("OPENBLAS_NUM_THREADS") != "1":
-        _restart_single_threaded()
+    if argv is None:
+        restart_single_threaded("sandbox.bench.sweep")
     result = run_sweep_benchmark(args.data, n_per_task=args.n_per_task, workers=args.workers,
                                  dask=not args.no_dask,
                                  log=lambda line: print(line, file=sys.stderr, flush=True))
-    if args.json:
-        print(json.dumps(result, indent=2))
-    else:
-        for key, value in result.items():
-            print(f"{key:24s} {value}")
+    print_result(result, args.json, 24)
     return 0
-
-
-def _restart_single_threaded() -> None:
-    """Re-exec with one BLAS thread (the limit is read when numpy is imported)."""
-    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
-    os.execve(sys.executable, [sys.executable, "-m", "sandbox.bench.sweep", *sys.argv[1:]], env)
 
 
 if __name__ == "__main__":

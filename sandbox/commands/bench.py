@@ -2,9 +2,6 @@
 
 from __future__ import annotations
 
-import json
-import os
-
 from sandbox.commands import _types
 
 NAME = "bench"
@@ -21,11 +18,9 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
-    if args.repeats < 1:
-        raise ValueError(f"--repeats: expected a positive integer, got {args.repeats}")
-    threads = os.environ.get("OPENBLAS_NUM_THREADS")
-    if threads != "1":
-        _restart_single_threaded()
+    from sandbox.bench import print_result, restart_single_threaded
+
+    restart_single_threaded("sandbox")
     from sandbox.bench.core import run_core_benchmarks
 
     result = {"blas_threads": 1}
@@ -37,17 +32,5 @@ def run(args) -> int:
             run_env_benchmarks = None
         if run_env_benchmarks is not None:
             result.update(run_env_benchmarks())
-    if args.json:
-        print(json.dumps(result, indent=2))
-    else:
-        for key, value in result.items():
-            print(f"{key:36s} {value}")
+    print_result(result, args.json, 36)
     return 0
-
-
-def _restart_single_threaded() -> None:
-    """Re-exec this command with one BLAS thread (the limit is read at numpy import)."""
-    import sys
-
-    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
-    os.execve(sys.executable, [sys.executable, "-m", "sandbox", *sys.argv[1:]], env)
