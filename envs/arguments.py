@@ -10,9 +10,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-import numpy as np
-
-from sandbox.core.validation import check_array, check_positive
+from sandbox.core.validation import check_array, check_integer, check_number, check_positive
 from sandbox.envs.task import RewardWeights
 
 #: Arguments of :class:`sandbox.viz.Viewer` accepted in ``viewer_options`` ("human" mode).
@@ -31,11 +29,7 @@ def check_control_hz(value: Any) -> float:
 
 
 def check_substeps(value: Any) -> int:
-    number = isinstance(value, (int, float, np.integer, np.floating))
-    number = number and not isinstance(value, bool)
-    if number and np.isfinite(value) and value == int(value) and 1 <= value <= MAX_SUBSTEPS:
-        return int(value)
-    raise ValueError(f"substeps: expected an integer from 1 to {MAX_SUBSTEPS}, got {value!r}")
+    return check_integer(value, "substeps", 1, MAX_SUBSTEPS)
 
 
 def check_reward_weights(value: Any) -> RewardWeights:
@@ -75,7 +69,7 @@ def check_viewer_options(options: Any) -> dict[str, Any]:
     if out.get("resolution") is not None:
         check_positive(out["resolution"], "viewer_options['resolution']")
     if out.get("floor_z") is not None:
-        _finite(out["floor_z"], "viewer_options['floor_z']")
+        check_number(out["floor_z"], "viewer_options['floor_z']")
     for key in ("camera", "target"):
         if key in out:
             check_array(out[key], f"viewer_options[{key!r}]", 1, shape=(3,))
@@ -83,13 +77,3 @@ def check_viewer_options(options: Any) -> dict[str, Any]:
         raise ValueError(f"viewer_options['host']: expected an address such as '127.0.0.1', "
                          f"got {out['host']!r}")
     return out
-
-
-def _finite(value: Any, name: str) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        v = float("nan")
-    if isinstance(value, bool) or not np.isfinite(v):
-        raise ValueError(f"{name}: expected a finite number, got {value!r}")
-    return v

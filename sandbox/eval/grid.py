@@ -42,7 +42,7 @@ from pathlib import Path
 from typing import Any
 
 from sandbox.core.predictor import LIKELIHOODS, WINDOW_MODES
-from sandbox.core.validation import check_choice, check_fraction, check_positive
+from sandbox.core.validation import check_choice, check_fraction, check_integer, check_positive
 from sandbox.eval.loocv import EvalConfig
 from sandbox.eval.tune import RATIO, WINDOW
 
@@ -62,15 +62,12 @@ def _number(name: str, value: Any, *, allow_zero: bool = False) -> float:
 
 
 def _integer(name: str, value: Any, low: int = 1) -> int:
-    if isinstance(value, bool) or not isinstance(value, int | float | str):
-        raise ValueError(f"{name}: expected an integer >= {low}, got {value!r}")
-    try:
-        number = float(value)
-    except ValueError:
-        raise ValueError(f"{name}: expected an integer >= {low}, got {value!r}") from None
-    if number != int(number) or number < low:
-        raise ValueError(f"{name}: expected an integer >= {low}, got {value!r}")
-    return int(number)
+    if isinstance(value, str):  # YAML 1.1 reads 1e2 (no dot) as a string
+        try:
+            value = float(value)
+        except ValueError:
+            raise ValueError(f"{name}: expected an integer >= {low}, got {value!r}") from None
+    return check_integer(value, name, low)
 
 
 def _optional(name: str, value: Any) -> float | None:
