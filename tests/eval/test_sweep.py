@@ -49,6 +49,9 @@ class Inline:
     def slots(self):
         return 1
 
+    def capacity(self):
+        return 1
+
     def submit(self, task):
         self.submitted.append(task)
         future = Future()
