@@ -111,6 +111,12 @@ class DaskExecutor:
         """Worker threads of the cluster now (at least 1, so tasks queue while it grows)."""
         return max(1, sum(self.client.nthreads().values()))
 
+    def capacity(self) -> int:
+        """Tasks kept submitted: twice the worker threads. The scheduler holds the extra
+        ones (a worker of the local cluster is sent one at a time) and starts one as soon
+        as a worker is free, without a round trip to this process."""
+        return 2 * self.slots()
+
     def submit(self, task: Task):
         """Start ``task`` on the cluster (a fresh key per attempt); returns its future."""
         key = f"sandbox-sweep-{task.key[:12]}-{task.folds[0]}-{uuid.uuid4().hex[:8]}"

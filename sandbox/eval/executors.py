@@ -15,9 +15,11 @@ Both give each worker one BLAS thread (Dask's nanny does so by default; the
 lanes are started with ``OMP_NUM_THREADS``, ``MKL_NUM_THREADS`` and
 ``OPENBLAS_NUM_THREADS`` set to 1), so every executor computes the same bits.
 
-:func:`run_tasks` submits at most as many tasks as there are worker threads,
-retries a failed task (its worker died, or it raised) once, then reports it as
-failed and goes on with the others.
+:func:`run_tasks` keeps at most ``executor.capacity()`` tasks submitted (one per
+lane; twice the worker threads on Dask, whose scheduler holds the extra ones
+until a worker is free, so no worker waits for this process), retries a failed
+task (its worker died, or it raised) once, then reports it as failed and goes
+on with the others.
 
 Test hook: a worker running a task whose configuration key starts with
 ``$SANDBOX_TEST_SWEEP_CRASH`` kills its own process (``os._exit``). With
@@ -185,7 +187,7 @@ def run_tasks(executor, tasks: Iterable[Task], *, retries: int = RETRIES,
     pending, running, failures = deque(tasks), {}, {}
     dropped = set() if dropped is None else dropped
     while pending or running:
-        room = executor.slots() - len(running)
+        room = executor.capacity() - len(running)
         while pending and room > 0:
             task = pending.popleft()
             if task.key in dropped:
@@ -254,7 +256,12 @@ class ProcessExecutor:
             self._data[token] = (list(train), list(test))
 
     def slots(self) -> int:
-        """How many tasks may run at once."""
+        """How many tasks run at once."""
+        return self.workers
+
+    def capacity(self) -> int:
+        """How many tasks may be submitted at once: one per lane (a task queued behind
+        another in a lane would be lost with it if its process died)."""
         return self.workers
 
     def submit(self, task: Task):

@@ -55,6 +55,9 @@ class Inline:
     def slots(self):
         return 1
 
+    def capacity(self):
+        return 1
+
     def submit(self, task):
         self.submitted.append(task)
         future = Future()
@@ -246,8 +249,8 @@ def test_dask_gives_the_same_results_and_retries_a_dead_worker_once(trials, tmp_
 
     always, _ = _crash(trials, tmp_path, worker_env)
     _sweep(Inline(), trials, POINTS, tmp_path / "inline")
-    with DaskExecutor("local", workers=2) as ex:
-        summary = _sweep(ex, trials, POINTS + [ALWAYS], tmp_path / "dask")
+    with DaskExecutor("local", workers=2) as ex:    # one task per configuration, as above
+        summary = _sweep(ex, trials, POINTS + [ALWAYS], tmp_path / "dask", chunk_size=6)
     assert _deaths(always) == 2 and len(summary["ranked"]) == 2
     assert [f["label"] for f in summary["failed"]] == ["n_basis=15, blend_rate=20, dow_t=1"]
     assert stored_results(tmp_path / "dask") == stored_results(tmp_path / "inline")
