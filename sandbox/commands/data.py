@@ -13,6 +13,9 @@ the recordings. ``--json`` prints the same as JSON.
 tracker frame of the first 60 % of each trial is hidden and predicted by the
 RTS smoother and by the causal filter from the others (every 3-D point of the
 observed position modalities).
+
+``cache`` shows where the on-disk cache of loaded trials is and how big it
+is (:mod:`sandbox.data.cache`); ``--clear`` empties it.
 """
 
 from __future__ import annotations
@@ -48,6 +51,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     check.add_argument("--gate-prob", type=_filter("gate_prob", 1.0), default=None,
                        help="in (0, 1] (default 0.999)")
     check.add_argument("--json", action="store_true", help="print JSON instead of text")
+    cache = sub.add_parser("cache", help="where the cache of loaded trials is, its size; --clear")
+    cache.add_argument("--clear", action="store_true", help="delete every cached trial")
 
 
 def _filter(field: str, high: float = float("inf"), *, open_low: bool = True):
@@ -68,7 +73,22 @@ _split = _observation.split
 def run(args: argparse.Namespace) -> int:
     if args.data_command == "summary":
         return _summary(args)
+    if args.data_command == "cache":
+        return _cache(args)
     return _check_filter(args)
+
+
+def _cache(args: argparse.Namespace) -> int:
+    from sandbox.data.cache import TrialCache
+
+    cache = TrialCache()
+    if args.clear:
+        print(f"{cache.folder}: {cache.clear()} cached trials deleted")
+        return 0
+    n, size = cache.size()
+    print(f"{cache.folder}: {n} cached trials, {size / 2**20:.1f} MiB "
+          "(safe to delete; --clear empties it, --no-cache bypasses it)")
+    return 0
 
 
 def _summary(args: argparse.Namespace) -> int:

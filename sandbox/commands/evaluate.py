@@ -30,7 +30,11 @@ def add_arguments(parser) -> None:
                         help="folder for the PNG figures")
     parser.add_argument("--markdown", type=_types.output_file, default=None,
                         help="report.md to write")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.add_argument("--no-progress", action="store_true",
+                        help="no progress bars or status lines on stderr")
+    parser.add_argument("--no-cache", action="store_true",
+                        help="load and preprocess every trial file afresh, without the on-disk "
+                             "cache of loaded trials (python -m sandbox data cache)")
 
 
 def run(args) -> int:
@@ -39,6 +43,7 @@ def run(args) -> int:
 
     from sandbox.eval.datasets import load_pair
     from sandbox.eval.loocv import EvalConfig, run_loocv
+    from sandbox.eval.progress import status
     from sandbox.eval.report import build_report, to_markdown
 
     spec = _observation.data_spec(args)
@@ -46,13 +51,15 @@ def run(args) -> int:
     config = EvalConfig(ratios=args.ratios, windows=args.windows, observe=observe)
     train, test, skipped = load_pair(args.data, seed=args.seed,
                                      tasks=_observation.split(args.tasks),
-                                     n_per_task=args.n_per_task, spec=spec, observe=observe)
+                                     n_per_task=args.n_per_task, spec=spec, observe=observe,
+                                     cache=not args.no_cache, progress=not args.no_progress)
     for reason in skipped:
         print(f"skipped: {reason}")
     if not train:
         raise ValueError(f"--data: no usable trial in {args.data} ({len(skipped)} skipped)")
     trials, runtime = run_loocv(train, test, config, workers=args.workers,
                                 progress=not args.no_progress)
+    status("report: metrics and bootstrap intervals", not args.no_progress)
     report = build_report(trials, config.to_dict(), str(args.data), runtime)
     Path(args.out).write_text(json.dumps(report, indent=1))
     print(f"{len(trials)} trials in {runtime:.1f} s -> {args.out}")

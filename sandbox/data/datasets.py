@@ -58,6 +58,8 @@ def load_dataset(
     n_per_task: int | None = None,
     preprocess: str = "smooth",
     rate_hz: float | None = None,
+    cache: Any = None,
+    on_trial: Any = None,
     **options: Any,
 ) -> list[Demonstration]:
     """Load or generate demonstrations.
@@ -114,7 +116,7 @@ def load_dataset(
         demos = _synthetic(data[len(SYNTHETIC_PREFIX):], seed, tasks, n_per_task, preprocess,
                            {"observe": observed, **options})
     elif isinstance(data, (str, Path)) and Path(data).is_dir():
-        given = {"observe": observe, **options}
+        given = {"observe": observe, "cache": cache, "on_trial": on_trial, **options}
         if "columns" not in options:          # columns= is shorthand for a hand-only spec
             given["spec"] = layout
         elif spec is not None:

@@ -53,6 +53,7 @@ from numpy.typing import ArrayLike
 from scipy.stats import chi2
 
 from sandbox.core.validation import FloatArray, check_array, check_fraction, check_positive
+from sandbox.data import kalman
 
 #: Per-sample status codes of :func:`filter_track` (index into :data:`STATUS_NAMES`).
 WAITING, MISSING, ACCEPTED, REJECTED, INIT, RESET, STALE = range(7)
@@ -318,7 +319,11 @@ class FilterRun:
 def filter_track(
     times: ArrayLike, values: ArrayLike, config: FilterConfig | None = None
 ) -> FilterRun:
-    """Run :class:`HandFilter` causally over a track.
+    """Run the causal filter of :class:`HandFilter` over a whole track.
+
+    The same model and arithmetic as feeding :class:`HandFilter` sample by
+    sample (:func:`filter_track_reference`, which the tests hold it to, 1e-9),
+    computed on plain arrays (:mod:`sandbox.data.kalman`), about ten times faster.
 
     Parameters
     ----------
@@ -333,12 +338,19 @@ def filter_track(
     -------
     FilterRun
     """
-    t = check_array(times, "times", 1, min_len=1)
-    y = check_array(values, "values", 2, shape=(t.size, None), allow_nan=True)
-    if np.any(np.diff(t) < 0):
-        raise ValueError("times: expected non-decreasing times, got a decrease")
+    t, y, config = _check_track(times, values, config)
+    skip = kalman.classify(y)
+    out = kalman.forward(t, y, config, config.gate(y.shape[1]), skip)
+    return FilterRun(t, **out)
+
+
+def filter_track_reference(
+    times: ArrayLike, values: ArrayLike, config: FilterConfig | None = None
+) -> FilterRun:
+    """:func:`filter_track` computed by feeding :class:`HandFilter` (filterpy) sample by sample."""
+    t, y, config = _check_track(times, values, config)
     f = HandFilter(y.shape[1], config)
-    n, d = y.shape[1], 2 * y.shape[1]
+    d = 2 * y.shape[1]
     out = np.full(y.shape, np.nan)
     status = np.zeros(t.size, dtype=int)
     means, covs = np.zeros((t.size, d)), np.zeros((t.size, d, d))
@@ -350,8 +362,17 @@ def filter_track(
             means[k], covs[k] = f.state
         if status[k] not in (WAITING, INIT):
             Fs[k], Qs[k] = f.last_F, f.last_Q
-    assert out.shape[1] == n
     return FilterRun(t, out, status, means, covs, Fs, Qs)
+
+
+def _check_track(times, values, config):
+    t = check_array(times, "times", 1, min_len=1)
+    y = check_array(values, "values", 2, shape=(t.size, None), allow_nan=True)
+    if np.any(np.diff(t) < 0):
+        raise ValueError("times: expected non-decreasing times, got a decrease")
+    if config is not None and not isinstance(config, FilterConfig):
+        raise ValueError(f"config: expected a FilterConfig, got {type(config).__name__}")
+    return t, y, config if config is not None else FilterConfig()
 
 
 def smooth_track(run: FilterRun, config: FilterConfig | None = None) -> FloatArray:
@@ -359,17 +380,29 @@ def smooth_track(run: FilterRun, config: FilterConfig | None = None) -> FloatArr
 
     Samples before the first accepted one stay NaN (nothing to smooth from).
     A filter reset starts a new segment: the smoother does not blend across it.
+    Computed by :func:`sandbox.data.kalman.rts_means`; :func:`smooth_track_reference`
+    (filterpy's smoother) gives the same to 1e-9.
     """
+    return _smooth(run, kalman.rts_means)
+
+
+def smooth_track_reference(run: FilterRun, config: FilterConfig | None = None) -> FloatArray:
+    """:func:`smooth_track` computed by :meth:`filterpy.kalman.KalmanFilter.rts_smoother`."""
+    kf = KalmanFilter(dim_x=run.means.shape[1], dim_z=run.filtered.shape[1])
+
+    def means(xs, ps, fs, qs):
+        return kf.rts_smoother(xs.copy(), ps.copy(), Fs=fs, Qs=qs, inv=np.linalg.pinv)[0]
+
+    return _smooth(run, means)
+
+
+def _smooth(run: FilterRun, smoother) -> FloatArray:
     n = run.filtered.shape[1]
-    kf = KalmanFilter(dim_x=2 * n, dim_z=n)
     out = np.full(run.filtered.shape, np.nan)
     starts = np.flatnonzero(np.isin(run.status, (INIT, RESET)))
     ends = np.r_[starts[1:], run.status.size].astype(int) if starts.size else starts
     for a, b in zip(starts, ends, strict=True):
-        xs, _, _, _ = kf.rts_smoother(
-            run.means[a:b].copy(), run.covs[a:b].copy(), Fs=run.Fs[a:b], Qs=run.Qs[a:b],
-            inv=np.linalg.pinv,
-        )
+        xs = smoother(run.means[a:b], run.covs[a:b], run.Fs[a:b], run.Qs[a:b])
         out[a:b] = xs[:, :n]
     return out
 

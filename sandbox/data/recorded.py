@@ -37,7 +37,7 @@ rows that carry a new, accepted sample of each modality; ``meta["human_measured"
 from __future__ import annotations
 
 import warnings
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from os import PathLike
 from pathlib import Path
 from typing import Any
@@ -46,6 +46,7 @@ import numpy as np
 
 from sandbox.core.modality import Modality
 from sandbox.core.validation import FloatArray, check_positive
+from sandbox.data.cache import TrialCache, resolve_cache
 from sandbox.data.demonstration import Demonstration
 from sandbox.data.limits import MAX_DURATION_S
 from sandbox.data.preprocess import (  # noqa: F401 - preprocess_rows/_demonstration re-exported
@@ -94,6 +95,7 @@ def load_trial(
     columns: Columns | None = None,
     preprocess: str = "smooth",
     max_duration: float = MAX_DURATION_S,
+    cache: TrialCache | bool | str | Path | None = None,
     **options: Any,
 ) -> Demonstration:
     """Load one trial file as a :class:`Demonstration`.
@@ -130,6 +132,10 @@ def load_trial(
         tracks with known truth it finds 67 % of the frames more than 3 cm off,
         with 96 % precision), ``signal_cutoff_hz`` and ``signal_rate_hz``
         (the envelope of signals, :mod:`sandbox.data.signals`; 5 Hz and 30 Hz by default).
+    cache : TrialCache, bool or path, optional
+        Keep the result on disk and reuse it when the same file is loaded the
+        same way again (:mod:`sandbox.data.cache`): ``True`` the user's cache
+        folder, a path a folder of your own; default none.
 
     Returns
     -------
@@ -153,11 +159,25 @@ def load_trial(
     spec = _spec(spec, columns)
     modalities = spec.observed(observe)
     path = _path(path, "path")
+    task = task or path.parent.name
+    store, key = resolve_cache(cache), ""
+    if store is not None:
+        key = store.key(path, task=task, spec=spec.to_dict(), observe=[m.name for m in modalities],
+                        preprocess=preprocess, max_duration=max_duration, options=options)
+        found = store.get(key)
+        if isinstance(found, str):
+            raise TrialError(f"{path}: {found}")
+        if found is not None:
+            return found
     try:
-        return _load_trial(path, task or path.parent.name, spec, modalities, preprocess,
-                           max_duration, options)
+        demo = _load_trial(path, task, spec, modalities, preprocess, max_duration, options)
     except TrialError as error:
+        if store is not None:
+            store.put(key, str(error))
         raise TrialError(f"{path}: {error}") from None
+    if store is not None:
+        store.put(key, demo)
+    return demo
 
 
 def _path(value: Any, name: str) -> Path:
@@ -264,6 +284,8 @@ def load_recorded(
     columns: Columns | None = None,
     preprocess: str = "smooth",
     max_duration: float = MAX_DURATION_S,
+    cache: TrialCache | bool | str | Path | None = None,
+    on_trial: Callable[[], Any] | None = None,
     **options: Any,
 ) -> tuple[list[Demonstration], list[tuple[str, str]]]:
     """Load every trial of ``<root>/<task>/<trial>.csv`` (optionally only ``tasks``).
@@ -274,8 +296,11 @@ def load_recorded(
         The dataset folder.
     tasks : sequence of str, optional
         Tasks to load (folder names); default all.
-    spec, observe, columns, preprocess, max_duration, **options
+    spec, observe, columns, preprocess, max_duration, cache, **options
         As in :func:`load_trial`.
+    on_trial : callable, optional
+        Called with no argument after each file, loaded or skipped (e.g. a
+        progress bar's ``update``).
 
     Returns
     -------
@@ -291,16 +316,19 @@ def load_recorded(
     check_positive(max_duration, "max_duration")
     spec = _spec(spec, columns)
     spec.observed(observe)
+    store = resolve_cache(cache)
     demos, skipped = [], []
     for task, path in find_trials(root, tasks):
         try:
             demos.append(load_trial(path, task=task, spec=spec, observe=observe,
                                     preprocess=preprocess, max_duration=max_duration,
-                                    **options))
+                                    cache=store, **options))
         except Exception as error:  # noqa: BLE001 - one file never stops the others
             reason = str(error).removeprefix(f"{path}: ")
             if not isinstance(error, TrialError):
                 reason = f"unexpected {type(error).__name__}: {reason}"
             skipped.append((str(path), reason))
             warnings.warn(f"skipped {path}: {reason}", SkippedTrialWarning, stacklevel=2)
+        if on_trial is not None:
+            on_trial()
     return demos, skipped

@@ -6,20 +6,29 @@ import warnings
 
 
 def load_pair(data: str, *, seed: int = 0, tasks=None, n_per_task=None, spec=None,
-              observe=None):
+              observe=None, cache=None, progress: bool = False):
     """The same trials preprocessed for training (smoothed) and as test streams (causal).
 
     ``data`` is a folder in the shared layout or ``synthetic:NAME``; ``spec`` (a
     :class:`~sandbox.data.spec.DataSpec` or a spec file) and ``observe`` choose
-    the modalities (see :func:`sandbox.data.datasets.load_dataset`). Returns
+    the modalities (see :func:`sandbox.data.datasets.load_dataset`); ``cache``
+    keeps a folder's loaded trials on disk (:mod:`sandbox.data.cache`; ``True``:
+    the user's cache folder); ``progress`` draws a bar on stderr. Returns
     ``(train, test, skipped)``; a trial either version cannot use is dropped
     from both, with its reason in ``skipped``.
     """
     from sandbox.data.datasets import load_dataset
+    from sandbox.eval.progress import bar, status
 
-    kw = dict(seed=seed, tasks=tasks, n_per_task=n_per_task, spec=spec, observe=observe)
-    with warnings.catch_warnings(record=True) as caught:
+    kw = dict(seed=seed, tasks=tasks, n_per_task=n_per_task, spec=spec, observe=observe,
+              cache=cache)
+    folder = _n_files(data, tasks)
+    if folder is None:
+        status(f"generating {data} (training and test versions)", progress)
+    with warnings.catch_warnings(record=True) as caught, \
+            bar(2 * (folder or 0), "loading", progress and folder is not None) as shown:
         warnings.simplefilter("always")
+        kw["on_trial"] = shown.update if folder is not None else None
         train = load_dataset(data, preprocess="smooth", **kw)
         test = load_dataset(data, preprocess="causal", **kw)
     skipped = sorted({str(w.message) for w in caught})
@@ -27,3 +36,17 @@ def load_pair(data: str, *, seed: int = 0, tasks=None, n_per_task=None, spec=Non
     train = [d for d in train if d.source in keep]
     test = [d for d in test if d.source in keep]
     return train, test, skipped
+
+
+def _n_files(data, tasks) -> int | None:
+    """Trial files of a folder dataset (None for a synthetic one or a bad folder)."""
+    from pathlib import Path
+
+    from sandbox.data.recorded import find_trials
+
+    if not isinstance(data, (str, Path)) or not Path(data).is_dir():
+        return None
+    try:
+        return len(find_trials(data, tasks))
+    except ValueError:
+        return None

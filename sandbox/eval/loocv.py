@@ -20,7 +20,6 @@ For each trial this module computes, on the same kept observations
 
 from __future__ import annotations
 
-import os
 import time
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass, field
@@ -35,6 +34,7 @@ from sandbox.core.phase import Lattice
 from sandbox.core.statistics import StreamStatistics
 from sandbox.core.stream import ObservationStream
 from sandbox.eval import metrics
+from sandbox.eval.progress import bar
 
 RATIOS = tuple(round(0.1 * i, 1) for i in range(1, 10))
 WINDOWS = (1.0, 0.5, 0.2, 0.1)
@@ -225,16 +225,22 @@ def _init(train, test, fits, config) -> None:
     _STATE.update(train=train, test=test, fits=fits, config=config)
 
 
-def prepare(train, test, config: EvalConfig) -> tuple[list, list, list]:
+def prepare(train, test, config: EvalConfig, *, progress: bool = False) -> tuple[list, list, list]:
     """The trials as the models see them (``config.observe`` selected) and each one's fit.
 
     Returns ``(train, test, fits)``, ``fits[i]`` the
     :meth:`~sandbox.core.IProMP.demo_fit` of ``train[i]`` that :func:`fold` combines.
+    ``progress`` draws a bar of the fits on stderr.
     """
     if config.observe is not None:
         train = [d.select(config.observe) for d in train]
         test = [d.select(config.observe) for d in test]
-    return list(train), list(test), [config.model().demo_fit(d) for d in train]
+    model, fits = config.model(), []
+    with bar(len(train), "fitting", progress, unit="demo") as shown:
+        for d in train:
+            fits.append(model.demo_fit(d))
+            shown.update()
+    return list(train), list(test), fits
 
 
 def fold(train, test, fits, config: EvalConfig, i: int, fk) -> dict:
@@ -268,35 +274,27 @@ def run_loocv(train, test, config: EvalConfig, *, workers: int = 1,
     workers : int
         Processes (fork); 1 runs in this process.
     progress : bool
-        Show a tqdm progress bar.
+        Show progress bars (fitting, then trials) on stderr.
     """
     if len(train) != len(test) or any(a.source != b.source or a.task != b.task
                                       for a, b in zip(train, test)):
         raise ValueError("train and test: expected the same trials in the same order")
     start = time.perf_counter()
-    train, test, fits = prepare(train, test, config)
+    train, test, fits = prepare(train, test, config, progress=progress)
     _init(train, test, fits, config)
     indices = range(len(test))
-    bar = _bar(len(test), progress)
-    if workers <= 1:
-        results = []
-        for i in indices:
-            results.append(_run_one(i))
-            bar.update()
-    else:
-        ctx = get_context("fork")
-        with ProcessPoolExecutor(workers, mp_context=ctx, initializer=_init,
-                                 initargs=(train, test, fits, config)) as pool:
-            results = []
-            for res in pool.map(_run_one, indices, chunksize=max(1, len(test) // (8 * workers))):
-                results.append(res)
-                bar.update()
-    bar.close()
+    results = []
+    with bar(len(test), "trials", progress) as shown:
+        if workers <= 1:
+            for i in indices:
+                results.append(_run_one(i))
+                shown.update()
+        else:
+            ctx = get_context("fork")
+            with ProcessPoolExecutor(workers, mp_context=ctx, initializer=_init,
+                                     initargs=(train, test, fits, config)) as pool:
+                chunk = max(1, len(test) // (8 * workers))
+                for res in pool.map(_run_one, indices, chunksize=chunk):
+                    results.append(res)
+                    shown.update()
     return results, time.perf_counter() - start
-
-
-def _bar(total: int, enabled: bool):
-    from tqdm import tqdm
-
-    return tqdm(total=total, desc="trials", unit="trial", disable=not enabled,
-                file=None if enabled else open(os.devnull, "w"))
