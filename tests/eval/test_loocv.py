@@ -93,3 +93,31 @@ def test_loocv_runs_every_trial_and_checks_alignment(setup):
     assert {r["task"] for r in results} == {"left", "right"}
     with pytest.raises(ValueError, match="same trials"):
         run_loocv(demos, demos[::-1], config)
+
+
+def _blas_threads() -> set[int]:
+    from threadpoolctl import threadpool_info
+
+    return {i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"}
+
+
+def test_folds_run_on_one_blas_thread_and_the_limit_is_lifted_after(setup, monkeypatch):
+    from sandbox.eval import loocv
+
+    _, demos = setup
+    seen = []
+    real = loocv.evaluate_trial
+    monkeypatch.setattr(loocv, "evaluate_trial",
+                        lambda *a, **k: (seen.append(_blas_threads()), real(*a, **k))[1])
+    before = _blas_threads()
+    run_loocv(demos[:4], demos[:4], EvalConfig(windows=(0.5,), ratios=(0.5,), n_basis=15))
+    assert seen and all(s == {1} for s in seen)
+    assert _blas_threads() == before
+
+
+def test_two_workers_give_the_results_of_one(setup):
+    _, demos = setup
+    config = EvalConfig(windows=(0.5,), ratios=(0.5,), n_basis=15)
+    one, _ = run_loocv(demos, demos, config, workers=1)
+    two, _ = run_loocv(demos, demos, config, workers=2)
+    assert one == two
