@@ -58,3 +58,14 @@ def tasks(model, wanted, source: str) -> None:
     if unknown:
         raise ValueError(f"--model: {source} has tasks {unknown} the model does not know "
                          f"(it knows {list(model.tasks)})")
+
+
+#: Joints of the robot arm the environments drive (Baxter's left arm).
+BAXTER_JOINTS = 7
+
+
+def baxter(model) -> None:
+    """``ValueError`` unless the model drives Baxter's seven left-arm joints."""
+    if model.n_robot != BAXTER_JOINTS:
+        raise ValueError(f"--model: the model drives {model.n_robot} robot dims, the "
+                         f"environments' Baxter arm has {BAXTER_JOINTS} joints")
