@@ -8,7 +8,7 @@ inside ``run`` so that ``--help`` stays fast.
 Exit status: 0 on success; 2 for bad input (argparse's own errors, and a
 ``ValueError`` from a command: one line ``error: ...`` on stderr); 1 when a
 file cannot be read or written (``OSError``) or something unexpected fails;
-130 on Ctrl-C, with the one line ``interrupted``, in every command: :func:`main`
+130 on Ctrl-C, with the one line ``error: interrupted``, in every command: :func:`main`
 is the only handler (forked worker processes leave silently, see
 :func:`_quiet_interrupts`). No traceback is printed unless ``--debug`` is
 given (before or after the command name).
@@ -87,7 +87,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         if args.debug:
             raise
-        print("\ninterrupted", file=sys.stderr)
+        print("error: interrupted", file=sys.stderr)
         return 130
     finally:
         if previous is not None:
