@@ -32,7 +32,12 @@ HELP = ("drive the human hand from the keyboard while the robot anticipates live
 def add_arguments(parser) -> None:
     parser.add_argument("--scenario", metavar="FILE", default=None,
                         help="run a scenario file (.json/.yaml) or a shipped example "
-                             "(intent_switch, waypoints) instead of the keyboard teleop")
+                             "(intent_switch, waypoints) instead of the keyboard teleop; keys: "
+                             "name, family, seed, object, speed, time_limit, observe, human "
+                             "(task/switch_to/switch_phase, waypoints or recorded), policy "
+                             "(type, dow_t or ratio, options), model (demos, seed, options, "
+                             "file); README 'Scenario files' gives each one's meaning and "
+                             "default")
     parser.add_argument("--out", type=_types.output_file_in_new_folder, default=None,
                         help="scenario replay (HTML; default: <file name>.html here)")
     parser.add_argument("--summary", type=_types.output_file_in_new_folder, default=None,
