@@ -212,3 +212,30 @@ def test_evaluate_help_shows_the_windows_and_ratios_defaults(capsys):
     text = " ".join(capsys.readouterr().out.split())
     assert "comma-separated, each in (0, 60] (default 1,0.5,0.2,0.1)" in text
     assert "(default 0.1,0.2,0.3,0.4,0.5,0.6,0.7,0.8,0.9)" in text
+
+
+def test_results_writes_its_folder_and_the_readme_only_when_asked(tmp_path, monkeypatch,
+                                                                   capsys):
+    """issue 14 part 2: `results` rewrote the tracked README by default. On two tiny synthetic
+    sets (figures left out): the README changes only with --update-readme, and then its
+    results section is the folder's results.md."""
+    import sandbox.eval.datasets as datasets
+    import sandbox.eval.plots as plots
+
+    load = datasets.load_pair
+    monkeypatch.setattr(datasets, "load_pair", lambda data, **kw: load(
+        "synthetic:two_task", seed=kw.get("seed", 0), n_per_task=3))
+    monkeypatch.setattr(plots, "plot_report", lambda *a, **kw: [])
+    monkeypatch.chdir(tmp_path)
+    readme = tmp_path / "README.md"
+    readme.write_text("head\n<!-- results:start -->\nold\n<!-- results:end -->\ntail\n")
+    assert main(["results", "--workers", "1", "--out", "r1"]) == 0
+    assert readme.read_text().count("old") == 1
+    section = (tmp_path / "r1" / "results.md").read_text()
+    assert "| data | formulation |" in section and "results:start" not in section
+    assert main(["results", "--workers", "1", "--out", "r1"]) == 2     # not empty: --force
+    assert "--force" in capsys.readouterr().err
+    assert main(["results", "--workers", "1", "--out", "r1", "--force", "--update-readme"]) == 0
+    text = readme.read_text()
+    assert "old" not in text and text.startswith("head\n") and text.endswith("tail\n")
+    assert (tmp_path / "r1" / "results.md").read_text().strip() in text

@@ -218,3 +218,12 @@ def test_bad_settings_files_are_one_line_naming_the_key(tmp_path, capsys, text, 
 def test_tune_out_must_be_a_settings_file(tmp_path, capsys):
     assert main(["tune", *SMALL, "--out", str(tmp_path / "tune.md")]) == 2
     assert "the Markdown table is --markdown" in capsys.readouterr().err
+
+
+def test_model_evaluation_on_workers_gives_the_same_trials(heldout_report, model_file,
+                                                           tmp_path):
+    out = tmp_path / "r.json"
+    quick = [a if a != "1" else "2" for a in QUICK]       # --workers 2
+    assert main(["evaluate", *SMALL, "--seed", "1", *quick, "--model", str(model_file),
+                 "--out", str(out)]) == 0
+    assert json.loads(out.read_text())["per_trial"] == heldout_report["per_trial"]
