@@ -8,16 +8,26 @@ inside ``run`` so that ``--help`` stays fast.
 Exit status: 0 on success; 2 for bad input (argparse's own errors, and a
 ``ValueError`` from a command: one line ``error: ...`` on stderr); 1 when a
 file cannot be read or written (``OSError``) or something unexpected fails;
-130 on Ctrl-C. No traceback is printed unless ``--debug`` is given (before
-or after the command name).
+130 on Ctrl-C, with the one line ``error: interrupted``, in every command: :func:`main`
+is the only handler (forked worker processes leave silently, see
+:func:`_quiet_interrupts`). No traceback is printed unless ``--debug`` is
+given (before or after the command name).
+
+A value that starts with a minus (``--windows -1,2``) is given to its option
+(``--windows=-1,2``), so argparse's range check names the option instead of
+saying "expected one argument".
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import pkgutil
+import re
+import signal
 import sys
+import threading
 from collections.abc import Sequence
 from types import ModuleType
 
@@ -57,6 +67,7 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Parse ``argv`` and run the chosen command; return the exit status."""
     parser = build_parser()
+    argv = _negative_values(sys.argv[1:] if argv is None else list(argv))
     try:
         args = parser.parse_args(argv)
     except SystemExit as stop:  # argparse printed the error (or the help, status 0)
@@ -66,6 +77,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if not hasattr(args, "_run"):
         parser.print_help()
         return 2
+    previous = _quiet_interrupts()
     try:
         return int(args._run(args) or 0)
     except Exception as error:  # noqa: BLE001 - every failure becomes one line and a status
@@ -75,9 +87,50 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         if args.debug:
             raise
-        status, text = 130, "interrupted"
+        print("error: interrupted", file=sys.stderr)
+        return 130
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGINT, previous)
     print(f"error: {text}", file=sys.stderr)
     return status
+
+
+#: A token that starts like a negative number or list of numbers (``-1``, ``-.5,0.2``).
+_NEGATIVE = re.compile(r"^-\.?\d")
+
+
+def _negative_values(argv: list[str]) -> list[str]:
+    """``["--windows", "-1,2"]`` -> ``["--windows=-1,2"]`` (no option of ours looks like -1)."""
+    out: list[str] = []
+    for token in argv:
+        if (out and _NEGATIVE.match(token) and out[-1].startswith("--") and out[-1] != "--"
+                and "=" not in out[-1]):
+            out[-1] = f"{out[-1]}={token}"
+        else:
+            out.append(token)
+    return out
+
+
+def _quiet_interrupts():
+    """Make Ctrl-C one ``KeyboardInterrupt`` here and a silent exit (130) in forked workers.
+
+    Worker processes forked by a command (the leave-one-out pool) inherit this
+    handler: there, SIGINT ends the process at once instead of printing a
+    traceback per worker. Returns the handler to restore (None if unchanged:
+    not the main thread, or SIGINT not at Python's default).
+    """
+    if (threading.current_thread() is not threading.main_thread()
+            or signal.getsignal(signal.SIGINT) is not signal.default_int_handler):
+        return None
+    pid = os.getpid()
+
+    def interrupt(signum, frame):
+        if os.getpid() != pid:
+            os._exit(130)
+        raise KeyboardInterrupt
+
+    return signal.signal(signal.SIGINT, interrupt)
 
 
 def _failure(error: Exception) -> tuple[int, str]:

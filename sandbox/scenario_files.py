@@ -31,7 +31,9 @@ A scenario file is one mapping (YAML needs PyYAML; paths are relative to the fil
     model:                          # optional
       demos: 20                     # synthetic demos per task (seed: model_seed)
       seed: 0
-      file: model.npz               # or a saved model (IProMP.save)
+      options: {n_basis: 15}        # IProMP options of the model fitted here (optional)
+      file: model.npz               # or a saved model (IProMP.save, python -m sandbox fit);
+                                    # then observe defaults to the model's modalities
 
 With a recorded human and no model file, the model is fitted on all the
 other trials of the recorded set (leave-one-out). :func:`load_scenario`
@@ -60,7 +62,7 @@ HUMAN_KEYS = {"synthetic": ("task", "switch_to", "switch_phase"),
               "waypoints": ("waypoints", "task", "tracker"),
               "recorded": ("recorded", "task", "trial")}
 POLICY_KEYS = {"dynamic": ("type", "dow_t", "options"), "static": ("type", "ratio", "options")}
-MODEL_KEYS = ("demos", "seed", "file")
+MODEL_KEYS = ("demos", "seed", "file", "options")
 #: Folder of the example scenarios shipped with the package.
 EXAMPLES = Path(__file__).resolve().parent / "scenario_examples"
 
@@ -168,16 +170,23 @@ def read_mapping(path: Path, what: str = "scenario") -> Any:
         raise ValueError(f"{what} {path}: invalid YAML{where}: {problem}") from error
 
 
-def load_scenario(path: str | Path, *, observe: list[str] | str | None = None) -> Scenario:
+def load_scenario(path: str | Path, *, observe: list[str] | str | None = None,
+                  model: str | Path | None = None, options: Mapping | None = None,
+                  model_options: Mapping | None = None) -> Scenario:
     """Read and validate a scenario file (or a shipped example by name).
 
-    ``observe`` (e.g. ``"hand,arm"``), if given, replaces the file's ``observe:``.
+    ``observe`` (e.g. ``"hand,arm"``), if given, replaces the file's ``observe:``;
+    ``model`` (a saved model's path, relative to the working folder) its
+    ``model.file``. ``options`` (predictor) and ``model_options`` (IProMP) fill
+    in what the file's ``policy.options`` and ``model.options`` do not set
+    (``play --config``).
     """
     path = resolve(path)
     check = _Checker(path)
     data = check.keys(read_mapping(path), "top level", TOP_KEYS)
     if observe is not None:
         data["observe"] = observe
+    data = _fill_in(check, data, model, options, model_options)
     for key in ("human", "policy"):
         if key not in data:
             check.fail(key, "this key (required)", "nothing")
@@ -190,7 +199,9 @@ def load_scenario(path: str | Path, *, observe: list[str] | str | None = None) -
     seed = check.integer(data.get("seed", 0), "seed")
     kind, human = _human(check, data["human"], family, path.parent, seed)
     model = _model(check, data.get("model"), path.parent)
-    observe = _observe(check, data.get("observe", ["hand"]))
+    observe = _observe(check, data.get("observe", _default_observe(model)))
+    if "file" in model:
+        _check_file_observes(check, model["file"], observe)
     if kind != "recorded" and "file" not in model and not set(observe) <= set(SYNTHETIC_MODALITIES):
         check.fail("observe", f"modalities of the synthetic model {list(SYNTHETIC_MODALITIES)} "
                               "(EMG is not simulated: use a recorded human or a model file)",
@@ -202,6 +213,47 @@ def load_scenario(path: str | Path, *, observe: list[str] | str | None = None) -
         object=obj, speed=check.number(data.get("speed", 1.0), "speed", 0.25, 4.0),
         time_limit=check.number(data.get("time_limit", 6.0), "time_limit", 0.1, 600.0),
         observe=observe)
+
+
+def _fill_in(check: _Checker, data: dict, model, options, model_options) -> dict:
+    """``data`` with the command line's model file and settings (the file's own win)."""
+    for key in ("policy", "model"):
+        if data.get(key) is not None and not isinstance(data[key], Mapping):
+            check.fail(key, "a mapping", data[key])
+    if model is not None:
+        data["model"] = {**(data.get("model") or {}), "file": str(Path(model).resolve())}
+    if options and isinstance(data.get("policy"), Mapping):
+        own = data["policy"].get("options") or {}
+        if isinstance(own, Mapping):
+            data["policy"] = {**data["policy"], "options": {**options, **own}}
+    if model_options:
+        section = dict(data.get("model") or {})
+        own = section.get("options") or {}
+        if isinstance(own, Mapping):
+            data["model"] = {**section, "options": {**model_options, **own}}
+    return data
+
+
+def _default_observe(model: dict) -> list[str]:
+    """``hand``, or the modalities of the model file the environments observe."""
+    if "file" not in model:
+        return ["hand"]
+    from sandbox.core import IProMP
+
+    names = [n for n in IProMP.load(model["file"]).modality_names if n in ENV_MODALITIES]
+    return names or ["hand"]
+
+
+def _check_file_observes(check: _Checker, file: str, observe: tuple[str, ...]) -> None:
+    from sandbox.core import IProMP
+
+    model = IProMP.load(file)
+    if not set(observe) <= set(model.modality_names):
+        check.fail("observe", f"modalities of the model file {file} "
+                              f"{list(model.modality_names)}", list(observe))
+    if model.n_robot != 7:
+        check.fail("model.file", "a model of Baxter's 7 left-arm joints",
+                   f"{model.n_robot} robot dims")
 
 
 def _observe(check: _Checker, data: Any) -> tuple[str, ...]:
@@ -331,6 +383,16 @@ def _model(check: _Checker, data: Any, folder: Path) -> dict:
         model["file"] = str(file)
     model["demos"] = check.integer(model.get("demos", 20), "model.demos", 2)
     model["seed"] = check.integer(model.get("seed", 0), "model.seed")
+    options = model.get("options", {})
+    if not isinstance(options, Mapping):
+        check.fail("model.options", "a mapping of IProMP options", options)
+    model["options"] = dict(options)
+    try:
+        from sandbox.core import IProMP
+
+        IProMP(**model["options"])
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"scenario {check.path}: model.options: {error}") from None
     return model
 
 
@@ -340,16 +402,39 @@ def build_model(scenario: Scenario):
 
     if "file" in scenario.model:
         return IProMP.load(scenario.model["file"])
+    options = scenario.model.get("options", {})
     if scenario.human_kind == "recorded":
         from sandbox.data.recorded import load_recorded
 
         held_out = Path(scenario.human["file"]).resolve()
         demos, _ = load_recorded(scenario.human["recorded"], observe=scenario.observe)
-        return IProMP().fit([d for d in demos if Path(d.source).resolve() != held_out])
+        return IProMP(**options).fit([d for d in demos
+                                      if Path(d.source).resolve() != held_out])
+    return fit_family(scenario.family, scenario.model["demos"], scenario.model["seed"],
+                      scenario.observe, options)
+
+
+def fit_family(family: str, demos: int, seed: int, observe, options: Mapping | None = None):
+    """An IProMP fitted on ``demos`` synthetic demonstrations per task of ``family``.
+
+    ``observe``: modalities (names or ``"a,b"``); ``options``: IProMP options
+    (with none but ``n_basis`` the model is the cached
+    :func:`~sandbox.policies.fit_family_model`).
+    """
     from sandbox.policies import fit_family_model
 
-    return fit_family_model(scenario.family, n_per_task=scenario.model["demos"],
-                            seed=scenario.model["seed"], observe=scenario.observe)
+    options = dict(options or {})
+    names = [n.strip() for n in observe.split(",")] if isinstance(observe, str) else observe
+    if set(options) <= {"n_basis"}:
+        return fit_family_model(family, n_per_task=demos, seed=seed, observe=names,
+                                n_basis=options.get("n_basis"))
+    import numpy as np
+
+    from sandbox.core import IProMP
+    from sandbox.data.synthetic import make_dataset
+
+    return IProMP(**options).fit(make_dataset(family, demos, np.random.default_rng(seed),
+                                              observe=list(names)))
 
 
 def make_policy(scenario: Scenario, model):

@@ -47,3 +47,38 @@ def test_demo_command_runs(tmp_path):
                          text=True, cwd=tmp_path, timeout=600)
     assert out.returncode == 0, out.stderr
     assert "dynamic" in out.stdout and "static" in out.stdout
+
+
+def _section(title: str) -> str:
+    text = README.read_text()
+    start = text.index(f"## {title}\n")
+    return text[start:text.index("\n## ", start + 1)]
+
+
+def test_the_scenario_format_documents_both_examples_and_every_key():
+    """issue 14 part 1: the scenario-file format is in the README: the shipped examples as
+    they are, and every key the loader accepts in the table."""
+    import json
+
+    import yaml
+
+    from sandbox import scenario_files as sf
+
+    section = _section("Scenario files")
+    shown = [yaml.safe_load(b) for b in re.findall(r"```yaml\n(.*?)```", section, flags=re.S)]
+    shown += [json.loads(b) for b in re.findall(r"```json\n(.*?)```", section, flags=re.S)]
+    for example in sorted(sf.EXAMPLES.glob("*")):
+        if example.suffix in sf.SUFFIXES:
+            assert sf.read_mapping(example) in shown, example.name
+    table = "\n".join(line for line in section.splitlines() if line.startswith("| `"))
+    keys = {*sf.TOP_KEYS, *(f"model.{k}" for k in sf.MODEL_KEYS),
+            *(f"human.{k}" for keys in sf.HUMAN_KEYS.values() for k in keys)}
+    missing = sorted(k for k in keys if f"`{k}`" not in table)
+    assert not missing
+
+
+def test_the_settings_keys_are_documented():
+    from sandbox.commands._settings import KEYS
+
+    section = _section("Reusing a model and tuned settings")
+    assert [k for k in KEYS if k not in section] == []

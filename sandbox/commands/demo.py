@@ -7,11 +7,14 @@ re-predicts every ``dow_t`` seconds; the static baseline, on the same motion,
 predicts once after a fraction of it. Prints what each believed over time and
 the outcome of both episodes, and writes the dynamic episode's replay (meshcat
 scene with the predictions, a self-contained HTML file: no network needed).
+``--model FILE`` uses a model saved by ``fit`` instead (it must know
+``--from-task`` and ``--to-task`` and observe what the synthetic human shows:
+hand, arm). An existing replay file is replaced only with ``--force``.
 """
 
 from __future__ import annotations
 
-from sandbox.commands import _types
+from sandbox.commands import _model, _outputs, _types
 
 NAME = "demo"
 HELP = "fit on synthetic diverging handovers and watch the robot anticipate an intent switch"
@@ -33,6 +36,9 @@ def add_arguments(parser) -> None:
                         help="observed fraction of the static baseline")
     parser.add_argument("--demos", type=_types.DEMOS, default=20,
                         help="training demos per task (at least 2)")
+    _model.add_argument(parser, "the robot uses it instead of fitting one (it must know "
+                                "--from-task and --to-task)")
+    _outputs.add_force(parser, "the --out replay")
 
 
 def _check(args) -> None:
@@ -42,6 +48,7 @@ def _check(args) -> None:
 
     if not args.no_html and Path(args.out).suffix.lower() not in (".html", ".htm"):
         raise ValueError(f"--out: expected a file name ending in .html, got {args.out!r}")
+    _outputs.check_new([] if args.no_html else [("--out", args.out)], args.force)
     if args.from_task == args.to_task:
         raise ValueError(f"--to-task: expected a task other than --from-task, got "
                          f"{args.to_task!r} twice")
@@ -103,6 +110,22 @@ def _settled(record, task: str) -> float | None:
     return out
 
 
+def _model_of(args):
+    """The saved model of ``--model`` (checked against the episode), or one fitted here."""
+    if args.model is None:
+        from sandbox.policies import fit_family_model
+
+        model = fit_family_model("diverging", n_per_task=args.demos, seed=args.seed)
+    else:
+        from sandbox.scenario_files import SYNTHETIC_MODALITIES
+
+        model = _model.load(args.model)
+        _model.within(model, SYNTHETIC_MODALITIES, "the synthetic human")
+        _model.baxter(model)
+    _model.tasks(model, [args.from_task, args.to_task], "--from-task/--to-task")
+    return model
+
+
 def run(args) -> int:
     _check(args)
     import time
@@ -112,15 +135,18 @@ def run(args) -> int:
     import numpy as np
 
     import sandbox.envs  # noqa: F401  (registers the environments)
-    from sandbox.policies import IProMPPolicy, StaticPolicy, fit_family_model
+    from sandbox.policies import IProMPPolicy, StaticPolicy
     from sandbox.recording import record_episode
 
     start = time.perf_counter()
-    model = fit_family_model("diverging", n_per_task=args.demos, seed=args.seed)
-    for task in (args.from_task, args.to_task):
-        model.task_index(task)
-    print(f"fitted {len(model.tasks)} tasks {list(model.tasks)} on {args.demos * len(model.tasks)}"
-          f" synthetic demos ({time.perf_counter() - start:.1f} s)")
+    model = _model_of(args)
+    if args.model is None:
+        print(f"fitted {len(model.tasks)} tasks {list(model.tasks)} on "
+              f"{args.demos * len(model.tasks)} synthetic demos "
+              f"({time.perf_counter() - start:.1f} s)")
+    else:
+        print(f"model {args.model}: {len(model.tasks)} tasks {list(model.tasks)}, observing "
+              f"{','.join(model.modality_names)}")
     env = gym.make("sandbox/BaxterHandoverDiverging-v1")
     options = {"task": args.from_task, "switch_to": args.to_task, "switch_phase": args.switch}
     viewer = overlay = None

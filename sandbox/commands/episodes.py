@@ -43,11 +43,11 @@ def add_arguments(parser) -> None:
                         help="static observed ratio (default 0.3)")
     parser.add_argument("--json", type=_types.output_file, default=None, metavar="FILE",
                         help="write the summaries and every episode's outcome as JSON")
+    parser.add_argument("--force", action="store_true", help="overwrite an existing --json file")
 
 
 def run(args) -> int:
     import json
-    from pathlib import Path
 
     from sandbox.commands._observation import split
     from sandbox.scenarios import POLICIES
@@ -57,10 +57,13 @@ def run(args) -> int:
     if not policies or unknown or len(set(policies)) != len(policies):
         raise ValueError(f"--policies: expected distinct names among {list(POLICIES)}, "
                          f"got {args.policies!r}")
+    from sandbox.commands._outputs import check_new, write_text
+
+    check_new([("--json", args.json)], args.force)
     out = {name: _run_policy(name, args) for name in policies}
     print(table(out))
     if args.json:
-        Path(args.json).write_text(json.dumps(out, indent=1))
+        write_text(args.json, json.dumps(out, indent=1))
     return 0
 
 

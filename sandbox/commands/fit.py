@@ -6,7 +6,11 @@ and ``--spec`` choose the modalities), fits one Interaction ProMP per task
 (:class:`sandbox.core.IProMP`) and saves it in the core's format (``.npz`` +
 JSON metadata, no pickle). Prints what was fitted: tasks, demos per task,
 nominal durations, the speed prior, the estimated observation noise of every
-modality and the scale of signal modalities.
+modality and the scale of signal modalities. ``--config FILE`` applies the
+model options and ``observe`` of a settings file written by ``tune --out``
+(``--n-basis``, ``--regularizer`` and ``--observe`` override it). A set with no
+usable trial is one error line counting the skipped trials by reason
+(``--verbose`` lists every file).
 """
 
 from __future__ import annotations
@@ -15,7 +19,7 @@ import argparse
 import json
 from pathlib import Path
 
-from sandbox.commands import _observation, _types
+from sandbox.commands import _observation, _settings, _skipped, _types
 
 NAME = "fit"
 HELP = "fit one Interaction ProMP per task on a dataset and save the model (.npz)."
@@ -38,8 +42,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--preprocess", choices=("none", "causal", "smooth"), default="smooth",
                         help="human-track preprocessing of the demos (smooth)")
     _observation.add_arguments(parser)
+    _settings.add_argument(parser)
     parser.add_argument("--force", action="store_true", help="overwrite an existing --out file")
     parser.add_argument("--json", action="store_true", help="print the fit summary as JSON")
+    _skipped.add_argument(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -54,6 +60,11 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"--out: {out} exists; pass --force to overwrite it")
     if not out.parent.is_dir():
         raise ValueError(f"--out: expected a file in an existing folder, got {str(out)!r}")
+    settings = _settings.load(args.config)
+    kwargs = _settings.model_options(settings, n_basis=args.n_basis,
+                                     regularizer=args.regularizer)
+    model = IProMP(**kwargs)                   # options checked before the data is read
+    args.observe = _settings.observe(args.observe, settings)
     spec = _observation.data_spec(args)
     observe = _observation.observe(args, spec)
     with warnings.catch_warnings(record=True) as caught:
@@ -61,16 +72,13 @@ def run(args: argparse.Namespace) -> int:
         demos = load_dataset(args.data, spec=spec, observe=observe, seed=args.seed,
                              tasks=_observation.split(args.tasks), n_per_task=args.n_per_task,
                              preprocess=args.preprocess)
+    skipped = [str(w.message) for w in caught if issubclass(w.category, SkippedTrialWarning)]
+    _skipped.report(skipped, args.verbose, len(demos))
     if not demos:
-        first = f"; the first: {caught[0].message}" if caught else ""
-        raise ValueError(f"--data: no usable demonstration in {args.data} "
-                         f"({len(caught)} skipped{first})")
-    kwargs = {} if args.regularizer is None else {"regularizer": args.regularizer}
-    if args.n_basis is not None:
-        kwargs["n_basis"] = args.n_basis
-    model = IProMP(**kwargs).fit(demos)
+        raise _skipped.no_usable(args.data, skipped, "demonstration", args.verbose)
+    model.fit(demos)
     model.save(out)
-    summary = _summary(model, args, out, len(demos), [str(w.message) for w in caught])
+    summary = _summary(model, args, out, len(demos), skipped)
     print(json.dumps(summary, indent=2) if args.json else _format(summary))
     return 0
 
@@ -112,6 +120,7 @@ def _format(s: dict) -> str:
         else:
             values, unit = ", ".join(f"{v:.3g}" for v in noise), s["units"][name]
         lines.append(f"  {name} observation noise ({unit}): {values}")
-    lines += [f"  {w}" for w in s["skipped"]]
+    if s["skipped"]:
+        lines.append(f"  {_skipped.summary(s['skipped'])}")
     lines.append(f"Saved {s['out']}")
     return "\n".join(lines)

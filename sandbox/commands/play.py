@@ -11,11 +11,18 @@ episode runs to completion, then its replay (HTML) and a JSON summary are
 written (success, handover time, final gripper-to-object distance, recognised
 task over time, updates). ``--observe hand,arm,emg`` chooses the modalities
 the policy observes (and its model is fitted on) in both modes.
+
+``--model FILE`` (saved by ``fit``) drives the robot in both modes instead of
+a model fitted here (in a scenario it replaces the file's ``model:``);
+``--config FILE`` (written by ``tune --out``) applies tuned settings: the
+model options when the model is fitted here, ``observe`` and the predictor
+options (see :mod:`sandbox.commands._settings`). A scenario's outputs are
+replaced only with ``--force``. Ctrl-C ends either mode with status 130.
 """
 
 from __future__ import annotations
 
-from sandbox.commands import _types
+from sandbox.commands import _model, _outputs, _settings, _types
 
 NAME = "play"
 HELP = ("drive the human hand from the keyboard while the robot anticipates live in the "
@@ -25,7 +32,12 @@ HELP = ("drive the human hand from the keyboard while the robot anticipates live
 def add_arguments(parser) -> None:
     parser.add_argument("--scenario", metavar="FILE", default=None,
                         help="run a scenario file (.json/.yaml) or a shipped example "
-                             "(intent_switch, waypoints) instead of the keyboard teleop")
+                             "(intent_switch, waypoints) instead of the keyboard teleop; keys: "
+                             "name, family, seed, object, speed, time_limit, observe, human "
+                             "(task/switch_to/switch_phase, waypoints or recorded), policy "
+                             "(type, dow_t or ratio, options), model (demos, seed, options, "
+                             "file); README 'Scenario files' gives each one's meaning and "
+                             "default")
     parser.add_argument("--out", type=_types.output_file_in_new_folder, default=None,
                         help="scenario replay (HTML; default: <file name>.html here)")
     parser.add_argument("--summary", type=_types.output_file_in_new_folder, default=None,
@@ -47,6 +59,10 @@ def add_arguments(parser) -> None:
     parser.add_argument("--start", action="store_true",
                         help="teleop: start the clock at once (default: press space)")
     parser.add_argument("--open", action="store_true", help="teleop: open the browser")
+    _model.add_argument(parser, "the robot uses it instead of a model fitted here (scenario: "
+                                "replaces the file's model:)")
+    _settings.add_argument(parser)
+    _outputs.add_force(parser, "the scenario's --out and --summary files")
     parser.add_argument("--host", default="127.0.0.1", metavar="ADDRESS",
                         help="teleop: address the live viewer listens on (default 127.0.0.1, "
                              "this machine only; 0.0.0.0 lets anyone on the network watch)")
@@ -73,32 +89,48 @@ def _teleop(args) -> int:
     import gymnasium as gym
 
     from sandbox.envs import ENV_IDS
-    from sandbox.policies import IProMPPolicy, fit_family_model
     from sandbox.teleop import Keyboard, run_teleop
 
     env_id = ENV_IDS[0] if args.family == "objects" else ENV_IDS[1]
-    observe = args.observe or "hand"
-    model = fit_family_model(args.family, n_per_task=args.demos, seed=args.seed,
-                             observe=observe)
-    policy = IProMPPolicy(model, dow_t=args.dow, observe=observe)
-    print(f"the robot knows {len(model.tasks)} tasks {list(model.tasks)} "
-          f"({args.demos} synthetic demos each); it re-predicts every {args.dow:g} s",
-          flush=True)
+    model, policy, known = _teleop_policy(args)
+    print(f"the robot knows {len(model.tasks)} tasks {list(model.tasks)} ({known}); it "
+          f"re-predicts every {args.dow:g} s", flush=True)
     env = gym.make(env_id, render_mode="human",
                    max_episode_steps=max(1, round(args.time_limit * 50)),
                    viewer_options={"open_browser": args.open, "host": args.host})
-    try:
+    try:   # Ctrl-C: the environment closes, the terminal is restored, cli.main says it
         with Keyboard() as keyboard:
             episodes = run_teleop(env, policy, keyboard, seed=args.seed, running=args.start,
                                   out=lambda line: print(line, flush=True))
-    except KeyboardInterrupt:
-        episodes = None
-        print("\ninterrupted", flush=True)
     finally:
         env.close()
-    if episodes is not None:
-        print(f"bye ({episodes} episode(s))", flush=True)
+    print(f"bye ({episodes} episode(s))", flush=True)
     return 0
+
+
+def _teleop_policy(args):
+    """The teleop's model, policy and what the robot knows, all checked before the env opens."""
+    from sandbox.policies import IProMPPolicy
+
+    settings = _settings.load(args.config)
+    observe = _settings.observe(args.observe, settings)
+    if args.model is not None:
+        model = _model.load(args.model)
+        _model.baxter(model)
+        known = f"from {args.model}"
+    else:
+        from sandbox.scenario_files import fit_family
+
+        observe = observe or "hand"
+        model = fit_family(args.family, args.demos, args.seed, observe,
+                           _settings.model_options(settings))
+        known = f"{args.demos} synthetic demos each"
+    try:
+        policy = IProMPPolicy(model, dow_t=args.dow, observe=observe,
+                              **_settings.predictor_options(settings))
+    except ValueError as error:
+        raise ValueError(f"--model/--observe: {error}" if args.model else str(error)) from None
+    return model, policy, known
 
 
 def _scenario(args) -> int:
@@ -107,12 +139,17 @@ def _scenario(args) -> int:
 
     from sandbox.scenario_files import load_scenario, run_scenario_file
 
-    scenario = load_scenario(args.scenario, observe=args.observe)
+    settings = _settings.load(args.config)
+    scenario = load_scenario(args.scenario, observe=_settings.observe(args.observe, settings),
+                             model=args.model,
+                             options=_settings.predictor_options(settings),
+                             model_options=_settings.model_options(settings))
     html = Path(args.out or f"{scenario.path.stem}.html")
     summary_path = Path(args.summary or f"{scenario.path.stem}.summary.json")
     if summary_path.suffix.lower() != ".json":
         raise ValueError(f"--summary: expected a file name ending in .json, got "
                          f"{str(summary_path)!r}")
+    _outputs.check_new([("--out", html), ("--summary", summary_path)], args.force)
     print(f"scenario '{scenario.name}' ({scenario.path}): {scenario.human_kind} human, "
           f"{scenario.policy['type']} policy observing {','.join(scenario.observe)}, "
           f"seed {scenario.seed}", flush=True)
@@ -124,7 +161,7 @@ def _scenario(args) -> int:
 
     summary = run_scenario_file(scenario, html=html, on_update=show)
     summary_path.parent.mkdir(parents=True, exist_ok=True)
-    summary_path.write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+    _outputs.write_text(summary_path, json.dumps(summary, indent=2) + "\n")
     outcome = (f"handover at {summary['handover_time_s']:.2f} s" if summary["success"]
                else f"no handover within {summary['end_time_s']:.2f} s")
     changes = ", ".join(f"{r['task']}@{r['time']:.2f}s" for r in summary["recognised"])

@@ -1,8 +1,11 @@
-"""``python -m sandbox plot REPORT.json [REPORT2.json] --out DIR``: the paper's figures."""
+"""``python -m sandbox plot REPORT.json [REPORT2.json] --out DIR``: the paper's figures.
+
+Existing figure files in ``--out`` are replaced only with ``--force``.
+"""
 
 from __future__ import annotations
 
-from sandbox.commands import _types
+from sandbox.commands import _outputs, _types
 
 NAME = "plot"
 HELP = "draw the evaluation figures (PNG) of one report, or compare two"
@@ -12,6 +15,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("reports", nargs="+", help="report.json (a second one to compare)")
     parser.add_argument("--out", type=_types.output_folder, required=True,
                         help="folder for the PNG files")
+    _outputs.add_force(parser, "figure files in --out")
 
 
 def run(args) -> int:
@@ -22,6 +26,8 @@ def run(args) -> int:
 
     if len(args.reports) > 2:
         raise ValueError(f"expected one or two reports, got {len(args.reports)}")
+    _outputs.check_new([("--out", f) for f in _outputs.figures(args.out, len(args.reports) > 1)],
+                       args.force)
     reports = []
     for name in args.reports:
         path = Path(name)

@@ -5,14 +5,21 @@ Experiment 2), the synthetic object set, and, if ``--data`` is given, a recorded
 set (Experiment 1, observing ``--observe``, default the hand) plus the
 comparison of observation modalities on it (hand vs hand + arm vs hand + arm +
 EMG, dynamic at 0.2 s, on the trials usable by all three); writes each
-``report.json``, ``report.md`` and the figures to ``--figures``, and replaces
-the README text between ``<!-- results:start -->`` and ``<!-- results:end -->``.
-Nothing in those tables is typed by hand.
+``report.json``, ``report.md``, the figures and ``results.md`` (the README's
+results section) to ``--out DIR`` (default: a fresh ``results-<date>-<time>``
+folder; an existing folder that is not empty needs ``--force``). Only with
+``--update-readme`` does it replace the README text between
+``<!-- results:start -->`` and ``<!-- results:end -->`` (the figures linked
+from there are those in ``--out``). Nothing in those tables is typed by hand.
+To regenerate the README's own section::
+
+    python -m sandbox results --data ../shared/data/birl-handover-20180329 \
+        --out notebooks/figures --force --update-readme
 """
 
 from __future__ import annotations
 
-from sandbox.commands import _observation, _types
+from sandbox.commands import _observation, _outputs, _types
 
 NAME = "results"
 HELP = "regenerate the README's results tables and figures from fresh evaluations"
@@ -23,9 +30,15 @@ START, END = "<!-- results:start -->", "<!-- results:end -->"
 def add_arguments(parser) -> None:
     parser.add_argument("--data", default=None,
                         help="recorded set folder (e.g. ../shared/data/birl-handover-20180329)")
-    parser.add_argument("--figures", type=_types.output_folder, default="notebooks/figures",
-                        help="folder for reports and figures (default notebooks/figures)")
-    parser.add_argument("--readme", default="README.md", help="README to update")
+    parser.add_argument("--out", "--figures", dest="out", type=_types.output_folder,
+                        default=None, metavar="DIR",
+                        help="folder for the reports, figures and results.md (default: a "
+                             "fresh results-<date>-<time> folder here)")
+    _outputs.add_force(parser, "files in a non-empty --out folder")
+    parser.add_argument("--update-readme", action="store_true",
+                        help="also replace the results section of --readme (links to --out)")
+    parser.add_argument("--readme", default="README.md",
+                        help="README to update with --update-readme (default README.md)")
     parser.add_argument("--workers", type=_types.WORKERS, default=2,
                         help=f"processes, 1 to {_types.MAX_WORKERS} (default 2)")
     parser.add_argument("--seed", type=_types.SEED, default=0, help="seed of the synthetic sets")
@@ -44,12 +57,10 @@ def run(args) -> int:
     from sandbox.eval.plots import plot_report
     from sandbox.eval.report import build_report, to_markdown
 
-    out = Path(args.figures)
-    out.mkdir(parents=True, exist_ok=True)
+    out = _out_folder(args)
     readme = Path(args.readme)
-    text = readme.read_text()
-    if START not in text or END not in text:
-        raise ValueError(f"{readme}: expected the markers {START} and {END}")
+    text = _readme_text(readme) if args.update_readme else ""
+    out.mkdir(parents=True, exist_ok=True)
     spec = _observation.data_spec(args)
     observe = _observation.observe(args, spec)
     sets = [("diverging", "synthetic:diverging"), ("objects", "synthetic:objects")]
@@ -65,8 +76,8 @@ def run(args) -> int:
                                     progress=True)
         rep = build_report(trials, config.to_dict(), data, runtime)
         rep["dataset"] = data if name != "recorded" else Path(data).name
-        (out / f"{name}.json").write_text(json.dumps(rep, indent=1))
-        (out / f"{name}.md").write_text(to_markdown(rep))
+        _outputs.write_text(out / f"{name}.json", json.dumps(rep, indent=1))
+        _outputs.write_text(out / f"{name}.md", to_markdown(rep))
         other = reports.get("recorded") if name == "diverging" else None
         plot_report(rep, out / name, other)
         reports[name] = rep
@@ -76,7 +87,7 @@ def run(args) -> int:
     if args.data and compare:
         table = compare_modalities(args.data, spec, compare, workers=args.workers,
                                    figures=out / "recorded")
-        (out / "modalities.md").write_text(table)
+        _outputs.write_text(out / "modalities.md", table)
         rel = (out / "recorded").as_posix()
         body += [f"#### Observation modalities on `{Path(args.data).name}` (dynamic, dow_t = "
                  "0.2 s; 95 % bootstrap intervals; recognition over the whole recording, "
@@ -99,10 +110,45 @@ def run(args) -> int:
         body.append(f"![Experiment 1 vs 2]({(out / 'diverging').as_posix()}"
                     "/average_comparison.png)\n")
     body.append(END)
-    head, rest = text.split(START, 1)
-    readme.write_text(head + "\n".join(body) + rest.split(END, 1)[1])
-    print(f"updated {readme}")
+    section = "\n".join(body)
+    _outputs.write_text(out / "results.md", section[len(START):-len(END)].strip() + "\n")
+    print(f"results: {out}/results.md")
+    if args.update_readme:
+        head, rest = text.split(START, 1)
+        _outputs.write_text(readme, head + section + rest.split(END, 1)[1])
+        print(f"updated {readme}")
     return 0
+
+
+def _out_folder(args):
+    """``--out``, checked (not empty needs ``--force``), or a fresh folder's name."""
+    import time
+    from pathlib import Path
+
+    if args.out is None:
+        stamp = time.strftime("%Y%m%d-%H%M%S")
+        out, n = Path(f"results-{stamp}"), 1
+        while out.exists():
+            n += 1
+            out = Path(f"results-{stamp}-{n}")
+        return out
+    _outputs.check_folder("--out", args.out, args.force)
+    return Path(args.out)
+
+
+def _readme_text(readme) -> str:
+    """The README to update, checked before any work (it has the markers, can be written)."""
+    import os
+
+    try:
+        text = readme.read_text(encoding="utf-8")
+    except OSError as error:
+        raise ValueError(f"--readme: cannot read {readme} ({error.strerror})") from None
+    if START not in text or END not in text:
+        raise ValueError(f"--readme: expected the markers {START} and {END} in {readme}")
+    if not os.access(readme, os.W_OK):
+        raise ValueError(f"--readme: {readme} is not writable")
+    return text
 
 
 def _summary_table(reports: dict) -> str:

@@ -2,11 +2,13 @@
 
 Prints the five best configurations; the exit status is 1 if a configuration
 failed (its worker died twice), 2 for bad input. See :mod:`sandbox.eval.sweep`.
+``--config FILE`` (written by ``tune --out``) sets the options the grid's
+points start from; a point's own values replace them.
 """
 
 from __future__ import annotations
 
-from sandbox.commands import _executor, _observation, _types
+from sandbox.commands import _executor, _observation, _settings, _types
 
 NAME = "sweep"
 HELP = ("leave-one-out of every configuration of a grid (YAML) on local processes or a Dask "
@@ -30,15 +32,20 @@ def add_arguments(parser) -> None:
                         help="trials per task (synthetic: generated; folder: first N)")
     parser.add_argument("--seed", type=_types.SEED, default=0, help="seed of synthetic data")
     _observation.add_arguments(parser)
+    _settings.add_argument(parser)
 
 
 def run(args) -> int:
+    from sandbox.eval.loocv import EvalConfig
     from sandbox.eval.sweep import sweep
 
+    settings = _settings.load(args.config)
+    args.observe = _settings.observe(args.observe, settings)
     spec = _observation.data_spec(args)
     summary = sweep(args.data, args.grid, args.out, force=args.force, seed=args.seed,
                     tasks=_observation.split(args.tasks), n_per_task=args.n_per_task,
                     spec=spec, observe=_observation.observe(args, spec),
+                    base=EvalConfig(**_settings.eval_fields(settings)),
                     **_executor.options(args))
     ranked, failed = summary["ranked"], summary["failed"]
     for entry in ranked[:5]:

@@ -225,8 +225,8 @@ def _init(train, test, fits, config) -> None:
     _STATE.update(train=train, test=test, fits=fits, config=config)
 
 
-def _init_worker(train, test, fits, config) -> None:
-    _init(train, test, fits, config)
+def _init_worker(init, initargs: tuple) -> None:
+    init(*initargs)
     _STATE["blas"] = one_blas_thread()     # kept for the worker's lifetime
 
 
@@ -306,20 +306,28 @@ def run_loocv(train, test, config: EvalConfig, *, workers: int = 1,
 
 def _run_all(train, test, config: EvalConfig, workers: int, progress: bool) -> list[dict]:
     train, test, fits = prepare(train, test, config, progress=progress)
-    _init(train, test, fits, config)
-    indices = range(len(test))
+    return map_trials(_run_one, len(test), _init, (train, test, fits, config),
+                      workers=workers, progress=progress)
+
+
+def map_trials(run_one, n: int, init, initargs: tuple, *, workers: int = 1,
+               progress: bool = False) -> list:
+    """``[run_one(i) for i in range(n)]`` after ``init(*initargs)``, in this process or in
+    ``workers`` forked processes (each initialised once), on one BLAS thread, in order.
+
+    ``progress`` draws a bar of the trials on stderr.
+    """
     results = []
-    with bar(len(test), "trials", progress) as shown:
+    with one_blas_thread(), bar(n, "trials", progress) as shown:
+        init(*initargs)
         if workers <= 1:
-            for i in indices:
-                results.append(_run_one(i))
+            for i in range(n):
+                results.append(run_one(i))
                 shown.update()
-        else:
-            ctx = get_context("fork")
-            with ProcessPoolExecutor(workers, mp_context=ctx, initializer=_init_worker,
-                                     initargs=(train, test, fits, config)) as pool:
-                chunk = max(1, len(test) // (8 * workers))
-                for res in pool.map(_run_one, indices, chunksize=chunk):
-                    results.append(res)
-                    shown.update()
+            return results
+        with ProcessPoolExecutor(workers, mp_context=get_context("fork"),
+                                 initializer=_init_worker, initargs=(init, initargs)) as pool:
+            for res in pool.map(run_one, range(n), chunksize=max(1, n // (8 * workers))):
+                results.append(res)
+                shown.update()
     return results

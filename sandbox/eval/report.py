@@ -128,7 +128,7 @@ def to_markdown(report: dict) -> str:
     lines = [f"### Evaluation of `{report['dataset']}`", "",
              f"{sum(report['n_trials'].values())} trials "
              f"({', '.join(f'{t}: {n}' for t, n in report['n_trials'].items())}), "
-             f"leave-one-out, {report['runtime_s']} s.", ""]
+             f"{_mode(report['config'])}, {report['runtime_s']} s.", ""]
     lines += _table("Dynamic formulation (mean over tasks)",
                     {f"dow_t = {w} s": report["dynamic"][w]["mean"] for w in report["dynamic"]},
                     MEASURES + ("recognition", "time_to_correct", "coverage"))
@@ -150,6 +150,13 @@ def to_markdown(report: dict) -> str:
         cells = [f"{values[w]:.3f}" for w in report["dynamic"]]
         lines.append(f"| {label} | " + " | ".join(cells) + f" | {report['best_window'][label]} |")
     return "\n".join(lines) + "\n"
+
+
+def _mode(config: dict) -> str:
+    """How the trials were predicted: leave-one-out, or test-only by a given model."""
+    if config.get("mode") == "test-only":
+        return f"test-only: all predicted by the model `{config.get('model')}` (no refit)"
+    return "leave-one-out"
 
 
 def _table(title: str, rows: dict, keys) -> list[str]:

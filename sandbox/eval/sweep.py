@@ -30,6 +30,7 @@ import sys
 import tempfile
 from collections import Counter
 from collections.abc import Callable, Iterator, Mapping, Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -327,7 +328,7 @@ def sweep(data: str, grid: str | Path, out: str | Path, *, workers: int = 2,
           scheduler: str | None = None, timeout: float | None = None, force: bool = False,
           seed: int = 0, tasks: Sequence[str] | None = None, n_per_task: int | None = None,
           spec=None, observe: Sequence[str] | None = None,
-          log: Callable[[str], None] = _stderr) -> dict:
+          log: Callable[[str], None] = _stderr, base: EvalConfig | None = None) -> dict:
     """``python -m sandbox sweep``: check everything, load the trials, run the grid.
 
     The grid, ``workers``, the output folder and the scheduler are checked (a
@@ -336,6 +337,8 @@ def sweep(data: str, grid: str | Path, out: str | Path, *, workers: int = 2,
     :func:`~sandbox.eval.datasets.load_pair`; ``observe`` the modalities of the
     points that do not set ``observe`` (default the spec's). The trials are
     loaded once per distinct ``observe`` (the trials kept can depend on it).
+    ``base``: the options of the points before their own values (default
+    :class:`EvalConfig`'s; ``python -m sandbox sweep --config FILE``).
     Returns the summary.
     """
     from sandbox.data.spec import resolve
@@ -346,7 +349,7 @@ def sweep(data: str, grid: str | Path, out: str | Path, *, workers: int = 2,
     points = read_grid(grid)
     if observe is None:
         observe = [m.name for m in resolve(spec).observed(None)]
-    base = EvalConfig(observe=tuple(observe))
+    base = replace(base or EvalConfig(), observe=tuple(observe))
     configs = [config_for(p, base) for p in points]
     described = {"data": _where(data), "seed": seed, "tasks": list(tasks) if tasks else None,
                  "n_per_task": n_per_task, "spec": _where(spec) if spec else None}

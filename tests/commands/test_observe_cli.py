@@ -79,7 +79,7 @@ def test_evaluate_observes_the_chosen_modalities(tmp_path, spec, capsys):
     (["fit", "--data", "{data}", "--out", "{tmp}/m.npz", "--observe", "grip"],
      "expected names among ['hand', 'arm', 'emg'], got ['grip']"),
     (["fit", "--data", "{data}", "--out", "{tmp}/m.npz", "--spec", "{spec}", "--observe",
-      "wrist,arm"], "missing column 'human_left_elbow_x'; it is a column of modality 'arm'"),
+      "wrist,arm"], "(missing column 'human_left_elbow_x' in 4 files; see --observe/--spec)"),
     (["fit", "--data", "{data}", "--out", "{tmp}/m.npz", "--spec", "{spec}", "--observe",
       "eeg"], "expected names among"),
     (["fit", "--data", "synthetic:two_task", "--out", "{tmp}/m.npz", "--observe", "hand,emg"],
@@ -98,8 +98,13 @@ def test_bad_observation_options_exit_2(tmp_path, spec, capsys, argv, match):
 
 
 def test_missing_column_error_names_file_and_option(tmp_path, spec, capsys):
+    """The error is one line counting the reasons (issue 14); --verbose names each file
+    and the spec key to set."""
     data = write_set(tmp_path / "set", n_per_task=2)
     assert main(["fit", "--data", str(data), "--out", str(tmp_path / "m.npz")]) == 2
     err = capsys.readouterr().err
-    assert "no usable demonstration" in err and "t0.csv: missing column 't'" in err
-    assert "--spec FILE, key 'time'" in err
+    assert err.count("\n") == 1 and "no usable demonstration" in err
+    assert "missing column 't' in 4 files; see --observe/--spec" in err
+    assert main(["fit", "--data", str(data), "--out", str(tmp_path / "m.npz"), "--verbose"]) == 2
+    err = capsys.readouterr().err
+    assert "t0.csv: missing column 't'" in err and "--spec FILE, key 'time'" in err

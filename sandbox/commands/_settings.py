@@ -1,0 +1,195 @@
+"""Settings files: what ``tune --out FILE`` chose, applied by ``--config FILE``.
+
+A settings file is one YAML or JSON mapping (by suffix) of model and
+predictor options, the names of :class:`~sandbox.eval.loocv.EvalConfig`::
+
+    observe: [hand]          # modalities (or "hand,arm")
+    n_basis: 21              # model (IProMP) options
+    regularizer: 0.001
+    noise_floor: 0.02        # m
+    settle_tol: 0.05         # rad, or null: the whole recording is the motion
+    likelihood: joint        # predictor options: joint | marginal
+    window_mode: all         # all | latest
+    blend_rate: 50.0         # 1/s
+
+Every key is optional; an unknown key is an error naming it and the valid
+ones. ``fit`` uses the model options and ``observe``; ``evaluate`` and
+``sweep`` all of them (a sweep's grid values replace them); ``play`` the
+model options (when it fits its model), ``observe`` and the predictor options
+but ``subsample`` and ``until_end``, which stay those of the closed-loop
+policy. A flag given on the command line (``--observe``, ``--n-basis``,
+``--regularizer``) overrides the file: those flags default to None, so a
+value that is not None was typed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+#: Options of the model (:class:`~sandbox.core.IProMP`).
+MODEL_KEYS = ("n_basis", "regularizer", "noise_scale", "noise_floor", "signal_floor",
+              "noise_floors", "settle_tol", "arrive_tol")
+#: Options of the predictor (:class:`~sandbox.core.DynamicPredictor`).
+PREDICTOR_KEYS = ("likelihood", "window_mode", "n_candidates", "refine_steps", "blend_rate",
+                  "blend_delay", "until_end", "end_prob", "subsample")
+#: Every key a settings file may hold.
+KEYS = ("observe", *MODEL_KEYS, *PREDICTOR_KEYS)
+#: Predictor options ``play`` takes from a file (the others are the closed loop's own).
+PLAY_PREDICTOR_KEYS = ("likelihood", "window_mode", "n_candidates", "refine_steps",
+                       "blend_rate", "blend_delay", "end_prob")
+CHOICES = {"likelihood": ("joint", "marginal"), "window_mode": ("all", "latest")}
+INTEGERS = {"n_basis": (2, 100), "n_candidates": (3, 10_000), "refine_steps": (0, 100),
+            "subsample": (1, 1000)}
+#: Positive numbers (``None`` allowed for the tolerances: "not used").
+POSITIVE = ("regularizer", "noise_scale", "noise_floor", "signal_floor", "blend_rate",
+            "settle_tol", "arrive_tol")
+OPTIONAL = ("settle_tol", "arrive_tol")
+
+
+def add_argument(parser: argparse.ArgumentParser) -> None:
+    """Add ``--config FILE``."""
+    parser.add_argument("--config", default=None, metavar="FILE",
+                        help="settings file (YAML/JSON) written by 'python -m sandbox tune "
+                             "--out FILE'; options given here override it")
+
+
+def load(path: str | Path | None) -> dict[str, Any]:
+    """The checked settings of ``path`` (``{}`` for None); errors name the file and key."""
+    if path is None:
+        return {}
+    from sandbox.scenario_files import read_mapping
+
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"--config: expected an existing settings file (.yaml/.json), "
+                         f"got {str(path)!r}")
+    data = read_mapping(path, "settings")
+    if data is None:
+        return {}
+    if not isinstance(data, Mapping):
+        raise ValueError(f"settings {path}: expected a mapping of options, got {data!r}")
+    unknown = sorted(str(k) for k in data if k not in KEYS)
+    if unknown:
+        raise ValueError(f"settings {path}: unknown key {unknown[0]!r}; valid keys: "
+                         f"{', '.join(KEYS)}")
+    settings = {k: _check(path, k, v) for k, v in data.items()}
+    _check_model(path, settings)
+    return settings
+
+
+def _check(path: Path, key: str, value: Any) -> Any:
+    def fail(expected: str):
+        return ValueError(f"settings {path}: {key}: expected {expected}, got {value!r}")
+
+    if key == "observe":
+        names = value.split(",") if isinstance(value, str) else value
+        if not isinstance(names, list) or not names or not all(
+                isinstance(n, str) and n.strip() for n in names):
+            raise fail("a list of modality names")
+        return tuple(n.strip() for n in names)
+    if key == "noise_floors":
+        if not isinstance(value, Mapping) or not all(
+                isinstance(k, str) and _positive(v) for k, v in value.items()):
+            raise fail("a mapping of modality names to positive floors")
+        return tuple(sorted((k, float(v)) for k, v in value.items()))
+    if key in CHOICES:
+        if value not in CHOICES[key]:
+            raise fail(f"one of {list(CHOICES[key])}")
+        return value
+    if key in INTEGERS:
+        low, high = INTEGERS[key]
+        if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+            raise fail(f"an integer in [{low}, {high}]")
+        return value
+    if key == "until_end":
+        if not isinstance(value, bool):
+            raise fail("true or false")
+        return value
+    if value is None and key in OPTIONAL:
+        return None
+    if key == "end_prob":
+        if not _number(value) or not 0.0 < value <= 1.0:
+            raise fail("a number in (0, 1]")
+        return float(value)
+    if key == "blend_delay":
+        if not _number(value) or value < 0:
+            raise fail("a finite number >= 0")
+        return float(value)
+    if not _positive(value):
+        raise fail("a finite number > 0" + (" or null" if key in OPTIONAL else ""))
+    return float(value)
+
+
+def _number(value: Any) -> bool:
+    return (not isinstance(value, bool) and isinstance(value, (int, float))
+            and math.isfinite(value))
+
+
+def _positive(value: Any) -> bool:
+    return _number(value) and value > 0
+
+
+def _check_model(path: Path, settings: dict) -> None:
+    """The core's own checks of the model options (ranges it alone knows)."""
+    from sandbox.core import IProMP
+
+    try:
+        IProMP(**model_options(settings))
+    except ValueError as error:
+        raise ValueError(f"settings {path}: {error}") from None
+
+
+def model_options(settings: dict, **explicit) -> dict[str, Any]:
+    """:class:`~sandbox.core.IProMP` keywords of ``settings``, ``explicit`` ones (not None)
+    replacing them."""
+    out = {k: v for k, v in settings.items() if k in MODEL_KEYS}
+    if "noise_floors" in out:
+        out["noise_floors"] = dict(out["noise_floors"])
+    out.update({k: v for k, v in explicit.items() if v is not None})
+    return out
+
+
+def eval_fields(settings: dict) -> dict[str, Any]:
+    """:class:`~sandbox.eval.loocv.EvalConfig` fields of ``settings`` (all but ``observe``)."""
+    return {k: v for k, v in settings.items() if k != "observe"}
+
+
+def predictor_options(settings: dict) -> dict[str, Any]:
+    """Policy (:class:`~sandbox.core.DynamicPredictor`) keywords ``play`` takes from a file."""
+    out = {k: v for k, v in settings.items() if k in PLAY_PREDICTOR_KEYS}
+    if "window_mode" in out:
+        out["window"] = out.pop("window_mode")
+    return out
+
+
+def observe(explicit: str | None, settings: dict) -> str | None:
+    """``--observe`` if given, else the file's ``observe`` (as ``"a,b"``), else None."""
+    if explicit is not None:
+        return explicit
+    return ",".join(settings["observe"]) if "observe" in settings else None
+
+
+def to_file(chosen: dict[str, Any], observe, path: str | Path, comment: str) -> None:
+    """Write ``chosen`` (EvalConfig option -> value) and ``observe`` as a settings file."""
+    from sandbox.commands._outputs import write_text
+
+    data: dict[str, Any] = {"observe": list(observe)}
+    for key, value in chosen.items():
+        if key not in KEYS:
+            raise ValueError(f"settings: {key!r} is not a settings key ({', '.join(KEYS)})")
+        data[key] = dict(value) if key == "noise_floors" else value
+    path = Path(path)
+    if path.suffix.lower() == ".json":
+        import json
+
+        text = json.dumps(data, indent=1) + "\n"
+    else:
+        import yaml
+
+        text = "".join(f"# {line}\n" for line in comment.splitlines())
+        text += yaml.safe_dump(data, sort_keys=False, default_flow_style=None)
+    write_text(path, text)
