@@ -38,7 +38,7 @@ DEFAULT_TARGET = (0.55, 0.05, 0.1)
 BAXTER_LINK = "left_upper_shoulder"
 #: Pose (with scale) of the overlays' bar panel in the camera frame (x right, y up, looking
 #: along -z): 1.5 m ahead, upper left, facing the camera, so it stays in view as the view turns.
-HUD_POSE = np.array([[0.0, 0.45, 0, -0.55], [0, 0, 0.45, 0.42], [0.45, 0, 0, -1.5], [0, 0, 0, 1]])
+HUD_POSE = np.array([[0.0, 0.45, 0, -0.55], [0, 0, 0.45, 0.31], [0.45, 0, 0, -1.5], [0, 0, 0, 1]])
 #: Height of the floor grid (m) in Baxter's base frame (the pedestal's feet).
 FLOOR_Z = -0.93
 
