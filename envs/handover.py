@@ -400,6 +400,25 @@ class BaxterHandoverEnv(gym.Env):
             out[f"{name}_valid"] = np.array([valid], dtype=np.int8)
         return out
 
+    def human_intent(self, t: float | None = None) -> str | None:
+        """The task the human pursues at time ``t`` (s; default now), when the source knows it.
+
+        A synthetic motion: its task, before and after an intent switch
+        (``switch_to``; the switch time follows the ``speed`` option); a recorded
+        trial: its task. ``None`` for the teleoperated hand and scripted motions
+        (the ``motion`` option), whose intent is not known. Feeds the viewer's
+        panel (``overlay.show(..., truth=env.unwrapped.human_intent())``).
+        """
+        if self.motion is None:
+            raise RuntimeError("human_intent: call reset() first")
+        if self.episode.motion is not None or self.episode.source == "teleop":
+            return None
+        intent = self.motion.meta.get("intent")
+        if intent is None:
+            return str(self.motion.task)
+        t = self._t if t is None else float(t)
+        return str(intent.task_at(t * float(self.motion.meta.get("speed", 1.0))))
+
     def tracked_arm(self) -> tuple[FloatArray, FloatArray]:
         """What the tracker measures now: hand (3,) and arm (6,: elbow, shoulder) m, NaN if not.
 

@@ -172,6 +172,7 @@ def record_episode(env, policy, *, seed: int | None = None,
     obs, info = env.reset(seed=seed, options=dict(options or {}))
     policy.reset()
     truth = _truth(env.unwrapped.motion)
+    intent = getattr(env.unwrapped, "human_intent", lambda t: None)  # for the viewer's panel
     record = EpisodeRecord(task=info["task"], object=info["object"], source=info["source"],
                            policy=policy_name)
     if viewer is not None:
@@ -195,7 +196,7 @@ def record_episode(env, policy, *, seed: int | None = None,
             for body in viewer.bodies.values():
                 body.update()
             if overlay is not None:
-                overlay.show(policy.predictor, t, executed_q=obs["q"])
+                overlay.show(policy.predictor, t, executed_q=obs["q"], truth=intent(t))
         record.success, record.handover_time = bool(step["is_success"]), step["handover_time"]
         record.final_distance, record.end_time = float(step["distance"]), t
     record.min_distance = float(np.min(distances)) if distances else float("nan")

@@ -504,7 +504,8 @@ def run_scenario_file(scenario: Scenario, *, html: str | Path | None = None,
             viewer = Viewer(fps=30.0)
             viewer.add_simulation(env.unwrapped.sim)
             viewer.add_tracked_arm(env.unwrapped.tracked_arm)
-            overlay = viewer.add_overlay(model.tasks, rng=np.random.default_rng(scenario.seed))
+            overlay = viewer.add_overlay(model.tasks, rng=np.random.default_rng(scenario.seed),
+                                         title=f"{scenario.name} ({scenario.policy['type']})")
         record = record_episode(env, policy, seed=scenario.seed, options=options, viewer=viewer,
                                 overlay=overlay, policy_name=scenario.policy["type"],
                                 on_update=on_update)

@@ -12,16 +12,22 @@ a / d   hand to Baxter's left / right (+y / -y)
 r / f   hand up / down (+z / -z)
 x       halt the hand (a direction key opposite to the motion halts that axis only)
 + / -   hand speed x1.5 / /1.5 (0.02 - 0.6 m/s)
-space   start / stop the clock (the episode starts stopped unless asked otherwise)
-n       reset: a new episode, the hand back at the start
+c       slow motion on / off: the clock runs at 1/4 of real time (time to aim; the hand
+        and the robot move as usual in simulated time)
+space   start / stop the clock (the first episode starts stopped unless asked otherwise)
+n       reset: a new episode, the hand back at the start, the clock stopped (press space)
 h       this help
 q       quit (also Ctrl-C)
 ======  ============================================================================
 
 :func:`run_teleop` runs the loop: read the keys, step the environment (its
 ``"human"`` render mode shows it live, paced to real time), draw the
-predictor's overlays, and print the hand position and the task posterior at
-every predictor update.
+predictor's overlays and panel, and print a status line at every predictor
+update (:func:`status_line`): the time, the hand (true and as the tracker saw
+it), the recognised task and posterior, the gripper-to-hand distance and the
+robot's predicted meeting point (where its plan ends), so that the hand can
+be aimed without looking at the browser; "unsure / unknown motion" when the
+predictor says the motion is unlike its training demos.
 """
 
 from __future__ import annotations
@@ -38,14 +44,19 @@ import numpy as np
 #: Key -> (axis, direction) of the hand motion.
 MOVES = {"w": (0, -1), "s": (0, 1), "a": (1, 1), "d": (1, -1), "r": (2, 1), "f": (2, -1)}
 SPEED_RANGE = (0.02, 0.6)
+#: Simulated seconds per wall-clock second in slow motion (key ``c``).
+SLOW_RATE = 0.25
+#: Said on the status line when the predictor finds the motion unlike its training demos.
+UNSURE = "unsure / unknown motion"
 HELP_TEXT = """\
   w / s   hand toward / away from Baxter (-x / +x)
   a / d   hand to Baxter's left / right (+y / -y)
   r / f   hand up / down (+z / -z)
   x       halt the hand (the key opposite to a motion halts that axis)
   + / -   hand speed x1.5 / /1.5
+  c       slow motion on / off (the clock at 1/4 of real time)
   space   start / stop the clock
-  n       reset (new episode)      h  help      q  quit (or Ctrl-C)"""
+  n       reset (new episode; press space to start)   h  help   q  quit (or Ctrl-C)"""
 
 
 @dataclass
@@ -60,11 +71,19 @@ class TeleopState:
         Hand speed along each moving axis (m/s).
     running : bool
         Whether the clock runs.
+    slow : bool
+        Slow motion: the clock runs at :data:`SLOW_RATE` of real time.
     """
 
     direction: np.ndarray = field(default_factory=lambda: np.zeros(3))
     speed: float = 0.2
     running: bool = False
+    slow: bool = False
+
+    @property
+    def rate(self) -> float:
+        """Simulated seconds per wall-clock second: 1, or :data:`SLOW_RATE` in slow motion."""
+        return SLOW_RATE if self.slow else 1.0
 
     @property
     def velocity(self) -> np.ndarray:
@@ -73,7 +92,10 @@ class TeleopState:
 
     def apply(self, key: str) -> str | None:
         """Apply one key; return the action for the loop (``"quit"``, ``"reset"``,
-        ``"help"``, ``"move"``, ``"clock"``) or None for an unknown key."""
+        ``"help"``, ``"move"``, ``"clock"``, ``"slow"``) or None for an unknown key.
+
+        ``n`` (reset) also stops the clock: the next episode waits for space.
+        """
         if key in MOVES:
             axis, sign = MOVES[key]
             self.direction[axis] = 0.0 if self.direction[axis] == -sign else sign
@@ -88,7 +110,13 @@ class TeleopState:
         if key == " ":
             self.running = not self.running
             return "clock"
-        return {"n": "reset", "q": "quit", "h": "help", "?": "help"}.get(key)
+        if key == "c":
+            self.slow = not self.slow
+            return "slow"
+        if key == "n":
+            self.running = False
+            return "reset"
+        return {"q": "quit", "h": "help", "?": "help"}.get(key)
 
 
 def split_keys(data: str) -> list[str]:
@@ -152,18 +180,50 @@ class Keyboard:
         return split_keys(data.decode("utf-8", "replace"))
 
 
-def status_line(t: float, hand, seen, predictor) -> str:
-    """``t=... hand=(x,y,z) seen=(x,y,z) m task=... p[...] T=...`` for the terminal.
+def status_line(t: float, hand, seen, predictor, *, gripper=None, meeting=None) -> str:
+    """``t=... hand=(x,y,z) seen=(x,y,z) m task=... p[...] T=...s gripper-hand=...m
+    meet=(x,y,z)`` for the terminal.
 
-    ``hand`` is the true hand position (m), ``seen`` the tracker's measurement the
-    policy received (m), then the predictor's task, posterior and duration estimate.
+    Parameters
+    ----------
+    t : float
+        Time (s).
+    hand, seen : array_like, shape (3,)
+        The true hand position and the tracker's measurement the policy received (m).
+    predictor : DynamicPredictor
+        Its task, posterior and duration estimate are shown, and "unsure /
+        unknown motion" when its ``familiar`` (if it has one) is False.
+    gripper : array_like, shape (3,), optional
+        The gripper's fingertip (m): adds its distance to the hand (m).
+    meeting : array_like, shape (3,), optional
+        The robot's predicted meeting point (m), e.g. :func:`meeting_point`.
     """
     post = predictor.task_posterior
     probs = " ".join(f"{k}={v:.2f}" for k, v in post.items())
-    x, y, z = (float(v) for v in hand)
-    a, b, c = (float(v) for v in seen)
-    return (f"t={t:5.2f}s hand=({x:+.3f},{y:+.3f},{z:+.3f}) seen=({a:+.3f},{b:+.3f},{c:+.3f}) "
-            f"m task={predictor.task} p[{probs}] T={predictor.duration:.2f}s")
+    hand = np.asarray(hand, dtype=float)
+    line = (f"t={t:5.2f}s hand={_xyz(hand)} seen={_xyz(seen)} m task={predictor.task} "
+            f"p[{probs}] T={predictor.duration:.2f}s")
+    if gripper is not None:
+        line += f" gripper-hand={np.linalg.norm(np.asarray(gripper, dtype=float) - hand):.3f}m"
+    if meeting is not None:
+        line += f" meet={_xyz(meeting)}"
+    if getattr(predictor, "familiar", None) is False:
+        line += f" {UNSURE}"
+    return line
+
+
+def _xyz(p) -> str:
+    x, y, z = (float(v) for v in p)
+    return f"({x:+.3f},{y:+.3f},{z:+.3f})"
+
+
+def meeting_point(predictor, kinematics, link: str = "left_gripper") -> np.ndarray:
+    """Where the robot's current plan ends (3,) m: the fingertip at its last mean joints.
+
+    ``kinematics`` is a :class:`~sandbox.robot.BaxterKinematics` (``fk(q, link=...)``).
+    """
+    _, means, _ = predictor.plan()
+    return kinematics.fk(means[-1], link=link)
 
 
 def _outcome(info: dict, t: float) -> str:
@@ -187,61 +247,88 @@ def run_teleop(env, policy, keyboard: Keyboard, *, seed: int = 0, running: bool 
     seed : int
         Seed of the first episode (then seed + 1, ...).
     running : bool
-        Start the clock at once (default: press space).
+        Start the clock of the first episode at once (default: press space); after
+        ``n`` the clock always waits for space.
     out : callable
         Prints a line.
 
     The loop ends on ``q``, or when the input is closed and the episode is over.
     """
     state = TeleopState(running=running)
-    episodes, over = 1, False
-
-    def new_episode(k: int):
-        obs, _ = env.reset(seed=seed + k, options={"source": "teleop"})
-        policy.reset()
-        state.direction[:] = 0.0
-        out(f"episode {k + 1}: the hand is at the start; "
-            + ("the clock runs" if state.running else "press space to start the clock"))
-        return obs
-
-    obs = new_episode(0)
-    viewer = env.unwrapped.viewer
-    overlay = viewer.add_overlay(policy.predictor.model.tasks, rng=np.random.default_rng(seed))
-    out("keys:\n" + HELP_TEXT)
-    n_updates, frame = 0, -1
+    loop = _Loop(env, policy, state, seed, out)
     while True:
-        for key in keyboard.read(0.0 if state.running and not over else 0.05):
-            action = state.apply(key)
-            if action == "quit":
-                return episodes
-            if action == "help":
-                out("keys:\n" + HELP_TEXT)
-            elif action == "reset":
-                obs, over, n_updates, frame = new_episode(episodes), False, 0, -1
-                episodes += 1
-            elif action == "move":
-                v = state.velocity
-                out(f"> {key}: hand velocity ({v[0]:+.2f}, {v[1]:+.2f}, {v[2]:+.2f}) m/s")
-            elif action == "clock":
-                viewer.restart_pacing()  # real time resumes from here, not from the reset
-                out("> clock " + ("runs" if state.running else "stopped"))
-        if keyboard.closed and not state.running and not over:
+        for key in keyboard.read(0.0 if state.running and not loop.over else 0.05):
+            if loop.key(key) == "quit":
+                return loop.episodes
+        if keyboard.closed and not state.running and not loop.over:
             state.running = True  # no more keys: play the episode out
-            viewer.restart_pacing()
-        if over and keyboard.closed:
-            return episodes
-        if not state.running or over:
-            continue
-        env.unwrapped.motion.set_velocity(state.velocity)
-        obs, _, terminated, truncated, info = env.step(policy(obs))
-        t = float(obs["time"][0])
-        if int(round(t * viewer.scene.timeline.fps)) != frame:
-            frame = int(round(t * viewer.scene.timeline.fps))
-            overlay.show(policy.predictor, t, executed_q=obs["q"])
-        if len(policy.predictor.updates) > n_updates:
-            n_updates = len(policy.predictor.updates)
-            out(status_line(t, env.unwrapped.motion.position(t), obs["hand"], policy.predictor))
+            loop.viewer.restart_pacing()
+        if loop.over and keyboard.closed:
+            return loop.episodes
+        if state.running and not loop.over:
+            loop.step()
+
+
+class _Loop:
+    """The state of :func:`run_teleop` between keys and steps."""
+
+    def __init__(self, env, policy, state: TeleopState, seed: int, out) -> None:
+        from sandbox.robot import BaxterKinematics
+
+        self.env, self.policy, self.state, self.seed, self.out = env, policy, state, seed, out
+        self.kinematics = BaxterKinematics()
+        self.episodes = 0
+        self.new_episode()
+        self.viewer = env.unwrapped.viewer
+        self.overlay = self.viewer.add_overlay(
+            policy.predictor.model.tasks, rng=np.random.default_rng(seed),
+            title="teleop: keys in the terminal (h: help)")
+        out("keys:\n" + HELP_TEXT)
+
+    def new_episode(self) -> None:
+        self.obs, _ = self.env.reset(seed=self.seed + self.episodes, options={"source": "teleop"})
+        self.policy.reset()
+        self.state.direction[:] = 0.0
+        self.episodes += 1
+        self.over, self.n_updates, self.frame = False, 0, -1
+        self.out(f"episode {self.episodes}: the hand is at the start; "
+                 + ("the clock runs" if self.state.running else "press space to start the clock"))
+
+    def key(self, key: str) -> str | None:
+        """Apply a key; return its action."""
+        action = self.state.apply(key)
+        if action == "help":
+            self.out("keys:\n" + HELP_TEXT)
+        elif action == "reset":
+            self.new_episode()
+        elif action == "move":
+            v = self.state.velocity
+            self.out(f"> {key}: hand velocity ({v[0]:+.2f}, {v[1]:+.2f}, {v[2]:+.2f}) m/s")
+        elif action == "clock":
+            self.viewer.restart_pacing()  # real time resumes from here, not from the reset
+            self.out("> clock " + ("runs" if self.state.running else "stopped"))
+        elif action == "slow":
+            self.viewer.set_rate(self.state.rate)
+            self.out(f"> slow motion {'on' if self.state.slow else 'off'}: the clock runs at "
+                     f"x{self.state.rate:g} real time")
+        return action
+
+    def step(self) -> None:
+        """One control step: move the hand, act, draw, report."""
+        env, predictor = self.env.unwrapped, self.policy.predictor
+        env.motion.set_velocity(self.state.velocity)
+        self.obs, _, terminated, truncated, info = self.env.step(self.policy(self.obs))
+        t = float(self.obs["time"][0])
+        if int(round(t * self.viewer.scene.timeline.fps)) != self.frame:
+            self.frame = int(round(t * self.viewer.scene.timeline.fps))
+            self.overlay.show(predictor, t, executed_q=self.obs["q"], truth=env.human_intent(t))
+        if len(predictor.updates) > self.n_updates:
+            self.n_updates = len(predictor.updates)
+            gripper = self.kinematics.fk(self.obs["q"], link="left_gripper")
+            meeting = meeting_point(predictor, self.kinematics)
+            self.out(status_line(t, env.motion.position(t), self.obs["hand"], predictor,
+                                 gripper=gripper, meeting=meeting))
         if terminated or truncated:
-            over = True
-            out(f"episode over: {_outcome(info, t)}, gripper {100 * info['distance']:.1f} cm "
-                f"from the object, task {policy.task}; n: new episode, q: quit")
+            self.over = True
+            self.out(f"episode over: {_outcome(info, t)}, gripper {100 * info['distance']:.1f} cm "
+                     f"from the object, task {self.policy.task}; n: new episode, q: quit")

@@ -24,6 +24,7 @@ from tests.viz.test_server import _servers_watching, _wait_gone
 
 _XYZ = r"\(([-+\d.]+),([-+\d.]+),([-+\d.]+)\)"
 STATUS = re.compile(rf"t=\s*([\d.]+)s hand={_XYZ} seen={_XYZ} m task=(\w+) p\[([^\]]+)\]")
+AIM = re.compile(rf"gripper-hand=([\d.]+)m meet={_XYZ}")
 
 
 # -- keys ----------------------------------------------------------------------------------
@@ -52,6 +53,17 @@ def test_speed_clock_and_commands():
     assert [state.apply(k) for k in "nqh?z"] == ["reset", "quit", "help", "help", None]
 
 
+def test_slow_motion_key_and_reset_stops_the_clock():
+    from sandbox.teleop import SLOW_RATE
+
+    state = TeleopState(running=True)
+    assert state.rate == 1.0
+    assert state.apply("c") == "slow" and state.slow and state.rate == SLOW_RATE < 1.0
+    assert state.apply("c") == "slow" and not state.slow and state.rate == 1.0
+    np.testing.assert_allclose(state.velocity, 0.0)  # the hand's own speed is not touched
+    assert state.apply("n") == "reset" and not state.running  # the next episode waits
+
+
 def test_escape_sequences_are_not_keys():
     assert split_keys("w\x1b[Aa\x1bOBq\x1b") == ["w", "a", "q"]
 
@@ -65,6 +77,51 @@ def test_keyboard_reads_a_pipe_until_it_closes():
         os.close(write)
         assert keyboard.read(1.0) == [] and keyboard.closed
     os.close(read)
+
+
+@pytest.fixture(scope="module")
+def fitted():
+    from sandbox.core import IProMP
+    from sandbox.data.synthetic import diverging_demos
+
+    demos = diverging_demos(6, np.random.default_rng(0), directions=("left", "right"))
+    return IProMP(n_basis=10).fit(demos[1:]), demos[0]
+
+
+def _predictor(fitted, familiar):
+    """A real DynamicPredictor fed a demo; ``familiar`` set by a test double subclass."""
+    from sandbox.core import DynamicPredictor
+
+    class Double(DynamicPredictor):
+        pass
+
+    Double.familiar = familiar
+    model, demo = fitted
+    predictor = Double(model, dow_t=0.25)
+    for t, y in zip(demo.times, demo.select("hand").human):
+        predictor.observe(t, y)
+    return predictor
+
+
+def test_status_line_aims_distance_meeting_point_and_unsure(fitted):
+    from sandbox.robot import BaxterKinematics
+    from sandbox.teleop import UNSURE, meeting_point
+
+    kin, demo = BaxterKinematics(), fitted[1]
+    for familiar in (None, True, False):
+        predictor = _predictor(fitted, familiar)
+        meet = meeting_point(predictor, kin)
+        hand = np.array([0.9, 0.1, 0.2])
+        line = status_line(1.0, hand, hand, predictor, gripper=hand + [0.0, 0.3, 0.4],
+                           meeting=meet)
+        assert STATUS.search(line)  # the first fields as before
+        assert "gripper-hand=0.500m" in line  # a 3-4-5 triangle
+        shown = re.search(rf"meet={_XYZ}", line)
+        np.testing.assert_allclose([float(v) for v in shown.groups()], meet, atol=5e-4)
+        assert (UNSURE in line) == (familiar is False)
+    # where the whole demo's plan ends: near where the demonstrated gripper went
+    end = kin.fk(demo.robot[-1], link="left_gripper")
+    assert np.linalg.norm(meet - end) < 0.1
 
 
 def test_status_line_has_the_posterior():
@@ -166,9 +223,17 @@ def test_keys_move_the_hand_and_the_posterior_follows(tmp_path):
         assert max(changes) > 0.2, "the task posterior did not change"
         times = [t for t, _, _, _ in moved]
         assert times == sorted(times)
+        aim = AIM.findall(term.text)  # the gripper-to-hand distance, the meeting point
+        assert aim and all(0.0 <= float(d) < 2.0 and -2 < float(y) < 2 for d, _, y, _ in aim)
+        term.type("c")
+        term.wait_for(lambda s: "> slow motion on: the clock runs at x0.25" in s, what="slow")
         mark = len(term.text)
-        term.type("n")  # a new episode: the hand back at the start, time from 0
-        term.wait_for(lambda s: "episode 2" in s[mark:], what="the reset")
+        term.type("n")  # a new episode: the hand back at the start, the clock stopped
+        term.wait_for(lambda s: "episode 2" in s[mark:] and "press space" in s[mark:],
+                      what="the reset")
+        term.drain(0.8)
+        assert term.statuses(mark) == []  # the clock waits for space again
+        term.type(" ")
         term.wait_for(lambda s: term.statuses(mark), what="an update after the reset")
         t, hand, _, _ = term.statuses(mark)[0]
         assert t < 1.0 and np.allclose(hand, HAND_START, atol=0.05)

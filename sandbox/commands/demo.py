@@ -156,7 +156,9 @@ def run(args) -> int:
 
             viewer = Viewer(fps=30.0)
             viewer.add_simulation(env.unwrapped.sim)
-            overlay = viewer.add_overlay(model.tasks, rng=np.random.default_rng(args.seed))
+            overlay = viewer.add_overlay(
+                model.tasks, rng=np.random.default_rng(args.seed),
+                title=f"demo: {args.from_task} -> {args.to_task}, dynamic (dow_t={args.dow:g} s)")
         dynamic = record_episode(env, IProMPPolicy(model, dow_t=args.dow), seed=args.seed,
                                  options=options, viewer=viewer, overlay=overlay,
                                  policy_name=f"dynamic (dow_t={args.dow:g} s)")

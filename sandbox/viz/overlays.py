@@ -11,14 +11,19 @@ Under the overlay's node (``/meshcat/overlays`` in a :class:`~sandbox.viz.Viewer
 ``updates/m<k>``            markers where update k happened: on the human path (small
                             sphere, task colour) and on the gripper command (ring of
                             the jump it caused)
-``panel``                   task probabilities as bars (height = p) and the speed factor
-                            alpha (height = alpha / 2), with text labels
+``switch/m<k>``             intent switch k of the human (when the source knows it): a cube
+                            at the hand, in the new task's colour
+``panel``                   title, time, the human's true task, the "unsure / unknown
+                            motion" warning, task probabilities as bars (height = p) and
+                            the speed factor alpha (height = alpha / 2) with value labels,
+                            and a legend (:class:`~sandbox.viz.panel.Panel`)
 ==========================  ================================================================
 
 Everything is built from arrays (:meth:`PredictionOverlay.show_human`,
 :meth:`~PredictionOverlay.show_prediction`, ...). :meth:`PredictionOverlay.show`
 reads a predictor (``plan()``, ``observations()``, ``updates``,
-``task_posterior``, ``alpha``, ``command(t)``) and calls them. In a recording,
+``task_posterior``, ``alpha``, ``command(t)``, and ``familiar`` when it has
+it) and calls them. In a recording,
 segments and markers appear at the time they were drawn and removed objects
 are hidden from then on (see :class:`~sandbox.viz.scene.Scene`).
 """
@@ -30,9 +35,11 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from sandbox.core.validation import check_array, check_positive
+from sandbox.core.validation import check_array
 from sandbox.viz import objects
 from sandbox.viz.geometry import FloatArray, polyline_tube, sample_paths, task_colors, tube
+from sandbox.viz.panel import NEUTRAL, Panel
+from sandbox.viz.panel import translation as _translation
 
 
 @dataclass(frozen=True)
@@ -52,12 +59,7 @@ class OverlayStyle:
     bar_gap: float = 0.05
     bar_height: float = 0.3
     label_height: float = 0.035
-
-
-def _translation(p: ArrayLike) -> FloatArray:
-    pose = np.eye(4)
-    pose[:3, 3] = np.asarray(p, dtype=np.float64)[:3]
-    return pose
+    switch_size: float = 0.04
 
 
 def facing(position: ArrayLike, toward: ArrayLike) -> FloatArray:
@@ -95,11 +97,13 @@ class PredictionOverlay:
         Pose of the panel in its parent (its x axis toward the viewer, z up);
         default beside Baxter, facing the front-left.
     style : OverlayStyle
+    title : str
+        Title line of the panel (:meth:`set_title` changes it).
     """
 
     def __init__(self, vis, *, rng: np.random.Generator, tasks, kinematics=None,
                  link: str = "left_gripper", panel=None, panel_pose: ArrayLike | None = None,
-                 style: OverlayStyle = OverlayStyle()) -> None:
+                 style: OverlayStyle = OverlayStyle(), title: str = "handover-sandbox") -> None:
         if not isinstance(rng, np.random.Generator):
             raise ValueError(f"rng: expected a numpy.random.Generator, got {type(rng).__name__}")
         if kinematics is None:
@@ -116,23 +120,26 @@ class PredictionOverlay:
         self._last_point: dict[str, FloatArray] = {}
         self._segments = {"human": 0, "executed": 0}
         self._prediction = -1
-        self._panel_version = -1
         self._n_updates = 0
         self._executed: list[FloatArray] = []
+        self._truth: str | None = None
+        self._switch: tuple[str, float] | None = None
+        self._n_switches = 0
         self.panel = vis["panel"] if panel is None else panel
         pose = facing([0.25, -0.75, 0.35], [2.0, 1.0, 0.5]) if panel_pose is None else panel_pose
-        self._panel_pose = check_array(pose, "panel_pose", 2, shape=(4, 4))
-        self._build_panel()
+        pose = check_array(pose, "panel_pose", 2, shape=(4, 4))
+        self.board = Panel(self.panel, self.tasks, self.colors, pose, style, title=str(title))
 
     def reset(self) -> None:
         """Remove the paths, predictions and markers (a new episode); the panel stays."""
-        for kind in ("human", "executed", "prediction", "updates"):
+        for kind in ("human", "executed", "prediction", "updates", "switch"):
             self.vis[kind].delete()
         self._drawn = {"human": 0, "executed": 0}
         self._last_point = {}
         self._executed = []
         self._prediction = -1
         self._n_updates = 0
+        self._truth, self._switch, self._n_switches = None, None, 0
 
     # -- paths -------------------------------------------------------------------------------
 
@@ -235,52 +242,48 @@ class PredictionOverlay:
             node[name].set_transform(_translation(point))
         return k
 
-    # -- task probabilities and speed ---------------------------------------------------------
-
-    def _bar_y(self, i: int) -> float:
-        return i * (self.style.bar_width + self.style.bar_gap)
-
-    def _build_panel(self) -> None:
-        s, panel = self.style, self.panel
-        panel.set_transform(self._panel_pose)
-        columns = [*self.tasks, "speed"]
-        width = self._bar_y(len(columns) - 1) + s.bar_width + 2 * s.bar_gap
-        board = _translation([-0.01, width / 2 - s.bar_gap - s.bar_width / 2, s.bar_height / 2])
-        panel["board"].set_object(objects.box([0.004, width, s.bar_height + 0.12],
-                                              [0.95, 0.95, 0.95, 1.0]))
-        panel["board"].set_transform(board)
-        for i, name in enumerate(columns):
-            column = panel[f"c{i}"]
-            column.set_transform(_translation([0.0, self._bar_y(i), 0.0]))
-            rgba = self.colors.get(name, [0.2, 0.2, 0.2, 1.0])
-            column["bar"]["box"].set_object(objects.box([0.02, s.bar_width, s.bar_height], rgba))
-            column["bar"]["box"].set_transform(_translation([0.0, 0.0, s.bar_height / 2]))
-            column["bar"].set_property("scale", [1.0, 1.0, 1e-3])
-            column["name"].set_object(objects.label(name, height=s.label_height))
-            column["name"].set_transform(_translation([0.01, 0.0, -0.03]))
+    # -- the panel ---------------------------------------------------------------------------
 
     def show_tasks(self, posterior: dict, alpha: float) -> None:
         """Set the bars: each task's probability and the speed factor (new value labels)."""
-        alpha = check_positive(alpha, "alpha")
-        values = []
-        for name in self.tasks:
-            p = float(posterior.get(name, 0.0))
-            if not np.isfinite(p) or not 0.0 <= p <= 1.0 + 1e-9:
-                raise ValueError(
-                    f"posterior[{name!r}]: expected a probability in [0, 1], got {p!r}"
-                )
-            values.append((min(p, 1.0), f"{100 * p:.0f}%"))
-        values.append((min(alpha / 2.0, 1.0), f"x{alpha:.2f}"))
-        panel, old = self.panel, self._panel_version
-        self._panel_version += 1
-        for i, (height, text) in enumerate(values):
-            column = panel[f"c{i}"]
-            column["bar"].set_property("scale", [1.0, 1.0, max(height, 1e-3)])
-            if old >= 0:
-                column[f"value{old}"].delete()
-            value = column[f"value{self._panel_version}"]
-            value.set_object(objects.label(text, height=self.style.label_height))
-            value.set_transform(_translation([0.01, 0.0, self.style.bar_height + 0.03]))
+        self.board.show_tasks(posterior, alpha)
+
+    def set_title(self, title: str) -> None:
+        """Replace the panel's title line."""
+        self.board.set_title(title)
+
+    def show_truth(self, task: str | None, t: float,
+                   hand_point: ArrayLike | None = None) -> bool:
+        """Show what the human pursues at time ``t`` (s); return whether it switched.
+
+        A change from one known task to another is an intent switch: the
+        panel says since when, and a cube (``switch/m<k>``, the new task's
+        colour) marks ``hand_point`` (3,) m, if given. ``None`` (unknown) clears
+        the row.
+        """
+        switched = task is not None and self._truth is not None and task != self._truth
+        if switched:
+            self._switch = (self._truth, float(t))
+            if hand_point is not None:
+                point = check_array(hand_point, "hand_point", 1, shape=(3,))
+                node = self.vis["switch"][f"m{self._n_switches}"]
+                size = self.style.switch_size
+                node.set_object(objects.box([size] * 3, self.colors.get(task, NEUTRAL)))
+                node.set_transform(_translation(point))
+            self._n_switches += 1
+        if task is None:
+            self._switch = None
+        self._truth = task
+        self.board.show_truth(task, self._switch)
+        return switched
+
+    def show_time(self, t: float) -> bool:
+        """Show the time ``t`` (s) on the panel; return whether the shown text changed."""
+        return self.board.show_time(t)
+
+    def show_familiar(self, familiar: bool | None) -> bool:
+        """Show "unsure / unknown motion" when ``familiar`` is False (None: not known)."""
+        return self.board.show_warning(familiar is False)
 
     def _color(self, task: str) -> FloatArray:
         if task not in self.colors:
@@ -290,26 +293,34 @@ class PredictionOverlay:
     # -- from a predictor ---------------------------------------------------------------------
 
     def show(self, predictor, t: float, *, executed_q: ArrayLike | None = None,
-             human_to_world: ArrayLike | None = None) -> int:
+             human_to_world: ArrayLike | None = None, truth: str | None = None) -> int:
         """Draw the state of a predictor at time ``t``; return the number of new updates.
 
         Parameters
         ----------
         predictor : DynamicPredictor or StaticPredictor
             Read only (``observations``, ``updates``, ``plan``, ``command``,
-            ``task_posterior``, ``alpha``).
+            ``task_posterior``, ``alpha``; ``familiar`` if it has it: False shows
+            "unsure / unknown motion").
         t : float
             Current time (s).
         executed_q : array_like, shape (7,), optional
             The robot's actual joints now (rad); default: the predictor's command at ``t``.
         human_to_world : array_like, shape (4, 4), optional
             Pose of the human observations' frame (default: Baxter's base = world).
+        truth : str, optional
+            The task the human actually pursues at ``t``, when the source knows it
+            (e.g. ``env.unwrapped.human_intent()``); a change is marked as an intent
+            switch. None: unknown (nothing shown).
         """
         times, human = predictor.observations()
         human = _apply(human_to_world, human[:, :3]) if len(human) else np.zeros((0, 3))
         if len(human) < self._drawn["human"] or len(predictor.updates) < self._n_updates:
             self.reset()  # the predictor was reset: a new episode
         self.show_human(human)
+        self.show_time(t)
+        self.show_truth(truth, t, human[-1] if len(human) else None)
+        self.show_familiar(getattr(predictor, "familiar", None))
         q = predictor.command(t)[0] if executed_q is None else check_array(
             executed_q, "executed_q", 1, shape=(7,))
         self._executed.append(self.kinematics.fk(q, link=self.link))
@@ -320,7 +331,7 @@ class PredictionOverlay:
             hand = human[np.flatnonzero(seen)[-1]] if seen.any() else None
             command = self.kinematics.fk(predictor.command(update.time)[0], link=self.link)
             self.mark_update(hand, command, update.task)
-        if new or self._panel_version < 0:
+        if new or self.board.version < 0:
             plan_t, means, covs = predictor.plan()
             start = new[-1].time if new else t
             future = plan_t >= start

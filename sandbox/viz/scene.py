@@ -33,6 +33,8 @@ VIEWER_JS = Path(os.path.dirname(meshcat.__file__)) / "viewer" / "dist" / "main.
 #: Animated properties and their three.js track types.
 TRACK_TYPES = {"visible": "boolean", "scale": "vector3", "position": "vector3",
                "quaternion": "quaternion", "opacity": "number"}
+#: three.js ``InterpolateDiscrete``: a key holds until the next one.
+DISCRETE = 2300
 
 
 @dataclass
@@ -48,6 +50,15 @@ class Timeline:
     def __init__(self, fps: float) -> None:
         self.fps = float(fps)
         self.tracks: dict[str, dict[str, dict[int, object]]] = {}
+        self.held: set[str] = set()
+
+    def hold(self, path: str) -> None:
+        """Make the tracks of ``path`` and its descendants step: each key holds until the next
+        (three.js interpolates numbers and vectors between keys otherwise)."""
+        self.held.add(path.rstrip("/"))
+
+    def is_held(self, path: str) -> bool:
+        return any(path == p or path.startswith(p + "/") for p in self.held)
 
     def set(self, path: str, prop: str, frame: int, value) -> None:
         """Record ``value`` of ``prop`` at ``frame`` (a later call at the same frame wins)."""
@@ -78,11 +89,11 @@ class Timeline:
                 if len(frames) > 1 and all(_same(v, values[0]) for v in values[1:]):
                     if prop != "visible":
                         continue  # constant: the scene's final state already shows it
-                tracks.append({
-                    "name": "." + prop,
-                    "type": TRACK_TYPES[prop],
-                    "keys": [{"time": f, "value": v} for f, v in zip(frames, values)],
-                })
+                track = {"name": "." + prop, "type": TRACK_TYPES[prop],
+                         "keys": [{"time": f, "value": v} for f, v in zip(frames, values)]}
+                if self.is_held(path):
+                    track["interpolation"] = DISCRETE
+                tracks.append(track)
             if tracks:
                 out.append({"path": path, "clip": {"fps": self.fps, "name": "default",
                                                    "tracks": tracks}})
@@ -164,9 +175,16 @@ class Scene:
             keys = props.get("visible")
             if keys and not keys[max(keys)] and path in self.nodes:
                 del self.nodes[path]
+        held = self.timeline.held
         self.timeline = Timeline(self.timeline.fps)
+        self.timeline.held = held
         self.recording = False
         self.frame = 0
+
+    def hold(self, path: str) -> None:
+        """Replay the properties under ``path`` as steps, not interpolated (see
+        :meth:`Timeline.hold`): e.g. a bar whose value label changes at the same frame."""
+        self.timeline.hold(path)
 
     # -- the meshcat window interface --------------------------------------------------------
 

@@ -38,7 +38,7 @@ DEFAULT_TARGET = (0.55, 0.05, 0.1)
 BAXTER_LINK = "left_upper_shoulder"
 #: Pose (with scale) of the overlays' bar panel in the camera frame (x right, y up, looking
 #: along -z): 1.5 m ahead, upper left, facing the camera, so it stays in view as the view turns.
-HUD_POSE = np.array([[0.0, 0.45, 0, -0.55], [0, 0, 0.45, 0.42], [0.45, 0, 0, -1.5], [0, 0, 0, 1]])
+HUD_POSE = np.array([[0.0, 0.45, 0, -0.55], [0, 0, 0.45, 0.31], [0.45, 0, 0, -1.5], [0, 0, 0, 1]])
 #: Height of the floor grid (m) in Baxter's base frame (the pedestal's feet).
 FLOOR_Z = -0.93
 
@@ -68,7 +68,8 @@ class Viewer:
         Height of the floor grid (m); ``None`` hides the grid.
     realtime : bool
         Make :meth:`update` wait so that time ``t`` is shown ``t`` seconds
-        after the first update (for live viewing of a fast simulation).
+        after the first update (for live viewing of a fast simulation; slower
+        or faster with :meth:`set_rate`).
     open_browser : bool
         Open the URL in the default browser (live only).
     host : str
@@ -88,6 +89,9 @@ class Viewer:
         What :meth:`update` redraws each frame.
     overlay : PredictionOverlay or None
         Set by :meth:`add_overlay`.
+    rate : float
+        Simulated seconds shown per second of wall-clock time with ``realtime``
+        (:meth:`set_rate`; default 1).
     """
 
     def __init__(self, *, live: bool = False, fps: float = 30.0, record: bool = True,
@@ -112,6 +116,7 @@ class Viewer:
         self.target = target
         self._frame: int | None = None
         self._wall_start: float | None = None
+        self.rate = 1.0
         self._setup(floor_z)
         if self.server is not None:
             where = ("" if self.server.host == DEFAULT_HOST else
@@ -280,10 +285,16 @@ class Viewer:
     def _pace(self, t: float) -> None:
         now = time.monotonic()
         if self._wall_start is None:
-            self._wall_start = now - t
-        delay = self._wall_start + t - now
+            self._wall_start = now - t / self.rate
+        delay = self._wall_start + t / self.rate - now
         if delay > 0:
             time.sleep(delay)
+
+    def set_rate(self, rate: float) -> None:
+        """With ``realtime``: show ``rate`` s of simulated time per second (1: real time,
+        0.25: slow motion), from the next frame on."""
+        self.rate = check_positive(rate, "rate")
+        self._wall_start = None
 
     def restart_pacing(self) -> None:
         """With ``realtime``: show the next frame now and pace from it (e.g. after a pause)."""

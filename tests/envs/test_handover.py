@@ -263,3 +263,34 @@ def test_recorded_episodes_observe_arm_and_emg_deterministically(objects_env, re
                 np.testing.assert_allclose(obs[name], expected)
             else:  # nothing measured yet: zeros, flagged
                 assert np.isnan(expected).all() and not obs[name].any()
+
+
+def test_human_intent_follows_an_intent_switch_and_the_speed(diverging_env):
+    options = {"task": "up", "switch_to": "right", "switch_phase": 0.5}
+    diverging_env.reset(seed=0, options=options)
+    env = diverging_env.unwrapped
+    switch = env.motion.meta["intent"].switch_time
+    assert env.human_intent(0.0) == "up"  # and now: t = 0
+    assert env.human_intent(switch - 0.01) == "up" and env.human_intent(switch + 0.01) == "right"
+    diverging_env.reset(seed=0, options={**options, "speed": 2.0})  # the switch comes 2x sooner
+    assert env.human_intent(switch / 2 - 0.01) == "up"
+    assert env.human_intent(switch / 2 + 0.01) == "right"
+    diverging_env.reset(seed=0, options={"task": "left"})
+    assert env.human_intent(0.0) == env.human_intent(5.0) == "left"
+
+
+def test_human_intent_is_unknown_for_teleop_and_scripted_hands(diverging_env):
+    from sandbox.envs.sources import waypoint_motion
+
+    motion = waypoint_motion([0.0, 1.0], [[1.1, 0.0, 0.2], [0.8, 0.1, 0.2]],
+                             np.random.default_rng(0), task="left")
+    for options in ({"motion": motion}, {"source": "teleop"}):
+        diverging_env.reset(seed=0, options=options)
+        assert diverging_env.unwrapped.human_intent() is None
+    with pytest.raises(RuntimeError, match="reset"):
+        BaxterHandoverEnv(family="diverging").human_intent()
+
+
+def test_human_intent_of_a_recorded_trial_is_its_task(objects_env, recorded_dir):
+    objects_env.reset(seed=0, options={"source": str(recorded_dir), "task": "pencil_box"})
+    assert objects_env.unwrapped.human_intent(0.5) == "pencil_box"

@@ -102,3 +102,57 @@ def test_replay_animation_moves_the_arm(chromium, replays, tmp_path):
         assert _window(changed, pixel, 25).mean() > 0.25, f"no change at the forearm {pixel}"
     pedestal = _project(scene, [0.0, 0.0, -0.6])
     assert _window(changed, pedestal, 20).mean() < 0.02  # what does not move stays
+
+
+class _ScriptedKeys:
+    """Keys for :func:`~sandbox.teleop.run_teleop`: ``script[k]`` at its k-th read, then ``q``."""
+
+    def __init__(self, script: list[str]) -> None:
+        self.script, self.closed = list(script), False
+
+    def read(self, timeout: float = 0.0) -> list[str]:
+        return [self.script.pop(0)] if self.script else ["q"]
+
+
+@pytest.fixture(scope="module")
+def live_teleop():
+    """The live view of a teleop episode after 0.8 s of the hand moving toward Baxter."""
+    import gymnasium as gym
+
+    import sandbox.envs  # noqa: F401
+    from sandbox.policies import IProMPPolicy, fit_family_model
+    from sandbox.teleop import run_teleop
+
+    model = fit_family_model("diverging", n_per_task=4, seed=0)
+    policy = IProMPPolicy(model, dow_t=0.2)
+    env = gym.make("sandbox/BaxterHandoverDiverging-v1", render_mode="human",
+                   viewer_options={"realtime": False})
+    try:
+        run_teleop(env, policy, _ScriptedKeys([" ", "w", *[""] * 40]), out=lambda line: None)
+        yield env.unwrapped
+    finally:
+        env.close()
+
+
+def test_live_teleop_view_shows_the_panel_and_a_large_hand(chromium, live_teleop, tmp_path):
+    from tests.viz.browser import live_screenshot
+
+    viewer = live_teleop.viewer
+    shown = live_screenshot(chromium, viewer.url, tmp_path / "shown", size=SIZE)
+    viewer.overlay.panel.set_property("visible", False)
+    viewer.vis["bodies"]["human_hand"].set_property("visible", False)
+    try:
+        hidden = live_screenshot(chromium, viewer.url, tmp_path / "hidden", size=SIZE)
+    finally:
+        viewer.overlay.panel.set_property("visible", True)
+        viewer.vis["bodies"]["human_hand"].set_property("visible", True)
+    changed = _changed(shown, hidden)
+    panel = changed[: int(0.45 * SIZE[1]), : int(0.45 * SIZE[0])]  # where HUD_POSE puts it
+    assert panel.mean() > 0.2, f"the panel covers {panel.mean():.0%} of the upper left"
+    hand = changed.copy()
+    hand[: int(0.45 * SIZE[1]), : int(0.45 * SIZE[0])] = False
+    rows, cols = np.nonzero(hand)
+    assert len(rows) > 400, f"the hand covers {len(rows)} pixels"
+    col, row = _project(viewer, live_teleop.motion.position(live_teleop._t))
+    assert abs(np.median(cols) - col) < 60 and abs(np.median(rows) - row) < 60, (
+        "the hand is not where the replay's camera sees it")  # the live view uses that camera

@@ -174,3 +174,21 @@ def test_restart_forgets_the_recording_and_hidden_objects(scene):
     scene.restart()
     assert not scene.recording and scene.timeline.lower() == []
     assert "/meshcat/kept" in scene.nodes and "/meshcat/gone" not in scene.nodes
+
+
+def test_held_tracks_step_and_stay_held_after_a_restart():
+    from sandbox.viz.scene import DISCRETE
+
+    scene = Scene(fps=10)
+    vis = meshcat.Visualizer(window=scene)
+    scene.hold("/meshcat/panel")
+    for restart in (False, True):
+        if restart:
+            scene.restart()
+        for t, height in ((0.0, 0.2), (1.0, 0.8)):
+            scene.set_time(t)
+            vis["panel"]["bar"].set_property("scale", [1.0, 1.0, height])
+            vis["other"].set_property("scale", [1.0, 1.0, height])
+        tracks = {a["path"]: a["clip"]["tracks"][0] for a in scene.timeline.lower()}
+        assert tracks["/meshcat/panel/bar"]["interpolation"] == DISCRETE
+        assert "interpolation" not in tracks["/meshcat/other"]  # three.js default: linear

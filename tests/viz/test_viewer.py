@@ -139,6 +139,29 @@ def test_restart_pacing_after_a_pause(monkeypatch):
     assert slept == [pytest.approx(0.4)]
 
 
+def test_slow_motion_rate_stretches_the_pacing(monkeypatch):
+    import sandbox.viz.viewer as module
+
+    clock = {"now": 100.0}
+    slept = []
+    monkeypatch.setattr(module.time, "monotonic", lambda: clock["now"])
+    monkeypatch.setattr(module.time, "sleep", lambda s: slept.append(s))
+    viewer = Viewer(realtime=True, fps=10)
+    viewer.update(0.0)
+    viewer.update(0.5)  # real time: 0.5 s of simulation take 0.5 s
+    clock["now"] += slept[-1]
+    viewer.set_rate(0.25)  # slow motion from the next frame on
+    viewer.update(0.6)  # shown now (the pace restarts here)
+    viewer.update(1.0)  # 0.4 s of simulation take 1.6 s
+    clock["now"] += slept[-1]
+    viewer.set_rate(1.0)
+    viewer.update(1.1)
+    viewer.update(1.5)
+    assert slept == [pytest.approx(0.5), pytest.approx(1.6), pytest.approx(0.4)]
+    with pytest.raises(ValueError, match="rate"):
+        viewer.set_rate(0.0)
+
+
 def test_restart_recording_begins_a_new_replay(baxter):
     viewer = Viewer(fps=10)
     viewer.vis["probe"].set_transform(np.eye(4))
