@@ -28,6 +28,10 @@ it), the recognised task and posterior, the gripper-to-hand distance and the
 robot's predicted meeting point (where its plan ends), so that the hand can
 be aimed without looking at the browser; "unsure / unknown motion" when the
 predictor says the motion is unlike its training demos.
+
+With a recorder (:class:`sandbox.demos_recording.DemoRecorder`, ``play
+--record-demos DIR --task NAME``) every episode is also saved as a
+demonstration when it ends: ``n``, ``q``, the handover or the time limit.
 """
 
 from __future__ import annotations
@@ -233,7 +237,7 @@ def _outcome(info: dict, t: float) -> str:
 
 
 def run_teleop(env, policy, keyboard: Keyboard, *, seed: int = 0, running: bool = False,
-               out: Callable[[str], None] = print) -> int:
+               out: Callable[[str], None] = print, recorder=None) -> int:
     """The teleop loop; returns the number of episodes played.
 
     Parameters
@@ -251,14 +255,17 @@ def run_teleop(env, policy, keyboard: Keyboard, *, seed: int = 0, running: bool 
         ``n`` the clock always waits for space.
     out : callable
         Prints a line.
+    recorder : DemoRecorder, optional
+        Saves each episode as a demonstration when it ends (and says where).
 
     The loop ends on ``q``, or when the input is closed and the episode is over.
     """
     state = TeleopState(running=running)
-    loop = _Loop(env, policy, state, seed, out)
+    loop = _Loop(env, policy, state, seed, out, recorder)
     while True:
         for key in keyboard.read(0.0 if state.running and not loop.over else 0.05):
             if loop.key(key) == "quit":
+                loop.save()
                 return loop.episodes
         if keyboard.closed and not state.running and not loop.over:
             state.running = True  # no more keys: play the episode out
@@ -272,10 +279,11 @@ def run_teleop(env, policy, keyboard: Keyboard, *, seed: int = 0, running: bool 
 class _Loop:
     """The state of :func:`run_teleop` between keys and steps."""
 
-    def __init__(self, env, policy, state: TeleopState, seed: int, out) -> None:
+    def __init__(self, env, policy, state: TeleopState, seed: int, out, recorder=None) -> None:
         from sandbox.robot import BaxterKinematics
 
         self.env, self.policy, self.state, self.seed, self.out = env, policy, state, seed, out
+        self.recorder = recorder
         self.kinematics = BaxterKinematics()
         self.episodes = 0
         self.new_episode()
@@ -291,6 +299,9 @@ class _Loop:
         self.state.direction[:] = 0.0
         self.episodes += 1
         self.over, self.n_updates, self.frame = False, 0, -1
+        if self.recorder is not None:
+            self.recorder.start()
+            self._record(0.0)
         self.out(f"episode {self.episodes}: the hand is at the start; "
                  + ("the clock runs" if self.state.running else "press space to start the clock"))
 
@@ -300,6 +311,7 @@ class _Loop:
         if action == "help":
             self.out("keys:\n" + HELP_TEXT)
         elif action == "reset":
+            self.save()
             self.new_episode()
         elif action == "move":
             v = self.state.velocity
@@ -319,6 +331,7 @@ class _Loop:
         env.motion.set_velocity(self.state.velocity)
         self.obs, _, terminated, truncated, info = self.env.step(self.policy(self.obs))
         t = float(self.obs["time"][0])
+        self._record(t)
         if int(round(t * self.viewer.scene.timeline.fps)) != self.frame:
             self.frame = int(round(t * self.viewer.scene.timeline.fps))
             self.overlay.show(predictor, t, executed_q=self.obs["q"], truth=env.human_intent(t))
@@ -332,3 +345,16 @@ class _Loop:
             self.over = True
             self.out(f"episode over: {_outcome(info, t)}, gripper {100 * info['distance']:.1f} cm "
                      f"from the object, task {self.policy.task}; n: new episode, q: quit")
+            self.save()
+
+    def _record(self, t: float) -> None:
+        """Give the recorder the hand at time ``t`` (s): true and as the tracker saw it."""
+        if self.recorder is not None:
+            self.recorder.add(t, self.env.unwrapped.motion.position(t), self.obs["hand"])
+
+    def save(self) -> None:
+        """Save the episode as a demonstration (once), if recording."""
+        if self.recorder is not None:
+            line = self.recorder.finish()
+            if line:
+                self.out(line)

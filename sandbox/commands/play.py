@@ -18,6 +18,10 @@ a model fitted here (in a scenario it replaces the file's ``model:``);
 model options when the model is fitted here, ``observe`` and the predictor
 options (see :mod:`sandbox.commands._settings`). A scenario's outputs are
 replaced only with ``--force``. Ctrl-C ends either mode with status 130.
+
+``--record-demos DIR --task NAME`` (teleop only) saves every episode as a
+demonstration of task NAME in the recorded CSV layout, ``DIR/NAME/NNN.csv``
+(:mod:`sandbox.demos_recording`), for ``fit --data DIR``.
 """
 
 from __future__ import annotations
@@ -66,9 +70,41 @@ def add_arguments(parser) -> None:
     parser.add_argument("--host", default="127.0.0.1", metavar="ADDRESS",
                         help="teleop: address the live viewer listens on (default 127.0.0.1, "
                              "this machine only; 0.0.0.0 lets anyone on the network watch)")
+    _add_record_arguments(parser)
+
+
+# -- recording demonstrations (teleop) ------------------------------------------------------
+
+
+def _add_record_arguments(parser) -> None:
+    group = parser.add_argument_group("recording demonstrations (teleop)")
+    group.add_argument("--record-demos", metavar="DIR", default=None,
+                       help="save every teleop episode (ended by n, q, the handover or the "
+                            "time limit) as a demonstration DIR/NAME/NNN.csv in the recorded "
+                            "layout (hand as tracked, robot by IK to where the hand stopped), "
+                            "for fit --data DIR")
+    group.add_argument("--task", metavar="NAME", default=None,
+                       help="with --record-demos: the task the demonstrations show "
+                            "(letters, digits, _ . -)")
+
+
+def _recorder(args):
+    """The demonstration recorder ``--record-demos``/``--task`` ask for, or None."""
+    if args.record_demos is None:
+        if args.task is not None:
+            raise ValueError("--task: expected it with --record-demos DIR")
+        return None
+    if args.scenario is not None:
+        raise ValueError("--record-demos: expected the keyboard teleop, got --scenario too")
+    if args.task is None:
+        raise ValueError("--record-demos: expected --task NAME, the task the demos show")
+    from sandbox.demos_recording import DemoRecorder
+
+    return DemoRecorder(args.record_demos, args.task)
 
 
 def run(args) -> int:
+    recorder = _recorder(args)
     if args.scenario is not None:
         return _scenario(args)
     from sandbox.core.validation import check_positive
@@ -82,10 +118,10 @@ def run(args) -> int:
         check_host(args.host)
     except ValueError as error:
         raise ValueError(f"--{error}") from None
-    return _teleop(args)
+    return _teleop(args, recorder)
 
 
-def _teleop(args) -> int:
+def _teleop(args, recorder=None) -> int:
     import gymnasium as gym
 
     from sandbox.envs import ENV_IDS
@@ -95,16 +131,20 @@ def _teleop(args) -> int:
     model, policy, known = _teleop_policy(args)
     print(f"the robot knows {len(model.tasks)} tasks {list(model.tasks)} ({known}); it "
           f"re-predicts every {args.dow:g} s", flush=True)
+    if recorder is not None:
+        print(f"recording demos of task '{recorder.task}' in {recorder.folder}: each episode is "
+              f"saved when it ends (n, q, handover, time limit)", flush=True)
     env = gym.make(env_id, render_mode="human",
                    max_episode_steps=max(1, round(args.time_limit * 50)),
                    viewer_options={"open_browser": args.open, "host": args.host})
     try:   # Ctrl-C: the environment closes, the terminal is restored, cli.main says it
         with Keyboard() as keyboard:
             episodes = run_teleop(env, policy, keyboard, seed=args.seed, running=args.start,
-                                  out=lambda line: print(line, flush=True))
+                                  out=lambda line: print(line, flush=True), recorder=recorder)
     finally:
         env.close()
-    print(f"bye ({episodes} episode(s))", flush=True)
+    saved = "" if recorder is None else f", {len(recorder.saved)} demo(s) saved"
+    print(f"bye ({episodes} episode(s){saved})", flush=True)
     return 0
 
 

@@ -99,3 +99,60 @@ def joint_trajectory(
     q = Q_HOME + np.outer(skewed_minimum_jerk(s, skew), q_goal - Q_HOME)
     q = q + np.outer(bump(s), wobble)
     return np.clip(q, limits[0], limits[1])
+
+
+def robot_meeting(times: FloatArray, hand_end: FloatArray, t_on: float, t_off: float, *,
+                  ik_tol: float = 0.01, wobble: FloatArray | None = None
+                  ) -> tuple[FloatArray, float]:
+    """The robot's paired motion for a hand that comes to rest at ``hand_end``.
+
+    The synthetic generator's construction for one given handover point: the
+    gripper tip's target is ``hand_end`` + :data:`GRASP_OFFSET`, the
+    configuration there comes from :func:`solve_handover`, and the arm moves
+    from :data:`Q_HOME` along :func:`joint_trajectory` between ``t_on`` and
+    ``t_off`` (e.g. when a teleoperated hand starts and stops).
+
+    Parameters
+    ----------
+    times : ndarray, shape (T,)
+        Sample times (s).
+    hand_end : array_like, shape (3,)
+        Where the hand rests (m), Baxter's base frame.
+    t_on, t_off : float
+        Start and end (s) of the arm's motion, ``t_on < t_off``.
+    ik_tol : float
+        Required gripper position error (m).
+    wobble : array_like, shape (7,), optional
+        Joint-space detour at mid-motion (rad); default the recordings' median,
+        :data:`sandbox.data.synthetic.tasks.WOBBLE_MEAN`.
+
+    Returns
+    -------
+    q : ndarray, shape (T, 7)
+        Joint angles (rad).
+    error : float
+        Gripper position error (m) at ``hand_end + GRASP_OFFSET``.
+
+    Raises
+    ------
+    ValueError
+        If ``t_off <= t_on`` or Baxter's left arm cannot reach the point within ``ik_tol``.
+    """
+    from sandbox.data.synthetic.tasks import WOBBLE_MEAN
+
+    hand_end = np.asarray(hand_end, dtype=float)
+    if hand_end.shape != (3,) or not np.isfinite(hand_end).all():
+        raise ValueError(f"hand_end: expected 3 finite numbers (m), got {hand_end!r}")
+    if not t_off > t_on:
+        raise ValueError(f"t_on, t_off: expected t_on < t_off (s), got {t_on!r}, {t_off!r}")
+    res = solve_handover((hand_end + GRASP_OFFSET)[None], ik_tol)
+    if not res.success[0]:
+        raise ValueError(
+            f"hand_end: expected a handover point Baxter's left arm can reach (IK within "
+            f"{ik_tol} m), got ({', '.join(f'{v:.3f}' for v in hand_end)}) m, "
+            f"{res.error[0]:.3f} m out of reach")
+    kin = kinematics()
+    wobble = WOBBLE_MEAN if wobble is None else np.asarray(wobble, dtype=float)
+    q = joint_trajectory(np.asarray(times, dtype=float), res.q[0], t_on, t_off, wobble,
+                         (kin.lower, kin.upper))
+    return q, float(res.error[0])
