@@ -113,8 +113,9 @@ def teleop_trial(times: ArrayLike, hand: ArrayLike, seen: ArrayLike, *, lead_s: 
                          f"reach of at least {100 * min_reach_m:g} cm to a handover place")
     t_on, t_stop = times[first], times[last]
     t_off = max(t_stop, t_on + check_positive(min_robot_s, "min_robot_s"))
-    keep = ((times >= t_on - check_positive(lead_s, "lead_s", allow_zero=True))
-            & (times <= t_off + check_positive(tail_s, "tail_s", allow_zero=True)))
+    lead_s = check_positive(lead_s, "lead_s", allow_zero=True)
+    tail_s = check_positive(tail_s, "tail_s", allow_zero=True)
+    keep = (times >= t_on - lead_s - 1e-9) & (times <= t_off + tail_s + 1e-9)  # rounding
     t0 = times[keep][0]
     out_t = times[keep] - t0
     q, error = robot_meeting(out_t, hand[last], t_on - t0, t_off - t0, ik_tol=ik_tol)
@@ -184,3 +185,34 @@ class DemoRecorder:
         return (f"saved demo {len(self.saved)} of '{self.task}': {path} ({info['duration']:.2f} s,"
                 f" hand stopped at ({x:+.3f},{y:+.3f},{z:+.3f}) m, the robot's demo meets it "
                 f"within {1000 * info['ik_error']:.1f} mm)")
+
+
+class HeldRobot:
+    """A policy whose predictor runs (status line, overlays) while the robot holds still.
+
+    While new tasks are recorded the robot knows none of them; held at home
+    with its gripper open, it never takes the object and cuts a demonstration
+    short.
+
+    Parameters
+    ----------
+    policy : IProMPPolicy
+        Its predictor is fed every observation; its other attributes are this one's.
+    q : array_like, shape (7,)
+        The held joint targets (rad); default the home pose :data:`~sandbox.data.synthetic.Q_HOME`.
+    """
+
+    def __init__(self, policy, q: ArrayLike | None = None) -> None:
+        from sandbox.data.synthetic.base import Q_HOME
+
+        self.policy = policy
+        self._action = np.append(check_array(Q_HOME if q is None else q, "q", 1, shape=(7,)),
+                                 -1.0)
+
+    def __getattr__(self, name: str):
+        return getattr(self.policy, name)
+
+    def __call__(self, obs) -> FloatArray:
+        """The held action (8,): joint targets (rad), gripper open (-1)."""
+        self.policy(obs)
+        return self._action.copy()

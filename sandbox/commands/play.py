@@ -21,7 +21,8 @@ replaced only with ``--force``. Ctrl-C ends either mode with status 130.
 
 ``--record-demos DIR --task NAME`` (teleop only) saves every episode as a
 demonstration of task NAME in the recorded CSV layout, ``DIR/NAME/NNN.csv``
-(:mod:`sandbox.demos_recording`), for ``fit --data DIR``.
+(:mod:`sandbox.demos_recording`), for ``fit --data DIR``; the robot holds
+still at home unless ``--model`` is given.
 """
 
 from __future__ import annotations
@@ -82,7 +83,8 @@ def _add_record_arguments(parser) -> None:
                        help="save every teleop episode (ended by n, q, the handover or the "
                             "time limit) as a demonstration DIR/NAME/NNN.csv in the recorded "
                             "layout (hand as tracked, robot by IK to where the hand stopped), "
-                            "for fit --data DIR")
+                            "for fit --data DIR; the robot holds still at home while you "
+                            "record, unless --model is given (then it anticipates)")
     group.add_argument("--task", metavar="NAME", default=None,
                        help="with --record-demos: the task the demonstrations show "
                             "(letters, digits, _ . -)")
@@ -129,6 +131,10 @@ def _teleop(args, recorder=None) -> int:
 
     env_id = ENV_IDS[0] if args.family == "objects" else ENV_IDS[1]
     model, policy, known = _teleop_policy(args)
+    if recorder is not None and args.model is None:
+        from sandbox.demos_recording import HeldRobot
+
+        policy, known = HeldRobot(policy), known + "; the robot holds still while you record"
     print(f"the robot knows {len(model.tasks)} tasks {list(model.tasks)} ({known}); it "
           f"re-predicts every {args.dow:g} s", flush=True)
     if recorder is not None:
