@@ -325,3 +325,20 @@ def test_record_demos_fit_and_play_recognises_them(tmp_path, capsys):
         assert summary["final_task"] == task, summary["recognised"]
         assert summary["success"], summary  # the robot met the hand
         assert summary["handover_time_s"] < 2.5  # soon after the hand arrived (1.6 s)
+
+
+def test_the_readme_workflow_commands_parse():
+    import shlex
+
+    from sandbox.cli import build_parser
+    from tests.test_readme import _section
+
+    section = _section("Recording your own handover tasks")
+    lines = [line.split("#")[0] for line in re.findall(r"```bash\n(.*?)```", section, re.S)[0]
+             .splitlines() if line.startswith("python -m sandbox ")]
+    assert [shlex.split(line)[3] for line in lines] == ["play", "play", "fit", "play"]
+    for line in lines:
+        args = build_parser().parse_args(shlex.split(line)[3:])
+        assert args.command in ("play", "fit")
+    recording = build_parser().parse_args(shlex.split(lines[0])[3:])
+    assert (recording.record_demos, recording.task) == ("mydemos", "left")
