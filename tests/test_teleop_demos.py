@@ -260,17 +260,19 @@ def test_play_record_options_are_checked(args, match, tmp_path, capsys, monkeypa
 
 # -- record -> fit -> play, through a pseudo-terminal ---------------------------------------
 
-#: Key script per task: the keys, then the axis and the coordinates (m) at which each of
-#: three demos halts the hand (x), as the status lines show it.
-DEMO_SCRIPTS = {"left": ("wa", 1, (0.18, 0.22, 0.26)), "up": ("wr", 2, (0.45, 0.50, 0.55))}
+#: Key script per task: the keys, the axis and the coordinates (m) at which each of three
+#: demos halts the hand (x), as the status lines show it, and how an episode ends: "n" (the
+#: last one "q"), or "limit" (a 3 s time limit; then q saves nothing more).
+DEMO_SCRIPTS = {"left": ("wa", 1, (0.18, 0.22, 0.26), "n"),
+                "up": ("wr", 2, (0.45, 0.50, 0.55), "limit")}
 
 
 def _record(root, task, cwd):
     from tests.test_play import Terminal
 
-    keys, axis, stops = DEMO_SCRIPTS[task]
+    keys, axis, stops, end = DEMO_SCRIPTS[task]
     term = Terminal(["--record-demos", str(root), "--task", task, "--demos", "2",
-                     "--time-limit", "10"], cwd)
+                     "--time-limit", "3" if end == "limit" else "10"], cwd)
     try:
         term.wait_for(lambda s: "press space" in s, timeout=120, what="the first episode")
         assert "the robot holds still while you record" in term.text
@@ -280,12 +282,19 @@ def _record(root, task, cwd):
             term.wait_for(lambda s, m=mark, a=axis, v=stop: any(
                 h[a] > v for _, h, _, _ in term.statuses(m)), what=f"the hand past {stop}")
             term.type("x")
-            term.drain(0.5)
-            term.type("n")
+            if end == "limit":
+                term.wait_for(lambda s, m=mark: "no handover by" in s[m:], what="the limit")
+            else:
+                term.drain(0.5)
+                term.type("q" if i == len(stops) - 1 else "n")
             term.wait_for(lambda s, n=i + 1: f"saved demo {n} of '{task}'" in s,
                           what=f"demo {i + 1} saved")
-            term.wait_for(lambda s, n=i + 2: f"episode {n}:" in s, what="the next episode")
-        term.type("q")
+            if i < len(stops) - 1:
+                if end == "limit":
+                    term.type("n")
+                term.wait_for(lambda s, n=i + 2: f"episode {n}:" in s, what="the next episode")
+        if end == "limit":
+            term.type("q")
         assert term.proc.wait(timeout=30) == 0
         term.wait_for(lambda s: "3 demo(s) saved" in s, timeout=5, what="the goodbye")
         return term.text
