@@ -42,6 +42,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--preprocess", choices=("none", "causal", "smooth"), default="smooth",
                         help="human-track preprocessing of the demos (smooth)")
     _observation.add_arguments(parser)
+    _observation.add_cache_argument(parser)
     _settings.add_argument(parser)
     parser.add_argument("--force", action="store_true", help="overwrite an existing --out file")
     parser.add_argument("--json", action="store_true", help="print the fit summary as JSON")
@@ -71,7 +72,7 @@ def run(args: argparse.Namespace) -> int:
         warnings.simplefilter("always", SkippedTrialWarning)
         demos = load_dataset(args.data, spec=spec, observe=observe, seed=args.seed,
                              tasks=_observation.split(args.tasks), n_per_task=args.n_per_task,
-                             preprocess=args.preprocess)
+                             preprocess=args.preprocess, cache=_observation.cache(args))
     skipped = [str(w.message) for w in caught if issubclass(w.category, SkippedTrialWarning)]
     _skipped.report(skipped, args.verbose, len(demos))
     if not demos:
