@@ -170,13 +170,33 @@ class Calibration:
         edges = check_array(EDGES if edges is None else edges, "edges", 1)
         edges = _populated(np.sort(edges), times)
         bins = np.searchsorted(edges, times, side="right") - 1
-        quantiles = np.array([np.quantile(values[bins == b], LEVELS) for b in range(edges.size)])
-        counts = np.bincount(bins, minlength=edges.size).astype(float)
-        draft = cls(edges, quantiles, counts, 0.0, alpha, **settings)
-        lowest = np.full(len(records), np.inf)
-        np.minimum.at(lowest, owner, [draft.familiarity(t, v) for t, v in zip(times, values)])
-        threshold = float(np.quantile(lowest, alpha))
-        return cls(edges, quantiles, counts, threshold, alpha, n_motions=len(records), **settings)
+        full = cls(edges, *_binned(values, bins, edges.size), 0.0, alpha, **settings)
+        lowest = np.array([_lowest(cls, full, times, values, bins, owner == i, **settings)
+                           for i in range(len(records))])
+        threshold = float(np.quantile(lowest[np.isfinite(lowest)], alpha))
+        return cls(edges, full.quantiles, full.counts, threshold, alpha, n_motions=len(records),
+                   **settings)
+
+
+def _binned(values: FloatArray, bins: np.ndarray, n_bins: int) -> tuple[FloatArray, FloatArray]:
+    """Quantiles at LEVELS (B, L) and counts (B,) of ``values`` in bins (empty bins: NaN, 0)."""
+    counts = np.bincount(bins, minlength=n_bins).astype(float)
+    q = np.full((n_bins, LEVELS.size), np.nan)
+    for b in np.flatnonzero(counts):
+        q[b] = np.quantile(values[bins == b], LEVELS)
+    return q, counts
+
+
+def _lowest(cls, full: Calibration, times, values, bins, mine, **settings) -> float:
+    """Lowest familiarity of one calibration motion against the quantiles of the others
+    (as a new motion is ranked: otherwise its own extremes would make it look familiar)."""
+    if not mine.any():
+        return float("inf")
+    q, counts = _binned(values[~mine], bins[~mine], full.edges.size)
+    empty = counts == 0
+    q[empty], counts[empty] = full.quantiles[empty], full.counts[empty]
+    others = cls(full.edges, q, counts, 0.0, full.alpha, **settings)
+    return min(others.familiarity(t, v) for t, v in zip(times[mine], values[mine]))
 
 
 def check(cal: Calibration) -> Calibration:
