@@ -36,7 +36,7 @@ per value ranked like the Mahalanobis term but was dominated by the log-determin
 from __future__ import annotations
 
 import copy
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -66,6 +66,8 @@ TAIL_LEVEL = 0.95
 #: Smallest tail scale (log-statistic per e-fold of familiarity).
 MIN_TAIL = 1e-3
 TINY = 1e-300
+#: Fewest updates of a (task, time bin) cell for its own quantiles (else the bin's).
+MIN_CELL = 20
 
 
 def statistic(prediction: Prediction) -> float:
@@ -84,8 +86,14 @@ def statistic(prediction: Prediction) -> float:
     """
     if prediction.factors is None or not prediction.n_values:
         return float("nan")
-    k = int(np.argmax(prediction.task_posterior))
+    k = chosen(prediction)
     return float(prediction.factors[k, -1, -1] ** 2 / prediction.n_values)
+
+
+def chosen(prediction: Prediction) -> int:
+    """The task the observations fit best: the most probable one (its own posterior,
+    even when a predictor holds another task after the motion's end)."""
+    return int(np.argmax(prediction.task_posterior))
 
 
 @dataclass(frozen=True, eq=False)
@@ -97,10 +105,12 @@ class Calibration:
     edges : ndarray, shape (B,)
         Left edges (s) of the bins of elapsed time since the motion started;
         the last bin is open-ended.
-    quantiles : ndarray, shape (B, L)
-        Quantiles of :func:`statistic` at :data:`LEVELS` in each bin.
-    counts : ndarray, shape (B,)
-        Updates in each bin (at least one).
+    quantiles : ndarray, shape (K, B, L)
+        Quantiles of :func:`statistic` at :data:`LEVELS` of the updates whose
+        chosen task was k, in each bin (a cell with fewer than
+        :data:`MIN_CELL` updates holds those of all tasks in the bin).
+    counts : ndarray, shape (K, B)
+        Updates each cell's quantiles come from (at least one).
     threshold : float
         Familiarity below which an update is unfamiliar.
     alpha : float
@@ -127,10 +137,15 @@ class Calibration:
     def __post_init__(self) -> None:
         check(self)
 
-    def familiarity(self, t: float, value: float) -> float:
-        """Familiarity in (0, 1] of statistic ``value`` at elapsed time ``t`` (s).
+    @property
+    def n_tasks(self) -> int:
+        """K."""
+        return int(self.quantiles.shape[0])
 
-        The share of the bin's calibration updates with a larger statistic:
+    def familiarity(self, t: float, value: float, task: int) -> float:
+        """Familiarity in (0, 1] of statistic ``value`` at elapsed time ``t`` (s), task chosen.
+
+        The share of the cell's calibration updates with a larger statistic:
         interpolated between the stored quantiles up to level
         :data:`TAIL_LEVEL`; beyond it a power-law tail through the quantiles at
         levels 0.75 and ``TAIL_LEVEL`` (so a motion far worse than any
@@ -140,7 +155,7 @@ class Calibration:
             return float("nan")
         b = max(int(np.searchsorted(self.edges, t, side="right")) - 1, 0)
         u = np.log(max(value, TINY))
-        lq = np.log(np.maximum(self.quantiles[b], TINY))
+        lq = np.log(np.maximum(self.quantiles[int(task), b], TINY))
         top = int(np.searchsorted(LEVELS, TAIL_LEVEL))
         if u <= lq[top]:
             return float(1.0 - np.interp(u, lq[: top + 1], LEVELS[: top + 1]))
@@ -150,14 +165,17 @@ class Calibration:
         return float((1.0 - LEVELS[top]) * np.exp(-(u - lq[top]) / beta))
 
     @classmethod
-    def from_records(cls, records, *, alpha: float = 0.05, edges=None, **settings) -> Calibration:
+    def from_records(cls, records, n_tasks: int, *, alpha: float = 0.05, edges=None,
+                     **settings) -> Calibration:
         """Calibration from per-motion records.
 
         Parameters
         ----------
-        records : sequence of (times, values)
-            Per calibration motion: update times (s,) in seconds and their
-            :func:`statistic` (s,).
+        records : sequence of (times, values, tasks)
+            Per calibration motion: update times (s,) in seconds, their
+            :func:`statistic` (s,) and the task each chose (s,) (int in [0, K)).
+        n_tasks : int
+            K.
         alpha : float
             Share of calibration motions that may be unfamiliar at some update.
         edges : array_like, shape (B,), optional
@@ -166,37 +184,50 @@ class Calibration:
             ``likelihood``, ``subsample``, ``dow_t`` as stored.
         """
         alpha = check_fraction(alpha, "alpha")
-        times, values, owner = _pool(records)
+        n_tasks = check_integer(n_tasks, "n_tasks", 1)
+        times, values, tasks, owner = _pool(records, n_tasks)
         edges = check_array(EDGES if edges is None else edges, "edges", 1)
         edges = _populated(np.sort(edges), times)
         bins = np.searchsorted(edges, times, side="right") - 1
-        full = cls(edges, *_binned(values, bins, edges.size), 0.0, alpha, **settings)
-        lowest = np.array([_lowest(cls, full, times, values, bins, owner == i, **settings)
+        cells = (n_tasks, edges.size)
+        full = cls(edges, *_cells(values, tasks, bins, cells), 0.0, alpha, **settings)
+        lowest = np.array([_lowest(full, times, values, tasks, bins, owner == i)
                            for i in range(len(records))])
         threshold = float(np.quantile(lowest[np.isfinite(lowest)], alpha))
         return cls(edges, full.quantiles, full.counts, threshold, alpha, n_motions=len(records),
                    **settings)
 
 
-def _binned(values: FloatArray, bins: np.ndarray, n_bins: int) -> tuple[FloatArray, FloatArray]:
-    """Quantiles at LEVELS (B, L) and counts (B,) of ``values`` in bins (empty bins: NaN, 0)."""
-    counts = np.bincount(bins, minlength=n_bins).astype(float)
-    q = np.full((n_bins, LEVELS.size), np.nan)
-    for b in np.flatnonzero(counts):
-        q[b] = np.quantile(values[bins == b], LEVELS)
+def _cells(values: FloatArray, tasks: np.ndarray, bins: np.ndarray,
+           cells: tuple[int, int]) -> tuple[FloatArray, FloatArray]:
+    """Quantiles (K, B, L) and counts (K, B) per (task, bin); thin cells use the whole bin."""
+    K, B = cells
+    q, counts = np.empty((K, B, LEVELS.size)), np.zeros((K, B))
+    for b in range(B):
+        in_bin = bins == b
+        pooled = np.quantile(values[in_bin], LEVELS) if in_bin.any() else np.full(LEVELS.size,
+                                                                                  np.nan)
+        for k in range(K):
+            mine = in_bin & (tasks == k)
+            n = int(mine.sum())
+            if n >= MIN_CELL:
+                q[k, b], counts[k, b] = np.quantile(values[mine], LEVELS), n
+            else:
+                q[k, b], counts[k, b] = pooled, int(in_bin.sum())
     return q, counts
 
 
-def _lowest(cls, full: Calibration, times, values, bins, mine, **settings) -> float:
+def _lowest(full: Calibration, times, values, tasks, bins, mine) -> float:
     """Lowest familiarity of one calibration motion against the quantiles of the others
     (as a new motion is ranked: otherwise its own extremes would make it look familiar)."""
     if not mine.any():
         return float("inf")
-    q, counts = _binned(values[~mine], bins[~mine], full.edges.size)
+    q, counts = _cells(values[~mine], tasks[~mine], bins[~mine], full.counts.shape)
     empty = counts == 0
     q[empty], counts[empty] = full.quantiles[empty], full.counts[empty]
-    others = cls(full.edges, q, counts, 0.0, full.alpha, **settings)
-    return min(others.familiarity(t, v) for t, v in zip(times[mine], values[mine]))
+    others = replace(full, quantiles=q, counts=counts)
+    return min(others.familiarity(t, v, k)
+               for t, v, k in zip(times[mine], values[mine], tasks[mine]))
 
 
 def check(cal: Calibration) -> Calibration:
@@ -204,10 +235,11 @@ def check(cal: Calibration) -> Calibration:
     edges = check_array(cal.edges, "calibration edges", 1)
     if edges[0] != 0.0 or np.any(np.diff(edges) <= 0):
         raise ValueError(f"calibration edges: expected increasing times from 0 s, got {edges}")
-    q = check_array(cal.quantiles, "calibration quantiles", 2, shape=(edges.size, LEVELS.size))
-    if np.any(np.diff(q, axis=1) < 0) or np.any(q < 0):
+    q = check_array(cal.quantiles, "calibration quantiles", 3,
+                    shape=(None, edges.size, LEVELS.size))
+    if np.any(np.diff(q, axis=2) < 0) or np.any(q < 0):
         raise ValueError("calibration quantiles: expected non-negative, non-decreasing rows")
-    counts = check_array(cal.counts, "calibration counts", 1, shape=(edges.size,))
+    counts = check_array(cal.counts, "calibration counts", 2, shape=(q.shape[0], edges.size))
     if np.any(counts < 1) or np.any(counts != np.round(counts)):
         raise ValueError(f"calibration counts: expected positive integers, got {counts}")
     check_number(cal.threshold, "calibration threshold", low=0.0, high=1.0)
@@ -219,23 +251,28 @@ def check(cal: Calibration) -> Calibration:
     return cal
 
 
-def _pool(records):
+def _pool(records, n_tasks: int):
     if len(records) == 0:
         raise ValueError("records: expected at least one calibration motion, got none")
-    times, values, owner = [], [], []
-    for i, (t, v) in enumerate(records):
+    times, values, tasks, owner = [], [], [], []
+    for i, (t, v, k) in enumerate(records):
         t, v = np.asarray(t, dtype=np.float64), np.asarray(v, dtype=np.float64)
-        if t.shape != v.shape or t.ndim != 1:
-            raise ValueError(f"records[{i}]: expected times and values of one length, got "
-                             f"shapes {t.shape} and {v.shape}")
+        k = np.asarray(k)
+        if t.shape != v.shape or t.shape != k.shape or t.ndim != 1:
+            raise ValueError(f"records[{i}]: expected times, values and tasks of one length, "
+                             f"got shapes {t.shape}, {v.shape} and {k.shape}")
+        if k.size and (k.dtype.kind not in "iu" or k.min() < 0 or k.max() >= n_tasks):
+            raise ValueError(f"records[{i}]: expected task indices in [0, {n_tasks}), got "
+                             f"{k.tolist()[:10]}")
         ok = np.isfinite(v) & np.isfinite(t)
         times.append(t[ok])
         values.append(v[ok])
+        tasks.append(k[ok].astype(np.int64))
         owner.append(np.full(int(ok.sum()), i))
     times, values = np.concatenate(times), np.concatenate(values)
     if times.size == 0:
         raise ValueError("records: expected finite statistics, got none")
-    return times, values, np.concatenate(owner)
+    return times, values, np.concatenate(tasks), np.concatenate(owner)
 
 
 def _populated(edges: FloatArray, times: FloatArray) -> FloatArray:
@@ -265,8 +302,9 @@ def update_times(times: FloatArray, kept: FloatArray, dow_t: float) -> FloatArra
 
 def stream_record(model, times, human, *, dow_t: float = 0.2, subsample: int = 2,
                   n_candidates: int = 50, width: float = 3.0,
-                  refine_steps: int = 1) -> tuple[FloatArray, FloatArray]:
-    """Update times (u,) and :func:`statistic` (u,) of a stream, as a predictor sees it.
+                  refine_steps: int = 1) -> tuple[FloatArray, FloatArray, np.ndarray]:
+    """Update times (u,), :func:`statistic` (u,) and chosen task (u,) of a stream, as a
+    predictor sees it.
 
     Parameters
     ----------
@@ -288,18 +326,19 @@ def stream_record(model, times, human, *, dow_t: float = 0.2, subsample: int = 2
     scorer = Scorer(model)
     stats = StreamStatistics(scorer, Lattice.for_tasks(model.task_models, n_candidates, width))
     at = update_times(times, t_obs, dow_t)
-    out, fed = np.empty(at.size), 0
+    out, task, fed = np.empty(at.size), np.zeros(at.size, dtype=np.int64), 0
     for j, tau in enumerate(at):
         n = int(np.searchsorted(t_obs, tau, side="right"))
         for i in range(fed, n):
             stats.add(t_obs[i], y_obs[i])
         fed = n
-        out[j] = statistic(predict(model, scorer, t_obs[:n], y_obs[:n], n_candidates=n_candidates,
-                                   width=width, refine_steps=refine_steps, stats=stats))
-    return at, out
+        pred = predict(model, scorer, t_obs[:n], y_obs[:n], n_candidates=n_candidates,
+                       width=width, refine_steps=refine_steps, stats=stats)
+        out[j], task[j] = statistic(pred), chosen(pred)
+    return at, out, task
 
 
-def loo_records(model, demos, streams=None, **options) -> list[tuple[FloatArray, FloatArray]]:
+def loo_records(model, demos, streams=None, **options) -> list[tuple]:
     """:func:`stream_record` of every demo by a model fitted on all the others.
 
     ``model`` gives the options (its fit, if any, is not used); ``streams[i]``
@@ -339,7 +378,8 @@ def calibrate(model, demos, streams=None, *, alpha: float = 0.05, dow_t: float =
     """
     records = loo_records(model, demos, streams, dow_t=dow_t, subsample=subsample, **options)
     mean = float(np.dot(model.priors, [t.mean_duration for t in model.task_models]))
-    cal = Calibration.from_records(records, alpha=alpha, edges=np.array(EDGES) * mean,
+    cal = Calibration.from_records(records, len(model.task_models), alpha=alpha,
+                                   edges=np.array(EDGES) * mean,
                                    subsample=subsample, dow_t=dow_t)
     model.calibration = cal
     return cal

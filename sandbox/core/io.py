@@ -14,8 +14,8 @@ Layout of the file (a numpy ``.npz`` archive, written atomically; any reader of
 Optional, for a model with a familiarity calibration
 (:mod:`sandbox.core.familiarity`): a ``familiarity`` entry in the metadata
 (threshold, alpha, likelihood, subsample, dow_t, n_motions) and the members
-``familiarity_edges`` (B,), ``familiarity_quantiles`` (B, L) and
-``familiarity_counts`` (B,).
+``familiarity_edges`` (B,), ``familiarity_quantiles`` (K, B, L) and
+``familiarity_counts`` (K, B).
 
 Version history: 1 (package 0.1.0) had the hand only (``human_names``, no
 modalities, no scale); such files still load, as one position modality
@@ -188,7 +188,7 @@ def _load(path: Path):
             _check_robot_definite(dist, P, t["name"])
             tasks.append(TaskModel(t["name"], dist, t["nominal_duration"], t["alpha_mean"],
                                    t["alpha_std"], t["n_demos"]))
-        calibration = _calibration(archive, meta.get("familiarity"))
+        calibration = _calibration(archive, meta.get("familiarity"), len(tasks))
     v1 = {"settle_tol": None, "arrive_tol": None} if meta["format_version"] == 1 else {}
     model = IProMP(n_basis=N, basis_width=meta["basis"]["width"],
                    basis_margin=meta["basis"]["margin"],
@@ -206,7 +206,7 @@ def _load(path: Path):
     return model
 
 
-def _calibration(archive, entry):
+def _calibration(archive, entry, n_tasks: int):
     """The familiarity calibration if the file has one (checked), else None."""
     from sandbox.core.familiarity import LEVELS, Calibration
 
@@ -220,8 +220,8 @@ def _calibration(archive, entry):
     if not 1 <= edges.size <= MAX_TIME_BINS:
         raise ValueError(f"member 'familiarity_edges': expected 1 to {MAX_TIME_BINS} bins, "
                          f"got {edges.size}")
-    quantiles = _read(archive, "familiarity_quantiles", (edges.size, LEVELS.size))
-    counts = _read(archive, "familiarity_counts", (edges.size,))
+    quantiles = _read(archive, "familiarity_quantiles", (n_tasks, edges.size, LEVELS.size))
+    counts = _read(archive, "familiarity_counts", (n_tasks, edges.size))
     try:
         return Calibration(edges, quantiles, counts, **entry)
     except TypeError:

@@ -38,7 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from sandbox.core.blending import blend_unchecked, sigmoid_activations
-from sandbox.core.familiarity import statistic
+from sandbox.core.familiarity import chosen, statistic
 from sandbox.core.inference import Prediction, predict
 from sandbox.core.likelihood import Scorer
 from sandbox.core.limits import (
@@ -384,7 +384,7 @@ class _Predictor:
         cal = getattr(self.model, "calibration", None)
         if cal is None or prediction.factors is None:
             return None
-        return cal.familiarity(t, statistic(prediction))
+        return cal.familiarity(t, statistic(prediction), chosen(prediction))
 
     @property
     def _last_update(self) -> float:

@@ -65,11 +65,13 @@ def _score(job) -> dict:
     d = test[i]
     t = d.times - d.times[0]
     end = float(t[model.motion_end(t, d.robot, train[i].human)])
-    times, stats = stream_record(model, t, d.human, dow_t=dow_t, subsample=config.subsample,
-                                 n_candidates=config.n_candidates,
-                                 refine_steps=config.refine_steps)
+    times, stats, tasks = stream_record(model, t, d.human, dow_t=dow_t,
+                                        subsample=config.subsample,
+                                        n_candidates=config.n_candidates,
+                                        refine_steps=config.refine_steps)
     return {"left_out": left, "trial": i, "task": d.task, "held_in": d.task != left,
             "source": d.source, "end": end, "times": times.tolist(), "stats": stats.tolist(),
+            "chosen": [model.tasks[k] for k in tasks], "tasks": list(model.tasks),
             "mean_duration": float(np.dot(model.priors,
                                           [m.mean_duration for m in model.task_models]))}
 
@@ -114,9 +116,12 @@ def judge(records: list[dict], alpha: float = 0.05, edges=None) -> list[dict]:
     out = []
     for r in records:
         pool = [c for c in calib[r["left_out"]] if c["trial"] != r["trial"]]
-        cal = Calibration.from_records([(c["times"], c["stats"]) for c in pool], alpha=alpha,
-                                       edges=fractions * r["mean_duration"])
-        fam = np.array([cal.familiarity(t, s) for t, s in zip(r["times"], r["stats"])])
+        names = r["tasks"]
+        cal = Calibration.from_records(
+            [(c["times"], c["stats"], [names.index(k) for k in c["chosen"]]) for c in pool],
+            len(names), alpha=alpha, edges=fractions * r["mean_duration"])
+        fam = np.array([cal.familiarity(t, s, names.index(k))
+                        for t, s, k in zip(r["times"], r["stats"], r["chosen"])])
         low = fam < cal.threshold
         before = np.asarray(r["times"]) <= r["end"] + 1e-9
         out.append({**r, "familiarity": fam.tolist(), "threshold": cal.threshold,

@@ -119,26 +119,37 @@ def test_familiarity_is_in_0_1_and_falls_with_the_statistic(model):
     cal = model.calibration
     values = np.geomspace(1e-4, 1e4, 200)
     for t in (0.0, 1.0, 5.0):
-        fam = np.array([cal.familiarity(t, v) for v in values])
+        fam = np.array([cal.familiarity(t, v, 0) for v in values])
         assert np.all((fam > 0) & (fam <= 1))
         assert np.all(np.diff(fam) <= 0)
         assert fam[0] == 1.0 and fam[-1] < 1e-3
-    assert np.isnan(cal.familiarity(1.0, float("nan")))
+    assert np.isnan(cal.familiarity(1.0, float("nan"), 1))
 
 
 def test_familiarity_of_a_bin_matches_its_quantiles():
     """Known answer: one bin with values 1..100: the value at level 0.5 has familiarity 0.5."""
     values = np.arange(1.0, 101.0)
-    cal = Calibration.from_records([(np.zeros(100), values)], edges=[0.0])
+    cal = Calibration.from_records([(np.zeros(100), values, np.zeros(100, int))], 1, edges=[0.0])
     median = float(np.quantile(values, 0.5))
-    assert cal.familiarity(3.0, median) == pytest.approx(0.5)
-    assert cal.familiarity(0.0, 0.5) == 1.0
+    assert cal.familiarity(3.0, median, 0) == pytest.approx(0.5)
+    assert cal.familiarity(0.0, 0.5, 0) == 1.0
+
+
+def test_each_task_is_ranked_against_its_own_updates():
+    """Task 1's updates score 10x task 0's: a value typical of task 1 is unfamiliar for 0."""
+    rng = np.random.default_rng(8)
+    records = [(np.arange(5) * 0.2, rng.lognormal(0.0, 0.2, 5) * 10.0 ** (i % 2),
+                np.full(5, i % 2)) for i in range(40)]
+    cal = Calibration.from_records(records, 2, edges=[0.0])
+    assert cal.familiarity(0.5, 10.0, 1) == pytest.approx(0.5, abs=0.1)
+    assert cal.familiarity(0.5, 10.0, 0) < 1e-3
 
 
 def test_threshold_grows_with_alpha():
     rng = np.random.default_rng(6)
-    records = [(np.arange(8) * 0.2, rng.lognormal(0, 0.5, 8)) for _ in range(60)]
-    thresholds = [Calibration.from_records(records, alpha=a, edges=[0.0, 0.5, 1.0]).threshold
+    records = [(np.arange(8) * 0.2, rng.lognormal(0, 0.5, 8), np.zeros(8, int))
+               for _ in range(60)]
+    thresholds = [Calibration.from_records(records, 1, alpha=a, edges=[0.0, 0.5, 1.0]).threshold
                   for a in (0.01, 0.05, 0.2, 0.5)]
     assert np.all(np.diff(thresholds) > 0)
 
@@ -150,12 +161,13 @@ def test_a_new_motion_like_the_calibration_ones_fires_at_about_alpha():
 
     def record():
         t = np.arange(10) * 0.2
-        return t, rng.lognormal(0.3 * t, 0.4 + 0.1 * rng.random())
+        k = rng.integers(0, 2, 10)
+        return t, rng.lognormal(0.3 * t + k, 0.4 + 0.1 * rng.random()), k
 
     alpha, n = 0.1, 400
-    cal = Calibration.from_records([record() for _ in range(100)], alpha=alpha,
+    cal = Calibration.from_records([record() for _ in range(100)], 2, alpha=alpha,
                                    edges=[0.0, 0.6, 1.2])
-    flagged = [min(cal.familiarity(t, v) for t, v in zip(*record())) < cal.threshold
+    flagged = [min(cal.familiarity(*update) for update in zip(*record())) < cal.threshold
                for _ in range(n)]
     assert 0.05 < np.mean(flagged) < 0.17
 
@@ -185,29 +197,34 @@ def test_statistic_is_the_mahalanobis_term_of_the_likelihood(model):
 # ------------------------------------------------------------------ errors
 def test_bad_records_are_value_errors():
     with pytest.raises(ValueError, match="at least one calibration motion"):
-        Calibration.from_records([])
+        Calibration.from_records([], 1)
     with pytest.raises(ValueError, match="one length"):
-        Calibration.from_records([(np.zeros(3), np.ones(2))])
+        Calibration.from_records([(np.zeros(3), np.ones(2), np.zeros(3, int))], 1)
+    with pytest.raises(ValueError, match="task indices"):
+        Calibration.from_records([(np.zeros(3), np.ones(3), np.full(3, 2))], 2)
     with pytest.raises(ValueError, match="alpha"):
-        Calibration.from_records([(np.zeros(3), np.ones(3))], alpha=2.0)
+        Calibration.from_records([(np.zeros(3), np.ones(3), np.zeros(3, int))], 1, alpha=2.0)
 
 
 def test_inconsistent_calibration_is_refused():
-    q = np.tile(LEVELS, (2, 1))
+    q = np.tile(LEVELS, (1, 2, 1))
     with pytest.raises(ValueError, match="edges"):
-        Calibration(np.array([0.5, 1.0]), q, np.ones(2), 0.1, 0.05)
+        Calibration(np.array([0.5, 1.0]), q, np.ones((1, 2)), 0.1, 0.05)
     with pytest.raises(ValueError, match="non-decreasing"):
-        Calibration(np.array([0.0, 1.0]), q[:, ::-1], np.ones(2), 0.1, 0.05)
+        Calibration(np.array([0.0, 1.0]), q[:, :, ::-1], np.ones((1, 2)), 0.1, 0.05)
+    with pytest.raises(ValueError, match="counts"):
+        Calibration(np.array([0.0, 1.0]), q, np.ones(2), 0.1, 0.05)
     with pytest.raises(ValueError, match="threshold"):
-        Calibration(np.array([0.0, 1.0]), q, np.ones(2), 1.5, 0.05)
+        Calibration(np.array([0.0, 1.0]), q, np.ones((1, 2)), 1.5, 0.05)
 
 
 def test_stream_record_matches_the_predictor(model):
     demo = unseen(0, seed=10)
-    times, stats = stream_record(model, demo.times, demo.human, **OPTIONS)
+    times, stats, tasks = stream_record(model, demo.times, demo.human, **OPTIONS)
     pred = stream(model, demo)
     np.testing.assert_allclose(times, [u.time for u in pred.updates])
-    fam = [model.calibration.familiarity(t, s) for t, s in zip(times, stats)]
+    assert [model.tasks[k] for k in tasks] == [u.task for u in pred.updates]
+    fam = [model.calibration.familiarity(*update) for update in zip(times, stats, tasks)]
     np.testing.assert_allclose(fam, [u.familiarity for u in pred.updates], rtol=1e-9)
 
 
@@ -245,7 +262,7 @@ def test_tampered_calibration_is_refused(model, tmp_path):
     with np.load(path) as data:
         arrays = {k: data[k] for k in data.files}
     bad = arrays["familiarity_quantiles"].copy()
-    bad[0] = bad[0][::-1] + 1.0
+    bad[0, 0] = bad[0, 0][::-1] + 1.0
     np.savez(tmp_path / "bad.npz", **{**arrays, "familiarity_quantiles": bad})
     with pytest.raises(ValueError, match="bad.npz.*non-decreasing"):
         IProMP.load(tmp_path / "bad.npz")
