@@ -184,18 +184,43 @@ class Calibration:
             ``likelihood``, ``subsample``, ``dow_t`` as stored.
         """
         alpha = check_fraction(alpha, "alpha")
-        n_tasks = check_integer(n_tasks, "n_tasks", 1)
-        times, values, tasks, owner = _pool(records, n_tasks)
-        edges = check_array(EDGES if edges is None else edges, "edges", 1)
-        edges = _populated(np.sort(edges), times)
-        bins = np.searchsorted(edges, times, side="right") - 1
-        cells = (n_tasks, edges.size)
-        full = cls(edges, *_cells(values, tasks, bins, cells), 0.0, alpha, **settings)
-        lowest = np.array([_lowest(full, times, values, tasks, bins, owner == i)
-                           for i in range(len(records))])
+        full, held_out = leave_one_out(records, n_tasks, edges=edges, **settings)
+        lowest = np.array([f.min() if f.size else np.inf for f in held_out])
         threshold = float(np.quantile(lowest[np.isfinite(lowest)], alpha))
-        return cls(edges, full.quantiles, full.counts, threshold, alpha, n_motions=len(records),
-                   **settings)
+        return replace(full, threshold=threshold, alpha=alpha)
+
+
+def leave_one_out(records, n_tasks: int, *, edges=None,
+                  **settings) -> tuple[Calibration, list[FloatArray]]:
+    """The quantiles of all records, and each record's familiarities against the others.
+
+    A calibration motion is ranked as a new one would be: against the quantiles
+    of the other motions (ranked against quantiles that include its own
+    extremes, it would look familiar, and the threshold would let twice
+    ``alpha`` of new motions fire).
+
+    Parameters
+    ----------
+    records, n_tasks, edges, **settings
+        As for :meth:`Calibration.from_records`.
+
+    Returns
+    -------
+    calibration : Calibration
+        Of all records, with threshold 0 (nothing fires) and ``alpha`` 1.
+    held_out : list of ndarray, shape (s_i,)
+        Familiarity of record i's finite updates against the other records.
+    """
+    n_tasks = check_integer(n_tasks, "n_tasks", 1)
+    times, values, tasks, owner = _pool(records, n_tasks)
+    edges = check_array(EDGES if edges is None else edges, "edges", 1)
+    edges = _populated(np.sort(edges), times)
+    bins = np.searchsorted(edges, times, side="right") - 1
+    full = Calibration(edges, *_cells(values, tasks, bins, (n_tasks, edges.size)), 0.0, 1.0,
+                       n_motions=len(records), **settings)
+    held_out = [_against_others(full, times, values, tasks, bins, owner == i)
+                for i in range(len(records))]
+    return full, held_out
 
 
 def _cells(values: FloatArray, tasks: np.ndarray, bins: np.ndarray,
@@ -217,17 +242,16 @@ def _cells(values: FloatArray, tasks: np.ndarray, bins: np.ndarray,
     return q, counts
 
 
-def _lowest(full: Calibration, times, values, tasks, bins, mine) -> float:
-    """Lowest familiarity of one calibration motion against the quantiles of the others
-    (as a new motion is ranked: otherwise its own extremes would make it look familiar)."""
+def _against_others(full: Calibration, times, values, tasks, bins, mine) -> FloatArray:
+    """Familiarities of one calibration motion's updates against the quantiles of the others."""
     if not mine.any():
-        return float("inf")
+        return np.empty(0)
     q, counts = _cells(values[~mine], tasks[~mine], bins[~mine], full.counts.shape)
     empty = counts == 0
     q[empty], counts[empty] = full.quantiles[empty], full.counts[empty]
     others = replace(full, quantiles=q, counts=counts)
-    return min(others.familiarity(t, v, k)
-               for t, v, k in zip(times[mine], values[mine], tasks[mine]))
+    return np.array([others.familiarity(t, v, k)
+                     for t, v, k in zip(times[mine], values[mine], tasks[mine])])
 
 
 def check(cal: Calibration) -> Calibration:
@@ -276,12 +300,13 @@ def _pool(records, n_tasks: int):
 
 
 def _populated(edges: FloatArray, times: FloatArray) -> FloatArray:
-    """Edges from 0 with at least one time in every bin (empty bins merged backwards)."""
+    """Edges from 0 with at least one time in every bin (an empty bin joins the next
+    populated one, or the one before at the end)."""
     edges = np.concatenate([[0.0], edges[edges > 0]])
     bins = np.searchsorted(edges, times, side="right") - 1
-    used = np.bincount(bins, minlength=edges.size) > 0
-    used[0] = True
-    return edges[used]
+    kept = edges[np.bincount(bins, minlength=edges.size) > 0]
+    kept[0] = 0.0
+    return kept
 
 
 # ----------------------------------------------------------------- calibrating

@@ -31,7 +31,7 @@ from multiprocessing import get_context
 
 import numpy as np
 
-from sandbox.core.familiarity import Calibration, stream_record
+from sandbox.core.familiarity import leave_one_out, stream_record
 from sandbox.eval.loocv import EvalConfig, prepare
 
 ALPHAS = (0.01, 0.02, 0.05, 0.1, 0.2)
@@ -100,31 +100,47 @@ def _progress(enabled: bool, n: int, total: int) -> None:
         print(f"  scored {n}/{total} streams", file=sys.stderr, flush=True)
 
 
-def judge(records: list[dict], alpha: float = 0.05, edges=None) -> list[dict]:
-    """Per record: its familiarity at each update and whether each rule flags it.
+def rank(records: list[dict], edges=None) -> list[dict]:
+    """Per record: its familiarity at each update and the reference it is thresholded with.
 
-    ``edges`` are the calibration's bin edges as fractions of the model's mean
+    Per left-out task, the held-in records are the calibration
+    (:func:`~sandbox.core.familiarity.leave_one_out`): a held-in record is ranked
+    against the others, and its reference is the others' lowest familiarities;
+    a left-out record is ranked against all of them, its reference is all their
+    lowest familiarities. ``edges`` are the time bins as fractions of the mean
     duration (default :data:`~sandbox.core.familiarity.EDGES`).
     """
     from sandbox.core.familiarity import EDGES
 
     fractions = np.asarray(EDGES if edges is None else edges, dtype=float)
-    calib = {}
-    for r in records:
-        if r["held_in"]:
-            calib.setdefault(r["left_out"], []).append(r)
     out = []
-    for r in records:
-        pool = [c for c in calib[r["left_out"]] if c["trial"] != r["trial"]]
-        names = r["tasks"]
-        cal = Calibration.from_records(
-            [(c["times"], c["stats"], [names.index(k) for k in c["chosen"]]) for c in pool],
-            len(names), alpha=alpha, edges=fractions * r["mean_duration"])
-        fam = np.array([cal.familiarity(t, s, names.index(k))
-                        for t, s, k in zip(r["times"], r["stats"], r["chosen"])])
-        low = fam < cal.threshold
+    for left in sorted({r["left_out"] for r in records}):
+        pool = [r for r in records if r["left_out"] == left and r["held_in"]]
+        names = pool[0]["tasks"]
+        mean = float(np.mean([r["mean_duration"] for r in pool]))
+        full, held = leave_one_out(
+            [(r["times"], r["stats"], [names.index(k) for k in r["chosen"]]) for r in pool],
+            len(names), edges=fractions * mean)
+        lowest = np.array([h.min() for h in held])
+        for i, r in enumerate(pool):
+            out.append({**r, "familiarity": held[i].tolist(),
+                        "reference": np.delete(lowest, i).tolist()})
+        for r in records:
+            if r["left_out"] == left and not r["held_in"]:
+                fam = [full.familiarity(t, v, names.index(k))
+                       for t, v, k in zip(r["times"], r["stats"], r["chosen"])]
+                out.append({**r, "familiarity": fam, "reference": lowest.tolist()})
+    return out
+
+
+def judge(ranked: list[dict], alpha: float = 0.05) -> list[dict]:
+    """Flag each ranked record (:func:`rank`) by each rule at calibration level ``alpha``."""
+    out = []
+    for r in ranked:
+        threshold = float(np.quantile(r["reference"], alpha))
+        low = np.asarray(r["familiarity"]) < threshold
         before = np.asarray(r["times"]) <= r["end"] + 1e-9
-        out.append({**r, "familiarity": fam.tolist(), "threshold": cal.threshold,
+        out.append({**r, "threshold": threshold,
                     "flags": {RULES[0]: bool(low.any()), RULES[1]: bool(low[before].any()),
                               RULES[2]: bool(low[-1]) if low.size else False}})
     return out
@@ -146,11 +162,11 @@ def rates(judged: list[dict]) -> dict:
     return out
 
 
-def tradeoff(records: list[dict], alphas=ALPHAS) -> list[dict]:
+def tradeoff(ranked: list[dict], alphas=ALPHAS) -> list[dict]:
     """False alarms and detections (all left-out tasks) for each calibration ``alpha``."""
     rows = []
     for a in alphas:
-        r = rates(judge(records, a))
+        r = rates(judge(ranked, a))
         rows.append({"alpha": a, **{rule: r[rule]["all"] for rule in RULES}})
     return rows
 
@@ -186,16 +202,22 @@ def run(data: str, *, observe=None, dow_t: float = 0.2, alpha: float = 0.05,
         raise ValueError(f"data: expected at least three tasks (two stay trained), got "
                          f"{sorted({d.task for d in train})}")
     records = score_all(train, test, config, dow_t=dow_t, workers=workers, progress=progress)
-    return {"data": str(data), "observe": ",".join(observe or ["hand"]), "dow_t": dow_t,
-            "alpha": alpha, "n_streams": len(records),
-            "seconds": time.perf_counter() - start, "rates": rates(judge(records, alpha)),
-            "tradeoff": tradeoff(records), "records": records}
+    return summarize(records, data=str(data), observe=",".join(observe or ["hand"]),
+                     dow_t=dow_t, alpha=alpha, seconds=time.perf_counter() - start)
+
+
+def summarize(records: list[dict], *, alpha: float = 0.05, **about) -> dict:
+    """Rates at ``alpha`` and the trade-off of scored records (:func:`score_all`)."""
+    ranked = rank(records)
+    return {**about, "alpha": alpha, "n_streams": len(records),
+            "rates": rates(judge(ranked, alpha)), "tradeoff": tradeoff(ranked),
+            "records": ranked}
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m sandbox.eval.ood", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--data", required=True, help="dataset folder or synthetic:NAME")
+    parser.add_argument("--data", default=None, help="dataset folder or synthetic:NAME")
     parser.add_argument("--observe", default=None,
                         help="modalities, comma-separated (default: the data's; hand)")
     parser.add_argument("--dow-t", type=float, default=0.2, help="update window (s; 0.2)")
@@ -203,14 +225,24 @@ def main(argv=None) -> int:
                         help="share of calibration motions allowed to fire (0.05)")
     parser.add_argument("--workers", type=int, default=1, help="processes (1)")
     parser.add_argument("--out", default=None, help="write everything as JSON here")
+    parser.add_argument("--records", default=None,
+                        help="re-judge the streams of a previous --out file (no rescoring)")
     args = parser.parse_args(argv)
+    if (args.data is None) == (args.records is None):
+        parser.error("expected --data DIR or --records FILE")
     observe = None if args.observe is None else args.observe.split(",")
-    result = run(args.data, observe=observe, dow_t=args.dow_t, alpha=args.alpha,
-                 workers=args.workers, progress=True)
-    print(markdown(result), end="")
+    if args.records:
+        with open(args.records) as fh:
+            saved = json.load(fh)
+        result = summarize(saved["records"], alpha=args.alpha,
+                           **{k: saved[k] for k in ("data", "observe", "dow_t", "seconds")})
+    else:
+        result = run(args.data, observe=observe, dow_t=args.dow_t, alpha=args.alpha,
+                     workers=args.workers, progress=True)
     if args.out:
         with open(args.out, "w") as fh:
             json.dump(result, fh)
+    print(markdown(result), end="")
     return 0
 
 
