@@ -375,10 +375,10 @@ class _Predictor:
     def familiar(self) -> bool | None:
         """False when :attr:`familiarity` is below the calibration's threshold (an
         unknown motion); None when there is no familiarity."""
-        fam = self.familiarity
-        if fam is None:
+        fam, cal = self.familiarity, getattr(self.model, "calibration", None)
+        if fam is None or cal is None:
             return None
-        return bool(fam >= self.model.calibration.threshold)
+        return bool(fam >= cal.threshold)
 
     def _familiarity_of(self, t: float, prediction: Prediction) -> float | None:
         cal = getattr(self.model, "calibration", None)
