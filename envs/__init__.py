@@ -37,7 +37,7 @@ import gymnasium as gym
 
 from sandbox.envs.handover import BaxterHandoverEnv
 from sandbox.envs.task import RewardWeights
-from sandbox.envs.vector import vector_entry_point
+from sandbox.envs.vector import VECTOR_ENTRY_POINT
 
 #: Steps before truncation (6 s at the default 50 Hz).
 MAX_EPISODE_STEPS = 300
@@ -59,7 +59,7 @@ for _env_id, _family, _body in _VARIANTS:
         gym.register(
             id=_env_id,
             entry_point="sandbox.envs.handover:BaxterHandoverEnv",
-            vector_entry_point=vector_entry_point(_env_id),
+            vector_entry_point=VECTOR_ENTRY_POINT,
             kwargs={"family": _family, "observe_body": _body},
             max_episode_steps=MAX_EPISODE_STEPS,
         )

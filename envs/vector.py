@@ -23,27 +23,32 @@ from gymnasium.vector import AsyncVectorEnv, AutoresetMode, SyncVectorEnv, Vecto
 
 #: Start method of the async workers made by :func:`make_vector_env`.
 VECTOR_CONTEXT = "forkserver"
+#: The ``vector_entry_point`` registered for every id.
+VECTOR_ENTRY_POINT = "sandbox.envs.vector:make_vector_env"
 #: Vectorizers :func:`make_vector_env` builds.
 VECTORIZERS = ("async", "sync")
 
 
-def make_vector_env(env_id: str, num_envs: int = 1, *, vectorizer: str = "async",
-                    context: str = VECTOR_CONTEXT,
+def make_vector_env(num_envs: int = 1, *, family: str = "objects", observe_body: bool = True,
+                    vectorizer: str = "async", context: str = VECTOR_CONTEXT,
                     autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
                     shared_memory: bool = True, **kwargs: Any) -> VectorEnv:
-    """``num_envs`` copies of ``gym.make(env_id, **kwargs)`` stepped together.
+    """``num_envs`` copies of a registered environment stepped together.
+
+    ``gym.make_vec`` calls it with the id's registered arguments (``family``,
+    ``observe_body``, ``max_episode_steps``) and the caller's.
 
     Parameters
     ----------
-    env_id : str
-        A registered id, e.g. ``"sandbox/BaxterHandoverDiverging-v1"`` (bound at
-        registration; ``gym.make_vec`` passes the rest).
     num_envs : int
         Number of sub-environments, >= 1.
+    family, observe_body
+        The registered arguments that tell which id each sub-env is made from
+        (``gym.make(id, **kwargs)``).
     vectorizer : {"async", "sync"}
         One worker process per sub-env, or all in this process.
-    context : str
-        Start method of the async workers (``"forkserver"`` or ``"spawn"``).
+    context : {"forkserver", "spawn"}
+        Start method of the async workers.
     autoreset_mode : AutoresetMode or str
         Gymnasium's autoreset mode (default next step), declared in the vector
         env's ``metadata["autoreset_mode"]``.
@@ -64,13 +69,19 @@ def make_vector_env(env_id: str, num_envs: int = 1, *, vectorizer: str = "async"
     if context not in ("forkserver", "spawn"):
         raise ValueError(f"context: expected 'forkserver' or 'spawn' (a fork would copy the "
                          f"parent's PyBullet state), got {context!r}")
-    make_one = partial(gym.make, f"sandbox.envs:{env_id}", **kwargs)
+    make_one = partial(gym.make, f"sandbox.envs:{env_id_of(family, observe_body)}", **kwargs)
     if vectorizer == "sync":
         return SyncVectorEnv([make_one] * num_envs, autoreset_mode=autoreset_mode)
     return AsyncVectorEnv([make_one] * num_envs, context=context, shared_memory=shared_memory,
                           autoreset_mode=autoreset_mode)
 
 
-def vector_entry_point(env_id: str) -> partial:
-    """The ``vector_entry_point`` of ``env_id``: :func:`make_vector_env` bound to it."""
-    return partial(make_vector_env, env_id)
+def env_id_of(family: str, observe_body: bool) -> str:
+    """The registered id made with these arguments (``ValueError`` if there is none)."""
+    from sandbox.envs import _VARIANTS
+
+    for env_id, variant_family, body in _VARIANTS:
+        if (variant_family, body) == (family, observe_body):
+            return env_id
+    raise ValueError(f"family, observe_body: expected one of "
+                     f"{[(f, b) for _, f, b in _VARIANTS]}, got {(family, observe_body)!r}")

@@ -112,6 +112,13 @@ def test_every_id_vectorizes_with_one_simulator_per_sub_env(env_id):
         env.close()
 
 
+@pytest.mark.parametrize("env_id", ALL_IDS)
+def test_specs_serialise_to_json_for_datasets(env_id):
+    """Minari stores the env spec as JSON, which a callable entry point would break."""
+    spec = gym.spec(env_id)
+    assert gym.envs.registration.EnvSpec.from_json(spec.to_json()) == spec
+
+
 def test_register_envs_accepts_the_package_in_a_fresh_process():
     code = ("import gymnasium as gym, sandbox.envs; gym.register_envs(sandbox.envs); "
             "print(sorted(i for i in gym.registry if i.startswith('sandbox/')))")
@@ -125,7 +132,8 @@ def test_register_envs_accepts_the_package_in_a_fresh_process():
     ({"num_envs": True}, "num_envs"),
     ({"vectorizer": "threads"}, "vectorizer"),
     ({"context": "fork"}, "context"),
+    ({"family": "cups"}, "family"),
 ])
 def test_make_vector_env_rejects_bad_arguments(kwargs, message):
     with pytest.raises(ValueError, match=message):
-        make_vector_env(ENV_IDS[0], **kwargs)
+        make_vector_env(**kwargs)
