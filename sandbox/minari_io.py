@@ -27,12 +27,17 @@ is a registered id of :mod:`sandbox.envs`, so
 ``minari.load_dataset(id).recover_environment()`` makes a working environment.
 Datasets are written under Minari's datasets folder (``MINARI_DATASETS_PATH``,
 default ``~/.minari/datasets``).
+
+Played episodes (``play --record-minari ID``) are recorded as they are by a
+``minari.DataCollector`` (:func:`collect`, :func:`save_collected`): the
+environment's whole observation, the policy's actions, rewards and ends.
 """
 
 from __future__ import annotations
 
 import warnings
 from collections.abc import Sequence
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -271,3 +276,72 @@ def load_for_fit(dataset_id: str, observe: Sequence[str], *, tasks: Sequence[str
         groups = {t: g for t, g in groups.items() if t in set(tasks)}
     n = None if n_per_task is None else int(n_per_task)
     return [d.select(list(observe)) for group in groups.values() for d in group[:n]]
+
+
+# ------------------------------------------------------------------ played episodes
+def check_new_dataset_id(dataset_id: str) -> str:
+    """``dataset_id`` if no local dataset has it (checked before a session is played)."""
+    minari = require_minari()
+    if not isinstance(dataset_id, str) or dataset_id.count("/") > 2 or not dataset_id.strip():
+        raise ValueError(f"--record-minari: expected a Minari id like sandbox/played-v0, "
+                         f"got {dataset_id!r}")
+    if dataset_id in minari.list_local_datasets():
+        raise ValueError(f"--record-minari: a dataset {dataset_id!r} exists already; choose "
+                         f"another id or delete it (minari delete {dataset_id})")
+    return dataset_id
+
+
+def collect(env):
+    """``env`` wrapped in a ``minari.DataCollector`` recording every step (arrow storage).
+
+    Reset options that are not JSON (a scripted ``motion``) are stored as their
+    type, task and source, e.g. ``"HumanMotion(task='scripted', source='waypoints[3]')"``.
+    """
+    require_minari()
+    from minari import DataCollector
+
+    class _Collector(DataCollector):
+        steps_recorded = 0
+
+        def step(self, action):
+            self.steps_recorded += 1
+            return super().step(action)
+
+        def reset(self, *, seed=None, options=None):
+            out = super().reset(seed=seed, options=options)
+            if options:
+                self._buffer = replace(self._buffer, options=_json_options(options))
+            return out
+
+    return _Collector(env, data_format=DATA_FORMAT)
+
+
+def _json_options(options) -> dict[str, Any]:
+    import json
+
+    out = {}
+    for key, value in dict(options).items():
+        try:
+            json.dumps(value)
+            out[key] = value
+        except TypeError:
+            named = [f"{k}={getattr(value, k)!r}" for k in ("task", "source") if hasattr(value, k)]
+            out[key] = f"{type(value).__name__}({', '.join(named)})"
+    return out
+
+
+def save_collected(collector, dataset_id: str, *, algorithm_name: str, description: str):
+    """Write what ``collector`` (:func:`collect`) recorded as the dataset ``dataset_id``.
+
+    An episode still running is stored truncated. Returns the
+    ``minari.MinariDataset``, or None if no step was played.
+    """
+    if collector.steps_recorded == 0:
+        return None
+    import sandbox
+
+    with warnings.catch_warnings():  # author, e-mail, permalink "set to None"
+        warnings.filterwarnings("ignore", message=".*is set to None", category=UserWarning)
+        return collector.create_dataset(
+            dataset_id, algorithm_name=algorithm_name, description=description,
+            requirements=[f"handover-sandbox>={sandbox.__version__}"])

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import importlib.util
 import json
+import os
+import subprocess
 import sys
 from pathlib import Path
 
@@ -179,3 +181,57 @@ def test_force_replaces_a_dataset(minari):
     _export("synthetic:diverging", "sandbox/again-v0", "--n-per-task", "2")
     _export("synthetic:diverging", "sandbox/again-v0", "--n-per-task", "3", "--force")
     assert minari.load_dataset("sandbox/again-v0").total_episodes == 15
+
+
+# -- play --record-minari ------------------------------------------------------------------
+
+REACH = {"name": "small reach", "seed": 2, "time_limit": 1.0, "family": "diverging",
+         "human": {"waypoints": [{"t": 0.0, "position": [1.10, -0.12, 0.25]},
+                                 {"t": 0.8, "position": [0.80, 0.18, 0.22]}]},
+         "policy": {"type": "dynamic", "dow_t": 0.25}, "model": {"demos": 3, "seed": 1}}
+
+
+def test_a_played_scenario_is_recorded_by_the_data_collector(minari, tmp_path, capsys):
+    path = tmp_path / "reach.json"
+    path.write_text(json.dumps(REACH))
+    summary_path = tmp_path / "summary.json"
+    assert main(["play", "--scenario", str(path), "--out", str(tmp_path / "r.html"),
+                 "--summary", str(summary_path), "--record-minari", "sandbox/played-v0"]) == 0
+    assert "as the Minari dataset sandbox/played-v0" in capsys.readouterr().out
+    summary = json.loads(summary_path.read_text())
+    dataset = minari.load_dataset("sandbox/played-v0")
+    assert dataset.total_episodes == 1 and dataset.total_steps == summary["steps"]
+    env = dataset.recover_environment()
+    try:
+        assert dataset.observation_space == env.observation_space
+        assert dataset.action_space == env.action_space
+    finally:
+        env.close()
+    episode = next(dataset.iterate_episodes())
+    assert episode.actions.shape == (summary["steps"], 8)
+    assert all(dataset.action_space.contains(a) for a in episode.actions)
+    assert bool(episode.terminations[-1]) == summary["success"]
+    options = next(iter(dataset.storage.get_episode_metadata([0])))["options"]
+    assert options["motion"] == "HumanMotion(task='scripted', source='waypoints[2]')"
+
+
+def test_an_existing_id_is_refused_before_playing(minari, tmp_path, capsys):
+    _export("synthetic:diverging", "sandbox/taken-v0", "--n-per-task", "2")
+    assert main(["play", "--scenario", "waypoints", "--out", str(tmp_path / "r.html"),
+                 "--record-minari", "sandbox/taken-v0"]) == 2
+    err = capsys.readouterr()
+    assert "exists already" in err.err and "scenario" not in err.out
+
+
+def test_teleop_episodes_are_recorded(minari, tmp_path):
+    """Teleop with no keys (stdin closed): the clock runs and the episode plays out."""
+    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
+    out = subprocess.run([sys.executable, "-m", "sandbox", "play", "--start", "--demos", "2",
+                          "--time-limit", "0.4", "--record-minari", "sandbox/teleop-v0"],
+                         stdin=subprocess.DEVNULL, capture_output=True, text=True,
+                         cwd=tmp_path, env=env, timeout=600)
+    assert out.returncode == 0, out.stderr
+    assert "recorded 1 episode(s), 20 steps" in out.stdout
+    dataset = minari.load_dataset("sandbox/teleop-v0")
+    episode = next(dataset.iterate_episodes())
+    assert episode.truncations[-1] and episode.actions.shape == (20, 8)
