@@ -29,7 +29,8 @@ from typing import Any
 from sandbox.commands import _observation, _types
 
 NAME = "data"
-HELP = "inspect a recorded dataset: summary of trials and tracker glitches, filter check."
+HELP = ("inspect a recorded dataset: summary of trials and tracker glitches, filter check; "
+        "export demonstrations as a Minari dataset.")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
