@@ -9,20 +9,26 @@ namespace; :data:`ENV_IDS` lists them::
     env = gym.make("sandbox/BaxterHandoverDiverging-v1")
     obs, info = env.reset(seed=0, options={"task": "left"})
 
-Without the import, ``gym.make("sandbox.envs:sandbox/BaxterHandover-v1")``
-imports it first. ``sandbox/BaxterHandover-v1`` hands over objects (synthetic
-box, glasses case and tape, or a recorded trial with ``options={"source":
-DIR}``); ``sandbox/BaxterHandoverDiverging-v1`` plays the diverging tasks
-(left, right, up, down, straight). See :class:`BaxterHandoverEnv`. The
-``-v0`` ids (:data:`LEGACY_IDS`) stay registered for one release with v0's
-observation (no ``arm``, ``emg``).
+``gym.register_envs(sandbox.envs)`` says so to linters (the import did the
+registering). Without the import,
+``gym.make("sandbox.envs:sandbox/BaxterHandover-v1")`` imports it first.
+``gym.make_vec(id, num_envs=N)`` gives N environments in worker processes
+started from a forkserver (:mod:`sandbox.envs.vector`);
+``vectorization_mode="sync"`` or ``"async"`` gives Gymnasium's own.
+
+``sandbox/BaxterHandover-v1`` hands over objects (synthetic box, glasses case
+and tape, or a recorded trial with ``options={"source": DIR}``);
+``sandbox/BaxterHandoverDiverging-v1`` plays the diverging tasks (left, right,
+up, down, straight). See :class:`BaxterHandoverEnv`. The ``-v0`` ids
+(:data:`LEGACY_IDS`) stay registered for one release with v0's observation
+(no ``arm``, ``emg``).
 
 Modules: ``pybullet`` (the only one importing PyBullet: :class:`Simulation`),
 ``robot`` (Baxter's arm and gripper), ``human`` (hand motion and body),
 ``sources`` (synthetic, recorded and scripted waypoint motions), ``teleop`` (a
 hand driven by velocity commands), ``task`` (objects, handover, reward),
-``options`` (``reset`` options), ``handover`` (the environment; render modes
-``"human"``, a live meshcat viewer, and ``"rgb_array"``).
+``options`` (``reset`` options), ``vector`` (vector environments), ``handover``
+(the environment; render modes ``"human"``, a live meshcat viewer, and ``"rgb_array"``).
 """
 
 from __future__ import annotations
@@ -31,6 +37,7 @@ import gymnasium as gym
 
 from sandbox.envs.handover import BaxterHandoverEnv
 from sandbox.envs.task import RewardWeights
+from sandbox.envs.vector import VECTOR_ENTRY_POINT
 
 #: Steps before truncation (6 s at the default 50 Hz).
 MAX_EPISODE_STEPS = 300
@@ -52,6 +59,7 @@ for _env_id, _family, _body in _VARIANTS:
         gym.register(
             id=_env_id,
             entry_point="sandbox.envs.handover:BaxterHandoverEnv",
+            vector_entry_point=VECTOR_ENTRY_POINT,
             kwargs={"family": _family, "observe_body": _body},
             max_episode_steps=MAX_EPISODE_STEPS,
         )

@@ -140,5 +140,7 @@ def _failure(error: Exception) -> tuple[int, str]:
     first = (str(error).strip().splitlines() or [""])[0]
     if isinstance(error, OSError):  # "[Errno 13] Permission denied: 'x'"
         return 1, first
+    if isinstance(error, ImportError) and "pip install" in first:  # a missing optional extra
+        return 1, first
     return 1, (f"unexpected {type(error).__name__}: {first} (run with --debug for the "
                "traceback, and please report it)")

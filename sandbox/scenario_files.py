@@ -473,8 +473,11 @@ def reset_options(scenario: Scenario) -> dict[str, Any]:
 
 
 def run_scenario_file(scenario: Scenario, *, html: str | Path | None = None,
-                      on_update=None) -> dict[str, Any]:
+                      on_update=None, wrap_env=None, on_close=None) -> dict[str, Any]:
     """Run a scenario to the end; write the replay to ``html`` (if given); return the summary.
+
+    ``wrap_env(env)`` returns the env to run (e.g. a ``minari.DataCollector``);
+    ``on_close(env)`` is called with it before it is closed.
 
     Returns
     -------
@@ -496,6 +499,7 @@ def run_scenario_file(scenario: Scenario, *, html: str | Path | None = None,
     policy = make_policy(scenario, model)
     options = reset_options(scenario)
     env = gym.make(scenario.env_id, max_episode_steps=max(1, round(scenario.time_limit * 50)))
+    env = env if wrap_env is None else wrap_env(env)
     viewer = overlay = None
     try:
         if html is not None:
@@ -510,6 +514,8 @@ def run_scenario_file(scenario: Scenario, *, html: str | Path | None = None,
                                 overlay=overlay, policy_name=scenario.policy["type"],
                                 on_update=on_update)
         intent = env.unwrapped.motion.meta.get("intent")
+        if on_close is not None:
+            on_close(env)
     finally:
         env.close()
     summary = {"scenario": scenario.name, "file": str(scenario.path), "seed": scenario.seed,

@@ -10,9 +10,18 @@ from __future__ import annotations
 
 import os
 import shutil
+import tempfile
 from pathlib import Path
 
 import pytest
+
+# Commands keep loaded trials in an on-disk cache (sandbox.data.cache): the tests
+# (and the subprocesses they start) use a fresh one of their own, never the user's.
+_CACHE = os.environ["SANDBOX_CACHE_DIR"] = tempfile.mkdtemp(prefix="sandbox-test-cache-")
+
+
+def pytest_sessionfinish(session, exitstatus) -> None:
+    shutil.rmtree(_CACHE, ignore_errors=True)
 
 REPO = Path(__file__).resolve().parents[1]
 RECORDED_SET = "birl-handover-20180329"

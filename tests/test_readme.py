@@ -22,7 +22,7 @@ def test_python_snippets_run(index, tmp_path):
     assert out.returncode == 0, out.stderr
 
 
-TEST_COMMAND = 'pip install -e ".[test,dask]" && pytest'
+TEST_COMMAND = 'pip install -e ".[test,dask,minari]" && pytest'
 
 
 def test_the_two_commands_are_there():
@@ -39,7 +39,7 @@ def test_ci_runs_the_readme_test_command_exactly():
         import tomllib
 
         project = tomllib.loads((README.parent / "pyproject.toml").read_text())["project"]
-        assert {"test", "dask"} <= set(project["optional-dependencies"])
+        assert {"test", "dask", "minari"} <= set(project["optional-dependencies"])
 
 
 def test_demo_command_runs(tmp_path):

@@ -13,6 +13,15 @@
 * ``policy_steps_per_s``: steps per second with the dynamic policy
   (:class:`sandbox.policies.IProMPPolicy`, ``dow_t = 0.1`` s) choosing the actions.
 
+:func:`run_vector_benchmarks` (the bench command runs it too):
+
+* ``vector_steps_per_s``: sub-env steps per second of ``gym.make_vec(ENV_ID, N)``
+  (async workers from a forkserver) for N = 1, 2, 4, and ``vector_speedup`` =
+  N=4 / N=1 (target >= 1.6 on 2 idle cores); ``gymnasium_benchmark_step_per_s``:
+  :func:`gymnasium.utils.performance.benchmark_step` on one env, for comparison;
+  ``cpu_count`` and the 1-minute load average before and after, since other
+  processes on the machine take cores from the workers.
+
 The -v1, -v0 and raw stepping alternate in blocks and each figure is the median over
 blocks, so both are measured in the same run under the same load. Run with
 ``OPENBLAS_NUM_THREADS=1``.
@@ -122,3 +131,62 @@ def run_env_benchmarks() -> dict[str, float]:
     result = env_vs_raw()
     result["policy_steps_per_s"] = policy_steps_per_s()
     return {key: round(value, 3 if key.endswith("ratio") else 1) for key, value in result.items()}
+
+
+# ---------------------------------------------------------------- vector environments
+#: Sub-environment counts of the vector benchmark (async, forkserver workers).
+VECTOR_SIZES = (1, 2, 4)
+
+
+def vector_steps_per_s(sizes: tuple[int, ...] = VECTOR_SIZES, block_s: float = 2.0,
+                       blocks: int = 3, seed: int = 0) -> dict[str, float]:
+    """Sub-env steps per second of ``gym.make_vec(ENV_ID, N)`` for each N (async workers).
+
+    All vector envs are made first, then timed in alternating blocks of
+    ``block_s`` seconds with :func:`gymnasium.utils.performance.benchmark_vector_step`
+    (random actions; the steps that only autoreset are not counted); each
+    figure is the median over ``blocks``. Returns ``{N: steps/s}``.
+    """
+    import gymnasium as gym
+    from gymnasium.utils.performance import benchmark_vector_step
+
+    import sandbox.envs  # noqa: F401  (registers the environments)
+
+    envs = {n: gym.make_vec(ENV_ID, num_envs=n) for n in sizes}
+    rates: dict[int, list[float]] = {n: [] for n in sizes}
+    try:
+        for _ in range(blocks):
+            for n, env in envs.items():
+                rates[n].append(benchmark_vector_step(env, target_duration=block_s, seed=seed))
+    finally:
+        for env in envs.values():
+            env.close()
+    return {n: float(np.median(r)) for n, r in rates.items()}
+
+
+def gymnasium_step_per_s(target_duration: float = 5.0, seed: int = 0) -> float:
+    """Steps/s of one ``gym.make(ENV_ID)``: :func:`gymnasium.utils.performance.benchmark_step`."""
+    from gymnasium.utils.performance import benchmark_step
+
+    env = _make_env()
+    try:
+        return float(benchmark_step(env, target_duration=target_duration, seed=seed))
+    finally:
+        env.close()
+
+
+def run_vector_benchmarks() -> dict:
+    """``vector_steps_per_s`` ({"1": ..., "2": ..., "4": ...}), the speed-up of the largest N
+    over N = 1 (``vector_speedup``), the host's CPU count and load average while it ran, and
+    Gymnasium's ``benchmark_step`` figure for one env (``gymnasium_benchmark_step_per_s``)."""
+    import os
+
+    load_before = os.getloadavg()[0]
+    rates = vector_steps_per_s()
+    single = gymnasium_step_per_s()
+    largest = max(rates)
+    return {"vector_steps_per_s": {str(n): round(r, 1) for n, r in rates.items()},
+            "vector_speedup": round(rates[largest] / rates[min(rates)], 3),
+            "gymnasium_benchmark_step_per_s": round(single, 1),
+            "cpu_count": os.cpu_count(),
+            "load_average_1min": [round(load_before, 2), round(os.getloadavg()[0], 2)]}

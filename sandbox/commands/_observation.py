@@ -27,6 +27,18 @@ def add_arguments(parser: argparse.ArgumentParser, *, columns: bool = True) -> N
                             help="robot columns (default left_s0 ... left_w2)")
 
 
+def add_cache_argument(parser: argparse.ArgumentParser) -> None:
+    """Add ``--no-cache`` (read with :func:`cache`)."""
+    parser.add_argument("--no-cache", action="store_true",
+                        help="load and preprocess every trial file afresh, without the on-disk "
+                             "cache of loaded trials (python -m sandbox data cache)")
+
+
+def cache(args: argparse.Namespace) -> bool:
+    """Whether to use the on-disk cache of loaded trials (:mod:`sandbox.data.cache`)."""
+    return not getattr(args, "no_cache", False)
+
+
 def split(text: str | None) -> list[str] | None:
     """``"a, b"`` -> ``["a", "b"]`` (None stays None)."""
     return None if text is None else [s.strip() for s in text.split(",") if s.strip()]

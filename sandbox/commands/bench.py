@@ -15,6 +15,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("--seed", type=_types.SEED, default=0, help="seed of the reference data")
     parser.add_argument("--skip-env", action="store_true",
                         help="skip the environment benchmarks")
+    parser.add_argument("--skip-vector", action="store_true",
+                        help="skip the vector-environment benchmark (gym.make_vec, N = 1, 2, 4)")
 
 
 def run(args) -> int:
@@ -32,5 +34,9 @@ def run(args) -> int:
             run_env_benchmarks = None
         if run_env_benchmarks is not None:
             result.update(run_env_benchmarks())
+            if not args.skip_vector:
+                from sandbox.bench.env import run_vector_benchmarks
+
+                result.update(run_vector_benchmarks())
     print_result(result, args.json, 36)
     return 0

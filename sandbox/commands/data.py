@@ -1,4 +1,4 @@
-"""``python -m sandbox data summary|check-filter --data DIR``: what a recorded set contains.
+"""``python -m sandbox data summary|check-filter|export --data DIR``: what a recorded set contains.
 
 ``summary`` prints the tasks, trial counts, durations, sample rates (rows/s
 and distinct tracker frames/s of the first observed position modality, the
@@ -16,6 +16,10 @@ observed position modalities).
 
 ``cache`` shows where the on-disk cache of loaded trials is and how big it
 is (:mod:`sandbox.data.cache`); ``--clear`` empties it.
+
+``export`` writes a folder's or a synthetic set's demonstrations as a Minari
+dataset (``--minari-id sandbox/NAME-v0``; layout in :mod:`sandbox.minari_io`),
+which ``fit --data minari:ID`` fits from.
 """
 
 from __future__ import annotations
@@ -28,7 +32,8 @@ from typing import Any
 from sandbox.commands import _observation, _types
 
 NAME = "data"
-HELP = "inspect a recorded dataset: summary of trials and tracker glitches, filter check."
+HELP = ("inspect a recorded dataset: summary of trials and tracker glitches, filter check; "
+        "export demonstrations as a Minari dataset.")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -53,6 +58,29 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     check.add_argument("--json", action="store_true", help="print JSON instead of text")
     cache = sub.add_parser("cache", help="where the cache of loaded trials is, its size; --clear")
     cache.add_argument("--clear", action="store_true", help="delete every cached trial")
+    _add_export(sub)
+
+
+def _add_export(sub) -> None:
+    """``data export``: demonstrations as a Minari dataset (optional extra)."""
+    export = sub.add_parser("export", help="write demonstrations as a Minari dataset "
+                                           '(pip install -e ".[minari]")')
+    export.add_argument("--data", required=True, metavar="DIR|synthetic:NAME",
+                        help="dataset folder <DIR>/<task>/<trial>.csv or synthetic:NAME")
+    export.add_argument("--minari-id", required=True, metavar="ID",
+                        help="Minari dataset id, e.g. sandbox/objects-v0 (written under "
+                             "MINARI_DATASETS_PATH, default ~/.minari/datasets)")
+    export.add_argument("--tasks", default=None, help="comma-separated subset of tasks")
+    export.add_argument("--n-per-task", type=_types.PER_TASK, default=None,
+                        help="demos per task (folder: the first N; synthetic: generated, 20)")
+    export.add_argument("--seed", type=_types.SEED, default=0, help="seed of a synthetic set")
+    export.add_argument("--preprocess", choices=("none", "causal", "smooth"), default="smooth",
+                        help="human-track preprocessing stored in the dataset (smooth, as fit)")
+    export.add_argument("--env-id", default=None, metavar="ID",
+                        help="environment the dataset points at (default: the diverging one "
+                             "for synthetic:diverging, sandbox/BaxterHandover-v1 otherwise)")
+    export.add_argument("--force", action="store_true", help="replace an existing dataset")
+    _observation.add_arguments(export)
 
 
 def _filter(field: str, high: float = float("inf"), *, open_low: bool = True):
@@ -75,6 +103,8 @@ def run(args: argparse.Namespace) -> int:
         return _summary(args)
     if args.data_command == "cache":
         return _cache(args)
+    if args.data_command == "export":
+        return _export(args)
     return _check_filter(args)
 
 
@@ -111,6 +141,40 @@ def _summary(args: argparse.Namespace) -> int:
         print(json.dumps(result, indent=2))
     else:
         print(format_summary(result))
+    return 0
+
+
+def _export(args: argparse.Namespace) -> int:
+    import warnings
+
+    import sandbox.envs
+    from sandbox.data.datasets import load_dataset
+    from sandbox.data.recorded import SkippedTrialWarning
+    from sandbox.minari_io import default_env_id, export_demonstrations, require_minari
+
+    minari = require_minari()
+    env_id = args.env_id or default_env_id(args.data)
+    if env_id not in sandbox.envs.ENV_IDS + sandbox.envs.LEGACY_IDS:
+        raise ValueError(f"--env-id: expected one of {sandbox.envs.ENV_IDS}, got {env_id!r}")
+    spec = _observation.data_spec(args)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", SkippedTrialWarning)
+        demos = load_dataset(args.data, spec=spec, observe=_observation.observe(args, spec),
+                             seed=args.seed, tasks=_split(args.tasks),
+                             n_per_task=args.n_per_task, preprocess=args.preprocess)
+    if not demos:
+        raise ValueError(f"--data: no usable demonstration in {args.data} "
+                         f"({len(caught)} skipped)")
+    dataset = export_demonstrations(demos, args.minari_id, env_id=env_id,
+                                    preprocess=args.preprocess, data=str(args.data),
+                                    force=args.force)
+    from minari.storage import get_dataset_path
+
+    tasks = sorted({d.task for d in demos})
+    print(f"wrote {dataset.total_episodes} episodes ({dataset.total_steps} steps) of "
+          f"{len(tasks)} tasks {tasks} to the Minari dataset {args.minari_id} "
+          f"({get_dataset_path(args.minari_id)}), environment {env_id}, "
+          f"{len(caught)} trials skipped; minari {minari.__version__}")
     return 0
 
 

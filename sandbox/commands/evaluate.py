@@ -52,9 +52,7 @@ def add_arguments(parser) -> None:
     _skipped.add_argument(parser)
     parser.add_argument("--no-progress", action="store_true",
                         help="no progress bars or status lines on stderr")
-    parser.add_argument("--no-cache", action="store_true",
-                        help="load and preprocess every trial file afresh, without the on-disk "
-                             "cache of loaded trials (python -m sandbox data cache)")
+    _observation.add_cache_argument(parser)
 
 
 def _prepare(args):
@@ -97,7 +95,7 @@ def run(args) -> int:
     train, test, skipped = load_pair(args.data, seed=args.seed,
                                      tasks=_observation.split(args.tasks),
                                      n_per_task=args.n_per_task, spec=spec, observe=observe,
-                                     cache=not args.no_cache, progress=not args.no_progress)
+                                     cache=_observation.cache(args), progress=not args.no_progress)
     _skipped.report(skipped, args.verbose, len(train))
     if not train:
         raise _skipped.no_usable(args.data, skipped, verbose=args.verbose)

@@ -42,9 +42,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--preprocess", choices=("none", "causal", "smooth"), default="smooth",
                         help="human-track preprocessing of the demos (smooth)")
     _observation.add_arguments(parser)
+    _observation.add_cache_argument(parser)
     _settings.add_argument(parser)
     parser.add_argument("--force", action="store_true", help="overwrite an existing --out file")
     parser.add_argument("--json", action="store_true", help="print the fit summary as JSON")
+    parser.add_argument("--calibrate", action="store_true",
+                        help="also calibrate the predictors' familiarity (an 'unsure / unknown "
+                             "motion' warning in the viewer and teleop): every demo streamed "
+                             "causally and scored by a model fitted without it (a leave-one-out; "
+                             "needs 3+ demos per task)")
     _skipped.add_argument(parser)
 
 
@@ -60,6 +66,9 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"--out: {out} exists; pass --force to overwrite it")
     if not out.parent.is_dir():
         raise ValueError(f"--out: expected a file in an existing folder, got {str(out)!r}")
+    if args.calibrate and args.preprocess != "smooth":
+        raise ValueError("--calibrate: expected --preprocess smooth (the demos the streams are "
+                         f"paired with), got {args.preprocess!r}")
     settings = _settings.load(args.config)
     kwargs = _settings.model_options(settings, n_basis=args.n_basis,
                                      regularizer=args.regularizer)
@@ -71,16 +80,34 @@ def run(args: argparse.Namespace) -> int:
         warnings.simplefilter("always", SkippedTrialWarning)
         demos = load_dataset(args.data, spec=spec, observe=observe, seed=args.seed,
                              tasks=_observation.split(args.tasks), n_per_task=args.n_per_task,
-                             preprocess=args.preprocess)
+                             preprocess=args.preprocess, cache=_observation.cache(args))
     skipped = [str(w.message) for w in caught if issubclass(w.category, SkippedTrialWarning)]
     _skipped.report(skipped, args.verbose, len(demos))
     if not demos:
         raise _skipped.no_usable(args.data, skipped, "demonstration", args.verbose)
     model.fit(demos)
+    if args.calibrate:
+        _calibrate(model, demos, args, spec, observe)
     model.save(out)
     summary = _summary(model, args, out, len(demos), skipped)
     print(json.dumps(summary, indent=2) if args.json else _format(summary))
     return 0
+
+
+def _calibrate(model, demos, args, spec, observe) -> None:
+    """Familiarity calibration on the demos' causal streams (as the predictors receive them)."""
+    from sandbox.data.datasets import load_dataset
+
+    streams = load_dataset(args.data, spec=spec, observe=observe, seed=args.seed,
+                           tasks=_observation.split(args.tasks), n_per_task=args.n_per_task,
+                           preprocess="causal", cache=_observation.cache(args))
+    by_source = {s.source: s for s in streams}
+    kept = [d for d in demos if d.source in by_source]
+    if len(kept) != len(demos):
+        raise ValueError(f"--calibrate: {len(demos) - len(kept)} demos have no causal stream")
+    cal = model.calibrate(demos, [by_source[d.source] for d in demos])
+    print(f"familiarity calibrated on {len(demos)} held-out streams "
+          f"(threshold {cal.threshold:.3g}, alpha {cal.alpha:g})")
 
 
 def _summary(model, args: argparse.Namespace, out: Path, n_demos: int, skipped: list[str]):

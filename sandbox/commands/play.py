@@ -72,6 +72,7 @@ def add_arguments(parser) -> None:
                         help="teleop: address the live viewer listens on (default 127.0.0.1, "
                              "this machine only; 0.0.0.0 lets anyone on the network watch)")
     _add_record_arguments(parser)
+    _add_record_minari(parser)
 
 
 # -- recording demonstrations (teleop) ------------------------------------------------------
@@ -90,7 +91,7 @@ def _add_record_arguments(parser) -> None:
                             "(letters, digits, _ . -)")
 
 
-def _recorder(args):
+def _demo_recorder(args):
     """The demonstration recorder ``--record-demos``/``--task`` ask for, or None."""
     if args.record_demos is None:
         if args.task is not None:
@@ -105,8 +106,36 @@ def _recorder(args):
     return DemoRecorder(args.record_demos, args.task)
 
 
+# --record-minari (Minari extra): the played episodes as a Minari dataset ----------------
+def _add_record_minari(parser) -> None:
+    parser.add_argument("--record-minari", metavar="ID", default=None,
+                        help="record the played episodes with minari.DataCollector as the "
+                             "Minari dataset ID, e.g. sandbox/played-v0 "
+                             '(pip install -e ".[minari]")')
+
+
+def _recorder(args):
+    """(wrap, save): wrap an env in a DataCollector, save what it recorded; no-ops without
+    ``--record-minari``. The id is checked before anything is played."""
+    if args.record_minari is None:
+        return (lambda env: env), (lambda env, name: None)
+    from sandbox.minari_io import check_new_dataset_id, collect, save_collected
+
+    dataset_id = check_new_dataset_id(args.record_minari)
+
+    def save(env, name: str) -> None:
+        dataset = save_collected(env, dataset_id, algorithm_name=name, description=(
+            f"episodes played with python -m sandbox play ({name})"))
+        print(f"recorded {dataset.total_episodes} episode(s), {dataset.total_steps} steps, as the "
+              f"Minari dataset {dataset_id}" if dataset else "no step played: nothing recorded",
+              flush=True)
+
+    return collect, save
+
+
 def run(args) -> int:
-    recorder = _recorder(args)
+    recorder = _demo_recorder(args)
+    args.record = _recorder(args)
     if args.scenario is not None:
         return _scenario(args)
     from sandbox.core.validation import check_positive
@@ -143,12 +172,17 @@ def _teleop(args, recorder=None) -> int:
     env = gym.make(env_id, render_mode="human",
                    max_episode_steps=max(1, round(args.time_limit * 50)),
                    viewer_options={"open_browser": args.open, "host": args.host})
+    wrap, save = args.record
+    env = wrap(env)
     try:   # Ctrl-C: the environment closes, the terminal is restored, cli.main says it
         with Keyboard() as keyboard:
             episodes = run_teleop(env, policy, keyboard, seed=args.seed, running=args.start,
                                   out=lambda line: print(line, flush=True), recorder=recorder)
     finally:
-        env.close()
+        try:
+            save(env, "teleop + IProMPPolicy")
+        finally:
+            env.close()
     saved = "" if recorder is None else f", {len(recorder.saved)} demo(s) saved"
     print(f"bye ({episodes} episode(s){saved})", flush=True)
     return 0
@@ -205,7 +239,9 @@ def _scenario(args) -> int:
         print(f"  t={belief.time:5.2f}s task={belief.task} p[{probs}] T={belief.duration:.2f}s "
               f"jump={belief.jump:.4f} rad", flush=True)
 
-    summary = run_scenario_file(scenario, html=html, on_update=show)
+    wrap, save = args.record
+    summary = run_scenario_file(scenario, html=html, on_update=show,
+                                wrap_env=wrap, on_close=lambda env: save(env, scenario.name))
     summary_path.parent.mkdir(parents=True, exist_ok=True)
     _outputs.write_text(summary_path, json.dumps(summary, indent=2) + "\n")
     outcome = (f"handover at {summary['handover_time_s']:.2f} s" if summary["success"]

@@ -33,6 +33,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--seed", type=_types.SEED, default=0, help="seed of synthetic data")
     _observation.add_arguments(parser)
     _settings.add_argument(parser)
+    _observation.add_cache_argument(parser)
 
 
 def run(args) -> int:
@@ -46,6 +47,7 @@ def run(args) -> int:
                     tasks=_observation.split(args.tasks), n_per_task=args.n_per_task,
                     spec=spec, observe=_observation.observe(args, spec),
                     base=EvalConfig(**_settings.eval_fields(settings)),
+                    cache=_observation.cache(args),
                     **_executor.options(args))
     ranked, failed = summary["ranked"], summary["failed"]
     for entry in ranked[:5]:

@@ -22,6 +22,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--window", type=_types.SECONDS, default=0.2,
                         help="dynamic window scored (s), in (0, 60] (default 0.2)")
     _observation.add_arguments(parser)
+    _observation.add_cache_argument(parser)
     _executor.add_arguments(parser)
     parser.add_argument("--seed", type=_types.SEED, default=0, help="seed of synthetic data")
     parser.add_argument("--tasks", default=None, help="comma-separated subset of tasks")
@@ -60,7 +61,7 @@ def run(args) -> int:
     observe = _observation.observe(args, spec)
     train, test, skipped = load_pair(args.data, seed=args.seed, spec=spec, observe=observe,
                                      tasks=_observation.split(args.tasks),
-                                     n_per_task=args.n_per_task)
+                                     n_per_task=args.n_per_task, cache=_observation.cache(args))
     _skipped.report(skipped, args.verbose, len(train))
     if not train:
         raise _skipped.no_usable(args.data, skipped, verbose=args.verbose)

@@ -41,6 +41,9 @@ class Prediction:
     grid : list or None
         Each task's posterior over its grid of durations
         (:attr:`~sandbox.core.phase.PhaseEstimate.grid`).
+    n_values : int or None
+        Observed values (finite entries of the observations) it was made from
+        (what :func:`~sandbox.core.familiarity.statistic` divides by).
     """
 
     task_index: int
@@ -52,6 +55,7 @@ class Prediction:
     duration: float
     factors: FloatArray | None = None
     grid: list | None = None
+    n_values: int | None = None
 
     def trajectory(self, basis, times) -> tuple[FloatArray, FloatArray]:
         """Robot mean (T, Q) and covariance (T, Q, Q) at ``times`` (s); holds after the end."""
@@ -114,4 +118,4 @@ def predict(model, scorer: Scorer, times: FloatArray, values: FloatArray, *,
     robot = condition_robot(model.task_models[k].weights, factor, model.n_human,
                             scorer.rank[k])
     return Prediction(k, post, est.alphas, est.durations, est.log_likelihood, robot, T,
-                      est.factors, est.grid)
+                      est.factors, est.grid, int(np.isfinite(values).sum()))

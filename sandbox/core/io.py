@@ -11,9 +11,19 @@ Layout of the file (a numpy ``.npz`` archive, written atomically; any reader of
 * ``scale``: the scale of every human dim (signal normaliser; 1 for positions), shape (P,);
 * for task i: ``task{i}_mean`` (D*N,), ``task{i}_factor`` (D*N, r), ``task{i}_reg`` (D,).
 
+Optional, for a model with a familiarity calibration
+(:mod:`sandbox.core.familiarity`): a ``familiarity`` entry in the metadata
+(threshold, alpha, likelihood, subsample, dow_t, n_motions) and the members
+``familiarity_edges`` (B,), ``familiarity_quantiles`` (K, B, L) and
+``familiarity_counts`` (K, B).
+
 Version history: 1 (package 0.1.0) had the hand only (``human_names``, no
 modalities, no scale); such files still load, as one position modality
-``"hand"``. Version 2 adds the modalities, the scale and the floors.
+``"hand"``. Version 2 adds the modalities, the scale and the floors. The
+familiarity section is optional within version 2: files without it load with
+``calibration = None`` (the predictors' familiarity is then None, never
+computed lazily: calibrating needs the training streams), and readers that
+predate it ignore it.
 
 Loading trusts nothing in the file (:mod:`sandbox.core.archive`): the file's
 size and number of members are checked first; the metadata is read and
@@ -64,6 +74,8 @@ HYPERPARAMETERS = {
         "settle_tol", "arrive_tol", "min_alpha_std", "ridge"},
 }
 TASK_KEYS = {"name", "nominal_duration", "alpha_mean", "alpha_std", "n_demos", "prior"}
+#: Most time bins of a stored familiarity calibration.
+MAX_TIME_BINS = 1000
 #: How far from 1 the stored priors may sum.
 PRIOR_TOLERANCE = 1e-6
 
@@ -101,7 +113,15 @@ def save_model(model, path: str | os.PathLike) -> None:
             for t, p in zip(model.task_models, model.priors)
         ],
     }
-    arrays = {"metadata": np.array(json.dumps(meta)), "noise": model.noise, "scale": model.scale}
+    arrays = {"noise": model.noise, "scale": model.scale}
+    cal = getattr(model, "calibration", None)
+    if cal is not None:
+        meta["familiarity"] = {"threshold": cal.threshold, "alpha": cal.alpha,
+                               "likelihood": cal.likelihood, "subsample": cal.subsample,
+                               "dow_t": cal.dow_t, "n_motions": cal.n_motions}
+        arrays.update(familiarity_edges=cal.edges, familiarity_quantiles=cal.quantiles,
+                      familiarity_counts=cal.counts)
+    arrays["metadata"] = np.array(json.dumps(meta))
     for i, t in enumerate(model.task_models):
         arrays[f"task{i}_mean"] = t.weights.mean
         arrays[f"task{i}_factor"] = t.weights.factor
@@ -168,6 +188,7 @@ def _load(path: Path):
             _check_robot_definite(dist, P, t["name"])
             tasks.append(TaskModel(t["name"], dist, t["nominal_duration"], t["alpha_mean"],
                                    t["alpha_std"], t["n_demos"]))
+        calibration = _calibration(archive, meta.get("familiarity"), len(tasks))
     v1 = {"settle_tol": None, "arrive_tol": None} if meta["format_version"] == 1 else {}
     model = IProMP(n_basis=N, basis_width=meta["basis"]["width"],
                    basis_margin=meta["basis"]["margin"],
@@ -180,8 +201,31 @@ def _load(path: Path):
     model.human_names = tuple(d for m in meta["modalities"] for d in m.dims)
     model.robot_names = tuple(meta["robot_names"])
     model.priors = np.array([t["prior"] for t in meta["tasks"]], dtype=np.float64)
+    model.calibration = calibration
     model._fitted = True
     return model
+
+
+def _calibration(archive, entry, n_tasks: int):
+    """The familiarity calibration if the file has one (checked), else None."""
+    from sandbox.core.familiarity import LEVELS, Calibration
+
+    if entry is None:
+        return None
+    keys = {"threshold", "alpha", "likelihood", "subsample", "dow_t", "n_motions"}
+    if not isinstance(entry, dict) or set(entry) != keys:
+        got = sorted(map(str, entry)) if isinstance(entry, dict) else entry
+        raise ValueError(f"metadata familiarity: expected the keys {sorted(keys)}, got {got!r}")
+    edges = _read(archive, "familiarity_edges", (None,))
+    if not 1 <= edges.size <= MAX_TIME_BINS:
+        raise ValueError(f"member 'familiarity_edges': expected 1 to {MAX_TIME_BINS} bins, "
+                         f"got {edges.size}")
+    quantiles = _read(archive, "familiarity_quantiles", (n_tasks, edges.size, LEVELS.size))
+    counts = _read(archive, "familiarity_counts", (n_tasks, edges.size))
+    try:
+        return Calibration(edges, quantiles, counts, **entry)
+    except TypeError:
+        raise ValueError(f"metadata familiarity: malformed entry {str(entry)[:80]}") from None
 
 
 def _read(archive, name: str, shape: tuple, max_rank: int | None = None) -> np.ndarray:
@@ -256,7 +300,7 @@ def _metadata(archive, path: Path) -> dict:
             "hyperparameters": _hyperparameters(meta["hyperparameters"], version),
             "n_human": P, "n_robot": Q, "modalities": _modalities(meta, P),
             "robot_names": _names(meta["robot_names"], "robot_names", (0, Q)),
-            "tasks": _tasks(meta["tasks"])}
+            "tasks": _tasks(meta["tasks"]), "familiarity": meta.get("familiarity")}
 
 
 def _count(value, name: str) -> int:

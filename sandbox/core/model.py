@@ -308,6 +308,7 @@ class IProMP:
                             {k: check_number(v, f"priors[{k!r}]", low=0.0)
                              for k, v in check_mapping(priors, "priors").items()})
         self._fitted = False
+        self.calibration = None
 
     # ------------------------------------------------------------------ fit
     def fit(self, demos: Sequence[DemonstrationLike]) -> IProMP:
@@ -431,6 +432,7 @@ class IProMP:
         self.human_names = tuple(d for m in self.modalities for d in m.dims)
         self.robot_names = tuple(getattr(first, "robot_names", ()) or ())
         self.priors = _priors([t.name for t in tasks], self._prior_spec)
+        self.calibration = None          # of a previous fit, if any: no longer valid
         self._fitted = True
 
     # ------------------------------------------------------------ accessors
@@ -471,6 +473,19 @@ class IProMP:
                 for k, v in check_mapping(priors, "priors").items()}
         self.priors = _priors(self.tasks, spec)
         return self
+
+    def calibrate(self, demos, streams=None, **options):
+        """Calibrate the familiarity of this model, fitted on ``demos`` (leave-one-out).
+
+        Sets and returns :attr:`calibration`; see
+        :func:`sandbox.core.familiarity.calibrate` for ``streams`` and the options.
+        Without a calibration (a fresh fit, a model file saved without one) the
+        predictors' ``familiarity`` is None.
+        """
+        from sandbox.core.familiarity import calibrate
+
+        self._require_fit()
+        return calibrate(self, demos, streams, **options)
 
     def save(self, path) -> None:
         """Save as ``.npz`` + JSON metadata (no pickle); see :mod:`sandbox.core.io`."""

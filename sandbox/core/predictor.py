@@ -38,6 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from sandbox.core.blending import blend_unchecked, sigmoid_activations
+from sandbox.core.familiarity import chosen, statistic
 from sandbox.core.inference import Prediction, predict
 from sandbox.core.likelihood import Scorer
 from sandbox.core.limits import (
@@ -94,6 +95,10 @@ class Update:
     after_end : bool
         Made after the motion had ended (``until_end``): the task and its
         posterior are those held since the end; the speeds and the robot are new.
+    familiarity : float or None
+        How well the observations fit the best task, against held-out training
+        motions (:mod:`sandbox.core.familiarity`), in (0, 1]; None when the
+        model carries no calibration or the likelihood is marginal.
     """
 
     time: float
@@ -108,6 +113,7 @@ class Update:
     jump: float
     seconds: float
     after_end: bool = False
+    familiarity: float | None = None
 
 
 class _Predictor:
@@ -329,6 +335,7 @@ class _Predictor:
         n_observations = check_integer(n_observations, "n_observations", 0)
         held = self.ended
         ends = False
+        familiarity = self._familiarity_of(t, prediction)
         if held:
             if prediction.factors is None:
                 return None                      # marginal likelihood: the plan just holds
@@ -344,13 +351,40 @@ class _Predictor:
         upd = Update(float(t), int(n_observations), self.model.tasks[k],
                      prediction.task_posterior, prediction.alphas, prediction.durations,
                      prediction.log_likelihood, float(prediction.alphas[k]),
-                     prediction.duration, jump, _time.perf_counter() - start, held)
+                     prediction.duration, jump, _time.perf_counter() - start, held,
+                     familiarity)
         self.updates.append(upd)
         self._after_update()
         return upd
 
     def _after_update(self) -> None:
         """Hook: what to forget after an update (nothing by default)."""
+
+    @property
+    def familiarity(self) -> float | None:
+        """How well the observations fit the best task, in (0, 1] (higher: more like the
+        held-out training motions; :mod:`sandbox.core.familiarity`).
+
+        None before the first update, and when the model carries no calibration
+        (``model.calibration``, made by :func:`~sandbox.core.familiarity.calibrate`;
+        model files saved without one load with None) or the likelihood is marginal.
+        """
+        return self.updates[-1].familiarity if self.updates else None
+
+    @property
+    def familiar(self) -> bool | None:
+        """False when :attr:`familiarity` is below the calibration's threshold (an
+        unknown motion); None when there is no familiarity."""
+        fam, cal = self.familiarity, getattr(self.model, "calibration", None)
+        if fam is None or cal is None:
+            return None
+        return bool(fam >= cal.threshold)
+
+    def _familiarity_of(self, t: float, prediction: Prediction) -> float | None:
+        cal = getattr(self.model, "calibration", None)
+        if cal is None or prediction.factors is None:
+            return None
+        return cal.familiarity(t, statistic(prediction), chosen(prediction))
 
     @property
     def _last_update(self) -> float:

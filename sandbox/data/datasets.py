@@ -27,6 +27,8 @@ from sandbox.data.limits import MAX_GRID_SAMPLES, MAX_RATE_HZ
 from sandbox.data.spec import DataSpec, resolve
 
 SYNTHETIC_PREFIX = "synthetic:"
+#: Prefix of a Minari dataset id (:mod:`sandbox.minari_io`, optional extra).
+MINARI_PREFIX = "minari:"
 #: Demonstrations per task of a synthetic set when ``n_per_task`` is not given.
 DEFAULT_SYNTHETIC_PER_TASK = 20
 #: Most demonstrations per task ``n_per_task`` accepts (a synthetic set generates them all).
@@ -45,7 +47,7 @@ def synthetic_names() -> tuple[str, ...]:
 
 def _spec_options() -> str:
     names = ", ".join(f"synthetic:{n}" for n in synthetic_names())
-    return f"a folder <root>/<task>/<trial>.csv or one of [{names}]"
+    return f"a folder <root>/<task>/<trial>.csv, minari:ID or one of [{names}]"
 
 
 def load_dataset(
@@ -67,7 +69,10 @@ def load_dataset(
     Parameters
     ----------
     data : str or Path
-        A dataset folder, or ``"synthetic:NAME"``.
+        A dataset folder, ``"synthetic:NAME"``, or ``"minari:ID"``: a Minari
+        dataset written by ``python -m sandbox data export`` (optional extra,
+        :mod:`sandbox.minari_io`; stored preprocessed, so ``preprocess`` must be
+        the export's).
     spec : DataSpec or path, optional
         What a folder's columns are (a :class:`~sandbox.data.spec.DataSpec` or a
         spec file); default the built-in layout of the recorded Baxter set.
@@ -115,6 +120,9 @@ def load_dataset(
         observed = [m.name for m in layout.observed(observe)]
         demos = _synthetic(data[len(SYNTHETIC_PREFIX):], seed, tasks, n_per_task, preprocess,
                            {"observe": observed, **options})
+    elif isinstance(data, str) and data.startswith(MINARI_PREFIX):
+        demos = _minari(data[len(MINARI_PREFIX):], layout, observe, tasks, n_per_task,
+                        preprocess, options)
     elif isinstance(data, (str, Path)) and Path(data).is_dir():
         given = {"observe": observe, "cache": cache, "on_trial": on_trial, **options}
         if "columns" not in options:          # columns= is shorthand for a hand-only spec
@@ -145,6 +153,16 @@ def _recorded(root, tasks, n_per_task, preprocess, options) -> list[Demonstratio
     if n_per_task is None:
         return demos
     return [d for group in stack_tasks(demos).values() for d in group[: int(n_per_task)]]
+
+
+def _minari(dataset_id, layout, observe, tasks, n_per_task, preprocess, options):
+    """A Minari dataset written by ``python -m sandbox data export``."""
+    from sandbox.minari_io import load_for_fit
+
+    if options:
+        raise ValueError(f"{sorted(options)}: only used for recorded folders, not minari:ID")
+    return load_for_fit(dataset_id, [m.name for m in layout.observed(observe)], tasks=tasks,
+                        n_per_task=n_per_task, preprocess=preprocess)
 
 
 def _synthetic(name, seed, tasks, n_per_task, preprocess, options) -> list[Demonstration]:

@@ -328,7 +328,8 @@ def sweep(data: str, grid: str | Path, out: str | Path, *, workers: int = 2,
           scheduler: str | None = None, timeout: float | None = None, force: bool = False,
           seed: int = 0, tasks: Sequence[str] | None = None, n_per_task: int | None = None,
           spec=None, observe: Sequence[str] | None = None,
-          log: Callable[[str], None] = _stderr, base: EvalConfig | None = None) -> dict:
+          log: Callable[[str], None] = _stderr, base: EvalConfig | None = None,
+          cache=None) -> dict:
     """``python -m sandbox sweep``: check everything, load the trials, run the grid.
 
     The grid, ``workers``, the output folder and the scheduler are checked (a
@@ -338,7 +339,8 @@ def sweep(data: str, grid: str | Path, out: str | Path, *, workers: int = 2,
     points that do not set ``observe`` (default the spec's). The trials are
     loaded once per distinct ``observe`` (the trials kept can depend on it).
     ``base``: the options of the points before their own values (default
-    :class:`EvalConfig`'s; ``python -m sandbox sweep --config FILE``).
+    :class:`EvalConfig`'s; ``python -m sandbox sweep --config FILE``). ``cache``:
+    keep loaded trials on disk (:func:`~sandbox.eval.datasets.load_pair`).
     Returns the summary.
     """
     from sandbox.data.spec import resolve
@@ -358,7 +360,8 @@ def sweep(data: str, grid: str | Path, out: str | Path, *, workers: int = 2,
         trials = {}
         for obs in dict.fromkeys(c.observe for c in configs):
             train, test, skipped = load_pair(data, seed=seed, tasks=tasks,
-                                             n_per_task=n_per_task, spec=spec, observe=obs)
+                                             n_per_task=n_per_task, spec=spec, observe=obs,
+                                             cache=cache)
             for reason in skipped:
                 log(f"skipped ({','.join(obs)}): {reason}")
             trials[obs] = (train, test)

@@ -227,3 +227,23 @@ def test_model_evaluation_on_workers_gives_the_same_trials(heldout_report, model
     assert main(["evaluate", *SMALL, "--seed", "1", *quick, "--model", str(model_file),
                  "--out", str(out)]) == 0
     assert json.loads(out.read_text())["per_trial"] == heldout_report["per_trial"]
+
+
+def test_fit_calibrate_saves_a_familiarity_the_predictor_uses(tmp_path, capsys):
+    from sandbox.core import DynamicPredictor, IProMP
+    from sandbox.data.datasets import load_dataset
+
+    out = tmp_path / "model.npz"
+    assert main(["fit", "--data", "synthetic:two_task", "--n-per-task", "4", "--n-basis", "9",
+                 "--calibrate", "--out", str(out)]) == 0
+    assert "familiarity calibrated on 8 held-out streams" in capsys.readouterr().out
+    model = IProMP.load(out)
+    assert model.calibration is not None
+    stream = load_dataset("synthetic:two_task", seed=5, n_per_task=2, preprocess="causal")[0]
+    predictor = DynamicPredictor(model, 0.2)
+    for t, y in zip(stream.times - stream.times[0], stream.human):
+        predictor.observe(t, y)
+    assert predictor.familiarity is not None and 0 < predictor.familiarity <= 1
+    assert predictor.familiar in (True, False)
+    assert main(["fit", "--data", "synthetic:two_task", "--n-per-task", "4", "--calibrate",
+                 "--preprocess", "causal", "--out", str(tmp_path / "m2.npz")]) == 2

@@ -41,3 +41,19 @@ def test_soak_reports_memory_and_descriptors_over_steps_and_resets():
     assert all(s["rss_mib"] > 0 and s["fds"] > 0 for s in result["samples"])
     assert result["fd_growth"] == result["samples"][-1]["fds"] - result["samples"][1]["fds"]
     assert result["finite_actions"]
+
+
+def test_vector_steps_per_s_reports_every_size():
+    rates = bench.vector_steps_per_s(sizes=(1, 2), block_s=0.3, blocks=1)
+    assert set(rates) == {1, 2}
+    assert all(math.isfinite(r) and r > 0 for r in rates.values())
+
+
+def test_run_vector_benchmarks_reports_the_speedup_of_the_largest_size(monkeypatch):
+    monkeypatch.setattr(bench, "vector_steps_per_s", lambda: {1: 100.0, 2: 180.0, 4: 250.04})
+    monkeypatch.setattr(bench, "gymnasium_step_per_s", lambda: 99.96)
+    result = bench.run_vector_benchmarks()
+    assert result["vector_steps_per_s"] == {"1": 100.0, "2": 180.0, "4": 250.0}
+    assert result["vector_speedup"] == 2.5
+    assert result["gymnasium_benchmark_step_per_s"] == 100.0
+    assert len(result["load_average_1min"]) == 2 and result["cpu_count"] >= 1

@@ -4,7 +4,8 @@
 page's WebSocket has delivered the scene (and ``--virtual-time-budget`` never
 ends while the socket is open). Here Chromium runs with a DevTools port; the
 page is opened, the scene is awaited (its mesh count stops changing) and
-``Page.captureScreenshot`` takes the picture. Only tornado (meshcat's own
+``Page.captureScreenshot`` takes pictures until two in a row are the same (on
+a busy machine the meshes are drawn some time after they arrive). Only tornado (meshcat's own
 dependency) is needed.
 """
 
@@ -75,9 +76,15 @@ async def _shoot(port: int, url: str, size: tuple[int, int], settle: float,
             last, stable_since = count, time.monotonic()
         elif count and time.monotonic() - stable_since >= settle:
             break
-    shot = await session.call("Page.captureScreenshot", format="png")
+    shot = None
+    while time.monotonic() < deadline:  # then until two shots agree (meshes drawn, not queued)
+        again = (await session.call("Page.captureScreenshot", format="png"))["data"]
+        if again == shot:
+            break
+        shot = again
+        await asyncio.sleep(0.5)
     socket.close()
-    return base64.b64decode(shot["data"])
+    return base64.b64decode(shot)
 
 
 def live_screenshot(chromium: str, url: str, profile: Path, size: tuple[int, int] = (640, 480),

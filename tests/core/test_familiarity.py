@@ -1,0 +1,277 @@
+"""Familiarity (sandbox.core.familiarity): known answers on synthetic motions, properties,
+calibration honesty, and the model file round trip."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from sandbox.core import DynamicPredictor, IProMP
+from sandbox.core.familiarity import LEVELS, Calibration, statistic, stream_record
+
+from . import synth
+
+NOISE = 0.01          # m, the live streams' tracker noise (the training demos have 0.002)
+OPTIONS = {"subsample": 5, "n_candidates": 20}
+
+
+def noisy(demo, rng):
+    return synth.Demo(demo.times, demo.human + NOISE * rng.standard_normal(demo.human.shape),
+                      demo.robot, demo.task)
+
+
+@pytest.fixture(scope="module")
+def model():
+    """Tasks 0 and 1 of synth, calibrated on noisy streams of the training demos."""
+    train = synth.demos(np.random.default_rng(0), n_per_task=8, n_tasks=2)
+    model = IProMP(n_basis=9).fit(train)
+    rng = np.random.default_rng(1)
+    model.calibrate(train, [noisy(d, rng) for d in train], **OPTIONS)
+    return model
+
+
+def stream(model, demo, **options):
+    pred = DynamicPredictor(model, dow_t=0.2, **{**OPTIONS, **options})
+    for t, y in zip(demo.times, demo.human):
+        pred.observe(t, y)
+    return pred
+
+
+def unseen(task: int, seed: int):
+    """A new motion of synth task ``task`` (2 is never trained), as a live stream."""
+    rng = np.random.default_rng(seed)
+    demo = synth.demos(rng, n_per_task=1, n_tasks=3)[task]
+    return noisy(demo, rng)
+
+
+def still_hand(duration: float = 2.0, seed: int = 3):
+    """The hand held still where the motions start, with tracker noise."""
+    rng = np.random.default_rng(seed)
+    demo = synth.replay(0, duration)
+    human = np.repeat(demo.human[:1], demo.times.size, axis=0)
+    return synth.Demo(demo.times, human + NOISE * rng.standard_normal(human.shape),
+                      demo.robot, "still")
+
+
+# ------------------------------------------------------------------ known answers
+@pytest.mark.parametrize("task", [0, 1])
+def test_a_new_motion_of_a_trained_task_is_familiar(model, task):
+    pred = stream(model, unseen(task, seed=10 + task))
+    fam = [u.familiarity for u in pred.updates]
+    assert pred.familiar is True
+    assert min(fam) >= model.calibration.threshold
+    assert pred.task == f"task{task}"
+
+
+def test_a_motion_of_another_shape_is_unfamiliar(model):
+    pred = stream(model, unseen(2, seed=12))
+    assert pred.familiar is False
+    assert pred.familiarity < 0.1 * model.calibration.threshold
+    assert max(pred.task_posterior.values()) > 0.99    # the posterior alone is confident
+
+
+def test_a_still_hand_becomes_unfamiliar(model):
+    pred = stream(model, still_hand())
+    assert pred.updates[0].familiarity >= model.calibration.threshold   # could be a start
+    assert pred.familiar is False
+
+
+def test_none_before_the_first_update_and_without_calibration(model):
+    pred = DynamicPredictor(model, dow_t=0.2, **OPTIONS)
+    assert pred.familiarity is None and pred.familiar is None
+    bare = IProMP(n_basis=9).fit(synth.demos(np.random.default_rng(0), n_per_task=4))
+    assert bare.calibration is None
+    pred = stream(bare, unseen(0, seed=10))
+    assert pred.updates and pred.familiarity is None and pred.familiar is None
+    assert all(u.familiarity is None for u in pred.updates)
+
+
+def test_marginal_likelihood_has_no_familiarity(model):
+    pred = stream(model, unseen(0, seed=10), likelihood="marginal")
+    assert pred.updates and pred.familiarity is None
+
+
+def test_predictions_do_not_change(model):
+    """The familiarity only reads the prediction: plan and posteriors are the same."""
+    demo = unseen(1, seed=11)
+    with_cal = stream(model, demo)
+    saved, model.calibration = model.calibration, None
+    try:
+        without = stream(model, demo)
+    finally:
+        model.calibration = saved
+    for a, b in zip(with_cal.updates, without.updates):
+        np.testing.assert_array_equal(a.task_posterior, b.task_posterior)
+    np.testing.assert_array_equal(with_cal.plan()[1], without.plan()[1])
+
+
+def test_refit_drops_the_calibration(model):
+    other = IProMP(n_basis=9).fit(synth.demos(np.random.default_rng(4), n_per_task=3))
+    other.calibration = model.calibration
+    other.fit(synth.demos(np.random.default_rng(5), n_per_task=3))
+    assert other.calibration is None
+
+
+# ------------------------------------------------------------------ properties
+def test_familiarity_is_in_0_1_and_falls_with_the_statistic(model):
+    cal = model.calibration
+    values = np.geomspace(1e-4, 1e4, 200)
+    for t in (0.0, 1.0, 5.0):
+        fam = np.array([cal.familiarity(t, v, 0) for v in values])
+        assert np.all((fam > 0) & (fam <= 1))
+        assert np.all(np.diff(fam) <= 0)
+        assert fam[0] == 1.0 and fam[-1] < 1e-3
+    assert np.isnan(cal.familiarity(1.0, float("nan"), 1))
+
+
+def test_familiarity_of_a_bin_matches_its_quantiles():
+    """Known answer: one bin with values 1..100: the value at level 0.5 has familiarity 0.5."""
+    values = np.arange(1.0, 101.0)
+    cal = Calibration.from_records([(np.zeros(100), values, np.zeros(100, int))], 1, edges=[0.0])
+    median = float(np.quantile(values, 0.5))
+    assert cal.familiarity(3.0, median, 0) == pytest.approx(0.5)
+    assert cal.familiarity(0.0, 0.5, 0) == 1.0
+
+
+def test_each_task_is_ranked_against_its_own_updates():
+    """Task 1's updates score 10x task 0's: a value typical of task 1 is unfamiliar for 0."""
+    rng = np.random.default_rng(8)
+    records = [(np.arange(5) * 0.2, rng.lognormal(0.0, 0.2, 5) * 10.0 ** (i % 2),
+                np.full(5, i % 2)) for i in range(40)]
+    cal = Calibration.from_records(records, 2, edges=[0.0])
+    assert cal.familiarity(0.5, 10.0, 1) == pytest.approx(0.5, abs=0.1)
+    assert cal.familiarity(0.5, 10.0, 0) < 1e-3
+
+
+def test_threshold_grows_with_alpha():
+    rng = np.random.default_rng(6)
+    records = [(np.arange(8) * 0.2, rng.lognormal(0, 0.5, 8), np.zeros(8, int))
+               for _ in range(60)]
+    thresholds = [Calibration.from_records(records, 1, alpha=a, edges=[0.0, 0.5, 1.0]).threshold
+                  for a in (0.01, 0.05, 0.2, 0.5)]
+    assert np.all(np.diff(thresholds) > 0)
+
+
+def test_a_new_motion_like_the_calibration_ones_fires_at_about_alpha():
+    """Exchangeable synthetic records: the share of fresh ones flagged at some update is
+    about alpha (binomial 99.9 % bounds)."""
+    rng = np.random.default_rng(7)
+
+    def record():
+        t = np.arange(10) * 0.2
+        k = rng.integers(0, 2, 10)
+        return t, rng.lognormal(0.3 * t + k, 0.4 + 0.1 * rng.random()), k
+
+    alpha, n = 0.1, 400
+    cal = Calibration.from_records([record() for _ in range(100)], 2, alpha=alpha,
+                                   edges=[0.0, 0.6, 1.2])
+    flagged = [min(cal.familiarity(*update) for update in zip(*record())) < cal.threshold
+               for _ in range(n)]
+    assert 0.05 < np.mean(flagged) < 0.17
+
+
+def test_statistic_is_the_mahalanobis_term_of_the_likelihood(model):
+    """m n = d^T C^-1 d of the chosen task at its MAP duration, against a dense solve."""
+    from sandbox.core.inference import predict
+    from sandbox.core.likelihood import Scorer
+
+    demo = unseen(0, seed=10)
+    t, y = demo.times[::5], demo.human[::5]
+    pred = predict(model, Scorer(model), t, y, n_candidates=20)
+    k = int(np.argmax(pred.task_posterior))
+    task = model.task_models[k]
+    z = np.minimum(t / pred.durations[k], 1.0)
+    Psi = model.basis.evaluate(z)
+    P = model.n_human
+    H = np.kron(np.eye(P), Psi)                                  # (s P, P N), dim-major
+    human = task.weights.dims(slice(0, P))
+    cov = (H @ human.cov() @ H.T + np.kron(np.diag(model.noise), np.eye(t.size)))
+    d = y.T.ravel() - H @ human.mean
+    expected = d @ np.linalg.solve(cov, d) / y.size
+    assert pred.n_values == y.size
+    assert statistic(pred) == pytest.approx(expected, rel=1e-6)
+
+
+# ------------------------------------------------------------------ errors
+def test_bad_records_are_value_errors():
+    with pytest.raises(ValueError, match="at least one calibration motion"):
+        Calibration.from_records([], 1)
+    with pytest.raises(ValueError, match="one length"):
+        Calibration.from_records([(np.zeros(3), np.ones(2), np.zeros(3, int))], 1)
+    with pytest.raises(ValueError, match="task indices"):
+        Calibration.from_records([(np.zeros(3), np.ones(3), np.full(3, 2))], 2)
+    with pytest.raises(ValueError, match="alpha"):
+        Calibration.from_records([(np.zeros(3), np.ones(3), np.zeros(3, int))], 1, alpha=2.0)
+
+
+def test_inconsistent_calibration_is_refused():
+    q = np.tile(LEVELS, (1, 2, 1))
+    with pytest.raises(ValueError, match="edges"):
+        Calibration(np.array([0.5, 1.0]), q, np.ones((1, 2)), 0.1, 0.05)
+    with pytest.raises(ValueError, match="non-decreasing"):
+        Calibration(np.array([0.0, 1.0]), q[:, :, ::-1], np.ones((1, 2)), 0.1, 0.05)
+    with pytest.raises(ValueError, match="counts"):
+        Calibration(np.array([0.0, 1.0]), q, np.ones(2), 0.1, 0.05)
+    with pytest.raises(ValueError, match="threshold"):
+        Calibration(np.array([0.0, 1.0]), q, np.ones((1, 2)), 1.5, 0.05)
+
+
+def test_stream_record_matches_the_predictor(model):
+    demo = unseen(0, seed=10)
+    times, stats, tasks = stream_record(model, demo.times, demo.human, **OPTIONS)
+    pred = stream(model, demo)
+    np.testing.assert_allclose(times, [u.time for u in pred.updates])
+    assert [model.tasks[k] for k in tasks] == [u.task for u in pred.updates]
+    fam = [model.calibration.familiarity(*update) for update in zip(times, stats, tasks)]
+    np.testing.assert_allclose(fam, [u.familiarity for u in pred.updates], rtol=1e-9)
+
+
+# ------------------------------------------------------------------ model files
+def test_round_trip_keeps_the_calibration(model, tmp_path):
+    model.save(tmp_path / "m.npz")
+    loaded = IProMP.load(tmp_path / "m.npz")
+    a, b = model.calibration, loaded.calibration
+    np.testing.assert_array_equal(a.edges, b.edges)
+    np.testing.assert_array_equal(a.quantiles, b.quantiles)
+    np.testing.assert_array_equal(a.counts, b.counts)
+    assert (a.threshold, a.alpha, a.subsample, a.dow_t, a.n_motions) == (
+        b.threshold, b.alpha, b.subsample, b.dow_t, b.n_motions)
+    demo = unseen(2, seed=12)
+    assert [u.familiarity for u in stream(model, demo).updates] == [
+        u.familiarity for u in stream(loaded, demo).updates]
+
+
+def test_files_without_a_calibration_load_with_none(model, tmp_path):
+    path = tmp_path / "m.npz"
+    model.save(path)
+    with np.load(path) as data:
+        arrays = {k: data[k] for k in data.files if not k.startswith("familiarity")}
+    meta = json.loads(str(arrays["metadata"]))
+    del meta["familiarity"]
+    np.savez(tmp_path / "old.npz", **{**arrays, "metadata": np.array(json.dumps(meta))})
+    old = IProMP.load(tmp_path / "old.npz")
+    assert old.calibration is None
+    assert stream(old, unseen(0, seed=10)).familiarity is None
+
+
+def test_tampered_calibration_is_refused(model, tmp_path):
+    path = tmp_path / "m.npz"
+    model.save(path)
+    with np.load(path) as data:
+        arrays = {k: data[k] for k in data.files}
+    bad = arrays["familiarity_quantiles"].copy()
+    bad[0, 0] = bad[0, 0][::-1] + 1.0
+    np.savez(tmp_path / "bad.npz", **{**arrays, "familiarity_quantiles": bad})
+    with pytest.raises(ValueError, match="bad.npz.*non-decreasing"):
+        IProMP.load(tmp_path / "bad.npz")
+    meta = json.loads(str(arrays["metadata"]))
+    meta["familiarity"]["threshold"] = "high"
+    np.savez(tmp_path / "meta.npz", **{**arrays, "metadata": np.array(json.dumps(meta))})
+    with pytest.raises(ValueError, match="threshold"):
+        IProMP.load(tmp_path / "meta.npz")
+    del arrays["familiarity_counts"]
+    np.savez(tmp_path / "short.npz", **arrays)
+    with pytest.raises(ValueError, match="familiarity_counts"):
+        IProMP.load(tmp_path / "short.npz")
