@@ -27,7 +27,7 @@ from multiprocessing import get_context
 
 import numpy as np
 
-from sandbox.core import DynamicPredictor, IProMP, predict
+from sandbox.core import DynamicPredictor, IProMP, familiarity, predict
 from sandbox.core.likelihood import Scorer
 from sandbox.core.model import SIGNAL_FLOOR
 from sandbox.core.phase import Lattice
@@ -148,13 +148,7 @@ def evaluate_trial(model: IProMP, test, config: EvalConfig, fk, truth=None) -> d
 
 def update_times(t, t_obs, window: float) -> list[float]:
     """Row times at which a :class:`DynamicPredictor` fed this stream updates."""
-    out, boundary = [], window
-    for ti in t:
-        if ti >= boundary - 1e-9:
-            if np.searchsorted(t_obs, ti, side="right") > 0:
-                out.append(float(ti))
-            boundary = float((np.floor(ti / window + 1e-9) + 1) * window)
-    return out
+    return familiarity.update_times(t, t_obs, window).tolist()
 
 
 def predictions_at(model, scorer, t_obs, y_obs, times, config, opts) -> dict:

@@ -105,13 +105,19 @@ def test_bad_times():
             viewer.update(t)
 
 
-def test_realtime_pacing_sleeps_until_the_frame_is_due(monkeypatch):
+@pytest.fixture
+def fake_clock(monkeypatch):
+    """The viewer's clock and sleeps, faked: ``({"now": s}, slept)``."""
     import sandbox.viz.viewer as module
 
-    clock = {"now": 100.0}
-    slept = []
+    clock, slept = {"now": 100.0}, []
     monkeypatch.setattr(module.time, "monotonic", lambda: clock["now"])
     monkeypatch.setattr(module.time, "sleep", lambda s: slept.append(s))
+    return clock, slept
+
+
+def test_realtime_pacing_sleeps_until_the_frame_is_due(fake_clock):
+    clock, slept = fake_clock
     viewer = Viewer(realtime=True, fps=10)
     viewer.update(0.0)
     clock["now"] += 0.05  # 50 ms of work
@@ -123,13 +129,8 @@ def test_realtime_pacing_sleeps_until_the_frame_is_due(monkeypatch):
     assert len(slept) == 1
 
 
-def test_restart_pacing_after_a_pause(monkeypatch):
-    import sandbox.viz.viewer as module
-
-    clock = {"now": 100.0}
-    slept = []
-    monkeypatch.setattr(module.time, "monotonic", lambda: clock["now"])
-    monkeypatch.setattr(module.time, "sleep", lambda s: slept.append(s))
+def test_restart_pacing_after_a_pause(fake_clock):
+    clock, slept = fake_clock
     viewer = Viewer(realtime=True, fps=10)
     viewer.update(0.0)
     clock["now"] += 10.0  # paused for 10 s: without a restart the next 10 s would not sleep
@@ -139,13 +140,8 @@ def test_restart_pacing_after_a_pause(monkeypatch):
     assert slept == [pytest.approx(0.4)]
 
 
-def test_slow_motion_rate_stretches_the_pacing(monkeypatch):
-    import sandbox.viz.viewer as module
-
-    clock = {"now": 100.0}
-    slept = []
-    monkeypatch.setattr(module.time, "monotonic", lambda: clock["now"])
-    monkeypatch.setattr(module.time, "sleep", lambda s: slept.append(s))
+def test_slow_motion_rate_stretches_the_pacing(fake_clock):
+    clock, slept = fake_clock
     viewer = Viewer(realtime=True, fps=10)
     viewer.update(0.0)
     viewer.update(0.5)  # real time: 0.5 s of simulation take 0.5 s
