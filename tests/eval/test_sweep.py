@@ -294,3 +294,15 @@ def test_the_sweep_benchmark_reports_wall_times_ratios_and_cores(worker_env):
     assert result["configurations"] == 2 and result["identical"]
     assert result["speedup"] == pytest.approx(
         result["sweep_1_worker_s"] / result["sweep_2_workers_s"], rel=0.01)
+
+
+def test_evaluate_benchmark_reports_cold_warm_and_first_progress():
+    from sandbox.bench.evaluate import run
+
+    result = run("synthetic:two_task", repeats=1, workers=1, n_per_task=3)
+    assert result["cpu_count"] == os.cpu_count() and result["trials"] > 0
+    for case in ("cold", "warm"):
+        wall = result[f"evaluate_{case}_wall_s"]
+        assert 0 < result[f"evaluate_{case}_first_progress_s"] < wall
+        assert 0 < result[f"evaluate_{case}_loocv_runtime_s"] < wall
+    assert result["warm_vs_cold_wall_ratio"] > 0
