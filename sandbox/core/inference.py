@@ -3,7 +3,7 @@
 :func:`predict` is one update of the method (paper sec. 2): the MAP speed of
 every task (:mod:`sandbox.core.phase`), the task posterior
 (:mod:`sandbox.core.recognition`), and the robot weights of the most probable
-task conditioned on the observations (eq. 9, :func:`~sandbox.core.likelihood.condition_robot`).
+task conditioned on the observations (eq. 8, :func:`~sandbox.core.likelihood.condition_robot`).
 The online predictors (:mod:`sandbox.core.predictor`) call it at every window;
 the evaluation calls it for static predictions and the oracle.
 """
@@ -32,7 +32,7 @@ class Prediction:
         The chosen (most probable, or given) task.
     task_posterior, alphas, durations, log_likelihood : ndarray, shape (K,)
     robot : WeightDistribution
-        Conditioned robot weights of the chosen task (eq. 9).
+        Conditioned robot weights of the chosen task (eq. 8).
     duration : float
         Its duration :math:`T^*` (s).
     factors : ndarray or None, shape (K, R+1, R+1)
@@ -108,7 +108,7 @@ def predict(model, scorer: Scorer, times: FloatArray, values: FloatArray, *,
     """
     est = estimate_phase(scorer, model.task_models, times, values, n_candidates=n_candidates,
                          width=width, refine_steps=refine_steps, mode=likelihood, stats=stats)
-    post = task_posterior(est.log_likelihood, model.priors)
+    post = task_posterior(est.log_likelihood, model.priors)     # eq. 14-15
     k = int(np.argmax(post)) if task is None else int(task)
     T = float(est.durations[k]) if duration is None else float(duration)
     if duration is None and est.factors is not None:

@@ -2,7 +2,7 @@
 
 For task k and a candidate duration T (phase :math:`z_j = \\min(t_j / T, 1)`: past
 its end a motion holds its final state), the human
-observations :math:`y \\in \\mathbb{R}^{sP}` have the marginal (eq. 12, 16)
+observations :math:`y \\in \\mathbb{R}^{sP}` have the marginal (eq. 12, 15)
 
 .. math::  y \\sim \\mathcal{N}(\\Phi\\mu_h, \\; \\Phi(\\Lambda_h + U_hU_h^T)\\Phi^T + R),
            \\quad \\Phi = I_P \\otimes \\Psi, \\; R = \\Sigma_y \\otimes I_s .
@@ -192,7 +192,7 @@ class Scorer:
                 factors.append(np.empty((0, self.R + 1, self.R + 1)))
                 continue
             Kt, eps, gamma_term, offset = self._stats(parts, k, slice(a, b), b - a)
-            ll, L = factor_scores(Kt, eps, gamma_term, offset)
+            ll, L = factor_scores(Kt, eps, gamma_term, offset)   # eq. 12
             loglik.append(ll)
             factors.append(L)
         return Scores(loglik, factors)
@@ -408,7 +408,7 @@ def condition_robot(weights: WeightDistribution, factor: FloatArray, n_human: in
     -------
     WeightDistribution
         Over the Q robot dims: mean :math:`\\mu_r + U_r K^{-1} e`, factor
-        :math:`U_r L_K^{-T}`, regulariser :math:`\\Lambda_r` (eq. 9 restricted to the
+        :math:`U_r L_K^{-T}`, regulariser :math:`\\Lambda_r` (eq. 8 restricted to the
         robot block).
     """
     N = weights.n_basis
@@ -418,5 +418,5 @@ def condition_robot(weights: WeightDistribution, factor: FloatArray, n_human: in
     U_r = weights.factor[n_human * N:]
     kinv_e = scipy.linalg.solve_triangular(LK, g, lower=True, trans="T")
     new_factor = scipy.linalg.solve_triangular(LK, U_r.T, lower=True).T
-    mean = weights.mean[n_human * N:] + U_r @ kinv_e
+    mean = weights.mean[n_human * N:] + U_r @ kinv_e          # eq. 8
     return WeightDistribution(mean, new_factor, weights.reg[n_human:], N)
