@@ -11,6 +11,7 @@ the evaluation calls it for static predictions and the oracle.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -20,6 +21,9 @@ from sandbox.core.promp import WeightDistribution, trajectory_distribution
 from sandbox.core.recognition import task_posterior
 from sandbox.core.statistics import StreamStatistics
 from sandbox.core.validation import FloatArray
+
+if TYPE_CHECKING:
+    from sandbox.core.model import IProMP
 
 
 @dataclass(frozen=True, eq=False)
@@ -62,7 +66,7 @@ class Prediction:
         z = np.clip(np.asarray(times, dtype=np.float64) / self.duration, 0.0, 1.0)
         return trajectory_distribution(self.robot, basis, z)
 
-    def for_task(self, model, k: int, posterior: FloatArray | None = None) -> Prediction:
+    def for_task(self, model: IProMP, k: int, posterior: FloatArray | None = None) -> Prediction:
         """The same estimate with task ``k`` chosen: its robot at its MAP duration.
 
         ``posterior`` replaces the task posterior (e.g. one held since the motion
@@ -83,7 +87,7 @@ class Prediction:
         return float(ended_probability(self.grid[k:k + 1], t)[0])
 
 
-def predict(model, scorer: Scorer, times: FloatArray, values: FloatArray, *,
+def predict(model: IProMP, scorer: Scorer, times: FloatArray, values: FloatArray, *,
             likelihood: str = "joint", n_candidates: int = 50, width: float = 3.0,
             refine_steps: int = 1, stats: StreamStatistics | None = None,
             task: int | None = None, duration: float | None = None) -> Prediction:

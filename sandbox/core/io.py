@@ -47,6 +47,7 @@ import os
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -65,6 +66,12 @@ from sandbox.core.modality import Modality, check_modalities, default_modalities
 from sandbox.core.promp import WeightDistribution
 from sandbox.core.validation import check_number
 
+if TYPE_CHECKING:
+    from sandbox.core.model import IProMP
+
+if TYPE_CHECKING:
+    from sandbox.core.familiarity import Calibration
+
 FORMAT = "handover-sandbox/iprompt"
 FORMAT_VERSION = 2
 READABLE_VERSIONS = (1, 2)
@@ -81,7 +88,7 @@ MAX_TIME_BINS = 1000
 PRIOR_TOLERANCE = 1e-6
 
 
-def save_model(model, path: str | os.PathLike) -> None:
+def save_model(model: IProMP, path: str | os.PathLike) -> None:
     """Write a fitted :class:`~sandbox.core.model.IProMP` to ``path`` (``.npz``)."""
     meta = {
         "format": FORMAT,
@@ -178,7 +185,7 @@ class ModelFile:
     weights: tuple[WeightDistribution, ...]
     noise: np.ndarray
     scale: np.ndarray
-    calibration: object | None
+    calibration: Calibration | None
 
 
 def read_model(path: str | os.PathLike) -> ModelFile:
@@ -353,12 +360,12 @@ def _modalities(meta: dict, P: int) -> tuple:
     return check_modalities([Modality.from_dict(m) for m in mods], P)
 
 
-def _tasks(tasks) -> list[dict]:
+def _tasks(tasks) -> list[dict[str, Any]]:
     """Task entries: names, durations within MAX_TIME_S, speed priors, priors summing to 1."""
     if not isinstance(tasks, list) or not 1 <= len(tasks) <= MAX_TASKS:
         raise ValueError(f"metadata tasks: expected a list of 1 to {MAX_TASKS} tasks, got "
                          f"{str(tasks)[:60]}")
-    out = []
+    out: list[dict[str, Any]] = []
     for i, t in enumerate(tasks):
         if not isinstance(t, dict) or set(t) != TASK_KEYS:
             raise ValueError(f"metadata tasks[{i}]: expected the keys {sorted(TASK_KEYS)}, got "

@@ -40,6 +40,7 @@ observation instead, as older public code does.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.linalg
@@ -48,6 +49,9 @@ from scipy.linalg import lapack
 from sandbox.core.interaction import LOG_2PI
 from sandbox.core.promp import WeightDistribution
 from sandbox.core.validation import FloatArray
+
+if TYPE_CHECKING:
+    from sandbox.core.model import IProMP
 
 
 @dataclass(frozen=True, eq=False)
@@ -107,7 +111,7 @@ class Scorer:
         A fitted model.
     """
 
-    def __init__(self, model) -> None:
+    def __init__(self, model: IProMP) -> None:
         model._require_fit()
         self.basis = model.basis
         P, N = model.n_human, model.basis.n_basis
@@ -152,7 +156,7 @@ class Scorer:
         """Per group: :func:`_b_part` of the rows observing it and the likelihood's
         constant per dim."""
         present = self.present(values)
-        out = []
+        out: list[tuple | None] = []
         for g in self.groups:
             rows = present[g.modality]
             s_g = int(rows.sum())
@@ -303,9 +307,9 @@ def _make_groups(kappa: FloatArray, modality_dims, pad: FloatArray) -> list[Grou
     groups = []
     for m, dims in enumerate(modality_dims):
         values: list[float] = []
-        for v in kappa[:, dims].ravel():
-            if not any(abs(v - u) <= 1e-9 * max(abs(u), 1e-300) for u in values):
-                values.append(float(v))
+        for x in kappa[:, dims].ravel():
+            if not any(abs(x - u) <= 1e-9 * max(abs(u), 1e-300) for u in values):
+                values.append(float(x))
         for v in values:
             same = np.abs(kappa[:, dims] - v) <= 1e-9 * max(abs(v), 1e-300)   # (K, |dims|)
             used = same.any(axis=0)
@@ -370,7 +374,7 @@ def factor_scores(Kt: FloatArray, eps: FloatArray, gamma_term: FloatArray,
 
 def _cholesky(aug: FloatArray) -> FloatArray:
     try:
-        return np.linalg.cholesky(aug)
+        return np.asarray(np.linalg.cholesky(aug), dtype=np.float64)
     except np.linalg.LinAlgError:
         return np.stack([_cholesky_one(m) for m in aug])
 
@@ -378,7 +382,7 @@ def _cholesky(aug: FloatArray) -> FloatArray:
 def _cholesky_one(m: FloatArray) -> FloatArray:
     """Cholesky of one augmented matrix whose last pivot may be lost to round-off."""
     try:
-        return np.linalg.cholesky(m)
+        return np.asarray(np.linalg.cholesky(m), dtype=np.float64)
     except np.linalg.LinAlgError:
         R = m.shape[0] - 1
         L = np.zeros_like(m)

@@ -56,7 +56,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
@@ -79,6 +79,9 @@ from sandbox.core.limits import (
 from sandbox.core.modality import Modality
 from sandbox.core.promp import WeightDistribution, fit_weights
 from sandbox.core.validation import FloatArray, check_mapping, check_number, check_positive
+
+if TYPE_CHECKING:
+    from sandbox.core.familiarity import Calibration
 
 #: Default noise floor of signal modalities, in their normalised units (see IProMP).
 SIGNAL_FLOOR = 1.0
@@ -309,7 +312,7 @@ class IProMP:
                             {k: check_number(v, f"priors[{k!r}]", low=0.0)
                              for k, v in check_mapping(priors, "priors").items()})
         self._fitted = False
-        self.calibration = None
+        self.calibration: Calibration | None = None
 
     # ------------------------------------------------------------------ fit
     def fit(self, demos: Sequence[DemonstrationLike]) -> IProMP:
@@ -387,10 +390,10 @@ class IProMP:
         floors = self.floors(modalities)
         sigma2 = np.maximum(self.noise_scale * residual / dof, floors**2)
         divide = np.r_[scale, np.ones(Q)].repeat(self.basis.n_basis)
-        weights = {k: np.array(v) / divide for k, v in weights.items()}
-        for k, w in weights.items():
+        arrays = {k: np.array(v) / divide for k, v in weights.items()}
+        for k, w in arrays.items():
             check_spread(k, w)
-        self._set_fit(weights,
+        self._set_fit(arrays,
                       {k: np.array(v) for k, v in durations.items()}, sigma2, P, Q,
                       names_from, modalities, scale)
         return self
@@ -507,7 +510,8 @@ class IProMP:
     def _from_file(cls, f: ModelFile) -> IProMP:
         """The fitted model a checked :class:`~sandbox.core.io.ModelFile` describes."""
         meta = f.meta
-        v1 = {"settle_tol": None, "arrive_tol": None} if meta["format_version"] == 1 else {}
+        v1: dict[str, Any] = ({"settle_tol": None, "arrive_tol": None}
+                              if meta["format_version"] == 1 else {})
         basis = meta["basis"]
         model = cls(n_basis=basis["n_basis"], basis_width=basis["width"],
                     basis_margin=basis["margin"], normalized_basis=basis["normalized"], **v1,

@@ -210,7 +210,7 @@ def _refine(score_pairs, times, values, tasks, brackets, nominal, a_mean, a_std,
     xs = np.array([x for _, x in trial])
     lls, facs = score_pairs(times, values, xs, ks)
     lps = log_alpha_prior(xs / nominal[ks], a_mean[ks], a_std[ks])
-    new = [None] * len(brackets)
+    new: list[tuple | None] = [None] * len(brackets)
     for j, (k, x) in enumerate(trial):
         ll, lp = float(lls[j]), float(lps[j])
         x0, x1, x2, f0, f1, f2 = brackets[k]

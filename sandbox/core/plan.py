@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -26,6 +27,9 @@ from sandbox.core.blending import blend_unchecked, sigmoid_activations
 from sandbox.core.limits import MAX_PLAN_STEPS
 from sandbox.core.promp import trajectory_distribution
 from sandbox.core.validation import FloatArray
+
+if TYPE_CHECKING:
+    from sandbox.core.model import IProMP
 
 #: A robot distribution over time: ``times`` (T,) in s -> means (T, Q), covariances (T, Q, Q).
 Trajectory = Callable[[FloatArray], tuple[FloatArray, FloatArray]]
@@ -76,7 +80,7 @@ class Plan:
     cov: FloatArray
 
     @classmethod
-    def prior(cls, model, dt: float) -> Plan:
+    def prior(cls, model: IProMP, dt: float) -> Plan:
         """Moment-matched mixture of the task priors, each at its mean duration, on knots of ``dt``.
 
         Parameters
@@ -90,14 +94,13 @@ class Plan:
         end = max(t.mean_duration for t in tasks)
         check_steps(end / dt + 1, f"the prior plan to {end:g} s", dt)
         knots = np.arange(0.0, end + dt, dt)
-        means, covs = [], []
+        parts = []
         for task in tasks:
             robot = task.weights.dims(slice(P, None))
             z = np.clip(knots / task.mean_duration, 0.0, 1.0)
-            m, c = trajectory_distribution(robot, model.basis, z)      # eq. 4
-            means.append(m)
-            covs.append(c)
-        means, covs = np.array(means), np.array(covs)
+            parts.append(trajectory_distribution(robot, model.basis, z))      # eq. 4
+        means = np.array([m for m, _ in parts])
+        covs = np.array([c for _, c in parts])
         mean = np.tensordot(p, means, axes=1)
         dev = means - mean
         cov = np.tensordot(p, covs + dev[..., :, None] * dev[..., None, :], axes=1)

@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import time as _time
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -63,6 +64,9 @@ from sandbox.core.validation import (
     check_number,
     check_positive,
 )
+
+if TYPE_CHECKING:
+    from sandbox.core.model import IProMP
 
 LIKELIHOODS = ("joint", "marginal")
 WINDOW_MODES = ("all", "latest")
@@ -119,8 +123,9 @@ class Update:
 class _Predictor:
     """Shared machinery of the two predictors (see the module docstring)."""
 
-    def __init__(self, model, *, observe=None, subsample: int = 5, likelihood: str = "joint",
-                 n_candidates: int = 50, width: float = 3.0, refine_steps: int = 1,
+    def __init__(self, model: IProMP, *, observe=None, subsample: int = 5,
+                 likelihood: str = "joint", n_candidates: int = 50, width: float = 3.0,
+                 refine_steps: int = 1,
                  dt: float = 0.01, blend_rate: float = 50.0, blend_delay: float = 0.1,
                  blend: bool = True, horizon: float = 0.0, incremental: bool = True,
                  until_end: bool = True, end_prob: float = 0.9,
@@ -269,7 +274,7 @@ class _Predictor:
     def task(self) -> str:
         """Most probable task now."""
         post = self.task_posterior
-        return max(post, key=post.get)
+        return max(post, key=lambda name: post[name])
 
     @property
     def alpha(self) -> float:
@@ -485,7 +490,8 @@ class DynamicPredictor(_Predictor):
     'left'
     """
 
-    def __init__(self, model, dow_t: float = 0.2, *, window: str = "all", **options) -> None:
+    def __init__(self, model: IProMP, dow_t: float = 0.2, *, window: str = "all",
+                 **options) -> None:
         self.dow_t = check_positive(dow_t, "dow_t")
         if self.dow_t < MIN_MEDIAN_DT_S:
             raise ValueError(f"dow_t: expected at least {MIN_MEDIAN_DT_S:g} s, got {dow_t!r}")
@@ -541,7 +547,7 @@ class StaticPredictor(_Predictor):
         As for :class:`DynamicPredictor` (``subsample``, ``likelihood``, ...).
     """
 
-    def __init__(self, model, ratio: float = 0.5, *, expected_duration: float | None = None,
+    def __init__(self, model: IProMP, ratio: float = 0.5, *, expected_duration: float | None = None,
                  **options) -> None:
         self.ratio = check_fraction(ratio, "ratio")
         self.expected_duration = (None if expected_duration is None
