@@ -22,3 +22,32 @@ def test_every_package_is_listed_in_pyproject():
             found.add(".".join([root_name, *rel.parts]))
     assert found - listed == set(), "package directories missing from pyproject.toml"
     assert listed - found == set(), "pyproject.toml lists packages that do not exist"
+
+
+@pytest.mark.skipif(sys.version_info < (3, 11), reason="tomllib needs Python 3.11")
+def test_one_version_source_and_the_typing_marker_ships():
+    import tomllib
+
+    import sandbox
+
+    config = tomllib.loads((REPO / "pyproject.toml").read_text())
+    assert "version" not in config["project"] and "version" in config["project"]["dynamic"]
+    attr = config["tool"]["setuptools"]["dynamic"]["version"]["attr"]
+    assert attr == "sandbox.__version__" and sandbox.__version__.count(".") == 2
+    assert (REPO / "sandbox" / "py.typed").is_file()
+    assert "py.typed" in config["tool"]["setuptools"]["package-data"]["sandbox"]
+    assert "Typing :: Typed" in config["project"]["classifiers"]
+    assert config["project"]["urls"]
+
+
+def test_ci_runs_the_gates_before_the_readme_test_command():
+    lines = (REPO / ".ci" / "run").read_text().splitlines()
+    commands = [line.strip() for line in lines if line.strip() and not line.startswith("#")]
+    assert commands.index("ruff check sandbox envs tests") < len(commands) - 1
+    assert commands.index("mypy") < len(commands) - 1
+
+
+def test_changelog_names_the_current_version():
+    import sandbox
+
+    assert f"## {sandbox.__version__}" in (REPO / "CHANGELOG.md").read_text()

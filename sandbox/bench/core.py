@@ -103,10 +103,10 @@ def _fed_predictor(model, times, values, **options) -> DynamicPredictor:
 
 
 def _timed_update(pred: DynamicPredictor, t: float) -> Callable[[], object]:
-    state = pred.plan()
+    state = pred._plan                     # a Plan is never mutated: restoring is assigning
 
     def run():
-        pred._plan_t, pred._plan_mean, pred._plan_cov = state
+        pred._plan = state
         pred.updates.clear()
         return pred.update(t)
 

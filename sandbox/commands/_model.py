@@ -2,7 +2,7 @@
 
 ``evaluate`` predicts every trial with it (test-only: no refit, no
 leave-one-out); ``play`` and ``demo`` drive the robot with it. The file is
-read with the core's loader (:func:`sandbox.core.io.load_model`: no pickle,
+read with the core's loader (:meth:`sandbox.core.IProMP.load`: no pickle,
 every member checked) and checked against what the command will feed it
 before any work: a mismatch is one ``ValueError`` line.
 """

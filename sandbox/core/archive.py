@@ -20,6 +20,7 @@ import zipfile
 import zlib
 from math import prod
 from pathlib import Path
+from typing import Literal
 
 import numpy as np
 from numpy.lib import format as npy
@@ -113,7 +114,7 @@ def read_array(archive: zipfile.ZipFile, name: str, kinds: str,
     return arr.astype(dtype.newbyteorder("="), copy=True)
 
 
-def _header(fh, name: str) -> tuple[np.dtype, tuple[int, ...], str]:
+def _header(fh, name: str) -> tuple[np.dtype, tuple[int, ...], Literal["C", "F"]]:
     version = npy.read_magic(fh)
     if version == (1, 0):
         shape, fortran, dtype = npy.read_array_header_1_0(fh)
@@ -121,7 +122,8 @@ def _header(fh, name: str) -> tuple[np.dtype, tuple[int, ...], str]:
         shape, fortran, dtype = npy.read_array_header_2_0(fh)
     else:
         raise ArchiveError(f"member {name!r} has .npy format version {version}, not 1.0 or 2.0")
-    return np.dtype(dtype), tuple(int(n) for n in shape), "F" if fortran else "C"
+    order: Literal["C", "F"] = "F" if fortran else "C"
+    return np.dtype(dtype), tuple(int(n) for n in shape), order
 
 
 def _check_header(name: str, dtype: np.dtype, got: tuple[int, ...], kinds: str,

@@ -1,4 +1,4 @@
-"""Gaussian basis functions over the phase z in [0, 1] (paper eq. 1-3).
+"""Gaussian basis functions over the phase z in [0, 1] (paper eq. 1 and 3).
 
 Notation: N basis functions with centres :math:`c_n` and common width
 :math:`h`,
@@ -91,7 +91,7 @@ class GaussianBasis:
 
     def evaluate(self, z: FloatArray) -> FloatArray:
         """Like ``__call__`` without conversion (hot path; ``z`` is a float array)."""
-        d = z[..., None] - self.centers
+        d = z[..., None] - self.centers            # eq. 3: row t of Psi is psi(z_t)^T
         e = d * d * (-0.5 / self.h)
         if not self.normalized:
             return np.exp(e)

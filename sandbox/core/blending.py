@@ -1,4 +1,4 @@
-"""Blending of trajectory distributions: product of Gaussians with activations (eq. 17-19).
+"""Blending of trajectory distributions: product of Gaussians with activations (eq. 16-18).
 
 Per time step t, distributions :math:`\\mathcal{N}(\\mu_i, \\Sigma_i)` with
 activations :math:`a_i \\in [0, 1]` combine into
@@ -25,7 +25,7 @@ from sandbox.core.validation import FloatArray, check_array
 
 def sigmoid_activations(times: FloatArray, center: float, rate: float
                         ) -> tuple[FloatArray, FloatArray]:
-    """Falling and rising sigmoids (eq. 19) centred at ``center`` (s) with gradient ``rate`` (1/s).
+    """Falling and rising sigmoids (eq. 18) centred at ``center`` (s) with gradient ``rate`` (1/s).
 
     Returns
     -------
@@ -33,7 +33,7 @@ def sigmoid_activations(times: FloatArray, center: float, rate: float
         ``fall + rise == 1``.
     """
     x = np.clip(rate * (np.asarray(times, dtype=np.float64) - center), -700.0, 700.0)
-    rise = 1.0 / (1.0 + np.exp(-x))
+    rise = 1.0 / (1.0 + np.exp(-x))                          # eq. 18
     return 1.0 - rise, rise
 
 
@@ -69,7 +69,7 @@ def blend_unchecked(means, covs, act):
     """:func:`blend` without validation (for the predictor's hot path)."""
     mean, cov, a_acc = means[0].copy(), covs[0].copy(), act[0].copy()
     for i in range(1, means.shape[0]):
-        mean, cov, a_acc = _pair(mean, cov, a_acc, means[i], covs[i], act[i])
+        mean, cov, a_acc = _pair(mean, cov, a_acc, means[i], covs[i], act[i])   # eq. 16
     if np.any(a_acc != 1.0):  # a lone active distribution: N(mu, Sigma)^a ~ N(mu, Sigma / a)
         cov = cov / a_acc[:, None, None]
     return mean, cov
@@ -103,6 +103,6 @@ def _product(m1, S1, a1, m2, S2, a2):
     except np.linalg.LinAlgError:
         # M numerically singular (module docstring): pseudo-inverse, not no command.
         sol = np.linalg.pinv(M, hermitian=True) @ rhs
-    new_cov = S2 @ sol[..., :-2]
-    new_mean = (b1 * (S2 @ sol[..., -2:-1]) + b2 * (S1 @ sol[..., -1:]))[..., 0]
+    new_cov = S2 @ sol[..., :-2]                                           # eq. 17
+    new_mean = (b1 * (S2 @ sol[..., -2:-1]) + b2 * (S1 @ sol[..., -1:]))[..., 0]  # eq. 17
     return new_mean, 0.5 * (new_cov + new_cov.transpose(0, 2, 1))

@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import copy
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -61,6 +62,9 @@ from sandbox.core.validation import (
     check_number,
     check_positive,
 )
+
+if TYPE_CHECKING:
+    from sandbox.core.model import IProMP
 
 #: Quantile levels stored per time bin.
 LEVELS = np.linspace(0.0, 1.0, 41)
@@ -284,7 +288,9 @@ def check(cal: Calibration) -> Calibration:
 def _pool(records, n_tasks: int):
     if len(records) == 0:
         raise ValueError("records: expected at least one calibration motion, got none")
-    times, values, tasks, owner = [], [], [], []
+    time_parts: list[np.ndarray] = []
+    value_parts: list[np.ndarray] = []
+    tasks, owner = [], []
     for i, (t, v, k) in enumerate(records):
         t, v = np.asarray(t, dtype=np.float64), np.asarray(v, dtype=np.float64)
         k = np.asarray(k)
@@ -295,11 +301,11 @@ def _pool(records, n_tasks: int):
             raise ValueError(f"records[{i}]: expected task indices in [0, {n_tasks}), got "
                              f"{k.tolist()[:10]}")
         ok = np.isfinite(v) & np.isfinite(t)
-        times.append(t[ok])
-        values.append(v[ok])
+        time_parts.append(t[ok])
+        value_parts.append(v[ok])
         tasks.append(k[ok].astype(np.int64))
         owner.append(np.full(int(ok.sum()), i))
-    times, values = np.concatenate(times), np.concatenate(values)
+    times, values = np.concatenate(time_parts), np.concatenate(value_parts)
     if times.size == 0:
         raise ValueError("records: expected finite statistics, got none")
     return times, values, np.concatenate(tasks), np.concatenate(owner)
@@ -331,7 +337,7 @@ def update_times(times: FloatArray, kept: FloatArray, dow_t: float) -> FloatArra
     return np.array(out)
 
 
-def stream_record(model, times, human, *, dow_t: float = 0.2, subsample: int = 2,
+def stream_record(model: IProMP, times, human, *, dow_t: float = 0.2, subsample: int = 2,
                   n_candidates: int = 50, width: float = 3.0,
                   refine_steps: int = 1) -> tuple[FloatArray, FloatArray, np.ndarray]:
     """Update times (u,), :func:`statistic` (u,) and chosen task (u,) of a stream, as a
@@ -369,7 +375,7 @@ def stream_record(model, times, human, *, dow_t: float = 0.2, subsample: int = 2
     return at, out, task
 
 
-def loo_records(model, demos, streams=None, **options) -> list[tuple]:
+def loo_records(model: IProMP, demos, streams=None, **options) -> list[tuple]:
     """:func:`stream_record` of every demo by a model fitted on all the others.
 
     ``model`` gives the options (its fit, if any, is not used); ``streams[i]``
@@ -389,7 +395,7 @@ def loo_records(model, demos, streams=None, **options) -> list[tuple]:
     return out
 
 
-def calibrate(model, demos, streams=None, *, alpha: float = 0.05, dow_t: float = 0.2,
+def calibrate(model: IProMP, demos, streams=None, *, alpha: float = 0.05, dow_t: float = 0.2,
               subsample: int = 2, **options) -> Calibration:
     """Leave-one-out calibration of the familiarity of ``model`` (fitted on ``demos``).
 

@@ -3,7 +3,7 @@
 :func:`predict` is one update of the method (paper sec. 2): the MAP speed of
 every task (:mod:`sandbox.core.phase`), the task posterior
 (:mod:`sandbox.core.recognition`), and the robot weights of the most probable
-task conditioned on the observations (eq. 9, :func:`~sandbox.core.likelihood.condition_robot`).
+task conditioned on the observations (eq. 8, :func:`~sandbox.core.likelihood.condition_robot`).
 The online predictors (:mod:`sandbox.core.predictor`) call it at every window;
 the evaluation calls it for static predictions and the oracle.
 """
@@ -11,6 +11,7 @@ the evaluation calls it for static predictions and the oracle.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -20,6 +21,9 @@ from sandbox.core.promp import WeightDistribution, trajectory_distribution
 from sandbox.core.recognition import task_posterior
 from sandbox.core.statistics import StreamStatistics
 from sandbox.core.validation import FloatArray
+
+if TYPE_CHECKING:
+    from sandbox.core.model import IProMP
 
 
 @dataclass(frozen=True, eq=False)
@@ -32,7 +36,7 @@ class Prediction:
         The chosen (most probable, or given) task.
     task_posterior, alphas, durations, log_likelihood : ndarray, shape (K,)
     robot : WeightDistribution
-        Conditioned robot weights of the chosen task (eq. 9).
+        Conditioned robot weights of the chosen task (eq. 8).
     duration : float
         Its duration :math:`T^*` (s).
     factors : ndarray or None, shape (K, R+1, R+1)
@@ -62,7 +66,7 @@ class Prediction:
         z = np.clip(np.asarray(times, dtype=np.float64) / self.duration, 0.0, 1.0)
         return trajectory_distribution(self.robot, basis, z)
 
-    def for_task(self, model, k: int, posterior: FloatArray | None = None) -> Prediction:
+    def for_task(self, model: IProMP, k: int, posterior: FloatArray | None = None) -> Prediction:
         """The same estimate with task ``k`` chosen: its robot at its MAP duration.
 
         ``posterior`` replaces the task posterior (e.g. one held since the motion
@@ -83,7 +87,7 @@ class Prediction:
         return float(ended_probability(self.grid[k:k + 1], t)[0])
 
 
-def predict(model, scorer: Scorer, times: FloatArray, values: FloatArray, *,
+def predict(model: IProMP, scorer: Scorer, times: FloatArray, values: FloatArray, *,
             likelihood: str = "joint", n_candidates: int = 50, width: float = 3.0,
             refine_steps: int = 1, stats: StreamStatistics | None = None,
             task: int | None = None, duration: float | None = None) -> Prediction:
@@ -108,7 +112,7 @@ def predict(model, scorer: Scorer, times: FloatArray, values: FloatArray, *,
     """
     est = estimate_phase(scorer, model.task_models, times, values, n_candidates=n_candidates,
                          width=width, refine_steps=refine_steps, mode=likelihood, stats=stats)
-    post = task_posterior(est.log_likelihood, model.priors)
+    post = task_posterior(est.log_likelihood, model.priors)     # eq. 14-15
     k = int(np.argmax(post)) if task is None else int(task)
     T = float(est.durations[k]) if duration is None else float(duration)
     if duration is None and est.factors is not None:

@@ -45,7 +45,9 @@ from __future__ import annotations
 import json
 import os
 import tempfile
+from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -64,6 +66,12 @@ from sandbox.core.modality import Modality, check_modalities, default_modalities
 from sandbox.core.promp import WeightDistribution
 from sandbox.core.validation import check_number
 
+if TYPE_CHECKING:
+    from sandbox.core.model import IProMP
+
+if TYPE_CHECKING:
+    from sandbox.core.familiarity import Calibration
+
 FORMAT = "handover-sandbox/iprompt"
 FORMAT_VERSION = 2
 READABLE_VERSIONS = (1, 2)
@@ -80,7 +88,7 @@ MAX_TIME_BINS = 1000
 PRIOR_TOLERANCE = 1e-6
 
 
-def save_model(model, path: str | os.PathLike) -> None:
+def save_model(model: IProMP, path: str | os.PathLike) -> None:
     """Write a fitted :class:`~sandbox.core.model.IProMP` to ``path`` (``.npz``)."""
     meta = {
         "format": FORMAT,
@@ -149,8 +157,39 @@ def _output_path(path) -> Path:
     return path
 
 
-def load_model(path: str | os.PathLike):
-    """Read a model written by :func:`save_model` (format version 1 or 2).
+@dataclass(frozen=True, eq=False)
+class ModelFile:
+    """The checked content of a model file, from which
+    :meth:`IProMP.load <sandbox.core.model.IProMP.load>` builds the model.
+
+    This module knows the file format and nothing of the model class
+    (:mod:`sandbox.core.model` imports this module, never the reverse).
+
+    Attributes
+    ----------
+    meta : dict
+        The checked metadata: ``format_version``, ``basis`` (a
+        :meth:`GaussianBasis.to_dict <sandbox.core.basis.GaussianBasis.to_dict>`),
+        ``hyperparameters``, ``n_human`` P, ``n_robot`` Q, ``modalities`` (tuple of
+        :class:`~sandbox.core.modality.Modality`), ``robot_names``, ``tasks``
+        (name, nominal_duration, alpha_mean, alpha_std, n_demos, prior per task).
+    weights : tuple of WeightDistribution
+        Each task's weights over P + Q dims, in the order of ``meta["tasks"]``.
+    noise, scale : ndarray, shape (P,)
+        Observation noise variances and the scale of every human dim.
+    calibration : Calibration or None
+        The familiarity calibration (:mod:`sandbox.core.familiarity`), if stored.
+    """
+
+    meta: dict
+    weights: tuple[WeightDistribution, ...]
+    noise: np.ndarray
+    scale: np.ndarray
+    calibration: Calibration | None
+
+
+def read_model(path: str | os.PathLike) -> ModelFile:
+    """Read and check a file written by :func:`save_model` (format version 1 or 2).
 
     Raises
     ------
@@ -160,7 +199,7 @@ def load_model(path: str | os.PathLike):
     """
     path = check_path(path)
     try:
-        return _load(path)
+        return _read_model(path)
     except ValueError as error:       # ArchiveError, or a check of the content
         text = str(error)
         where = f"model file {str(path)!r}"
@@ -168,9 +207,7 @@ def load_model(path: str | os.PathLike):
                          else f"{where}: {text}") from None
 
 
-def _load(path: Path):
-    from sandbox.core.model import IProMP, TaskModel
-
+def _read_model(path: Path) -> ModelFile:
     archive = open_archive(path)
     with archive:
         meta = _metadata(archive, path)
@@ -178,7 +215,7 @@ def _load(path: Path):
         noise = _positive(_read(archive, "noise", (P,)), "noise", MIN_NOISE_STD**2)
         scale = (_check_scale(_read(archive, "scale", (P,)), meta["modalities"])
                  if meta["format_version"] >= 2 else np.ones(P))
-        tasks = []
+        weights = []
         for i, t in enumerate(meta["tasks"]):
             D = (P + Q) * N
             dist = WeightDistribution(
@@ -186,24 +223,9 @@ def _load(path: Path):
                 _read(archive, f"task{i}_factor", (D, None), max_rank=t["n_demos"]),
                 _positive(_read(archive, f"task{i}_reg", (P + Q,)), f"task{i}_reg", 0.0), N)
             _check_robot_definite(dist, P, t["name"])
-            tasks.append(TaskModel(t["name"], dist, t["nominal_duration"], t["alpha_mean"],
-                                   t["alpha_std"], t["n_demos"]))
-        calibration = _calibration(archive, meta.get("familiarity"), len(tasks))
-    v1 = {"settle_tol": None, "arrive_tol": None} if meta["format_version"] == 1 else {}
-    model = IProMP(n_basis=N, basis_width=meta["basis"]["width"],
-                   basis_margin=meta["basis"]["margin"],
-                   normalized_basis=meta["basis"]["normalized"], **v1, **meta["hyperparameters"])
-    model.task_models = tuple(tasks)
-    model.noise = noise
-    model.scale = scale
-    model.modalities = meta["modalities"]
-    model.n_human, model.n_robot = P, Q
-    model.human_names = tuple(d for m in meta["modalities"] for d in m.dims)
-    model.robot_names = tuple(meta["robot_names"])
-    model.priors = np.array([t["prior"] for t in meta["tasks"]], dtype=np.float64)
-    model.calibration = calibration
-    model._fitted = True
-    return model
+            weights.append(dist)
+        calibration = _calibration(archive, meta.get("familiarity"), len(weights))
+    return ModelFile(meta, tuple(weights), noise, scale, calibration)
 
 
 def _calibration(archive, entry, n_tasks: int):
@@ -338,12 +360,12 @@ def _modalities(meta: dict, P: int) -> tuple:
     return check_modalities([Modality.from_dict(m) for m in mods], P)
 
 
-def _tasks(tasks) -> list[dict]:
+def _tasks(tasks) -> list[dict[str, Any]]:
     """Task entries: names, durations within MAX_TIME_S, speed priors, priors summing to 1."""
     if not isinstance(tasks, list) or not 1 <= len(tasks) <= MAX_TASKS:
         raise ValueError(f"metadata tasks: expected a list of 1 to {MAX_TASKS} tasks, got "
                          f"{str(tasks)[:60]}")
-    out = []
+    out: list[dict[str, Any]] = []
     for i, t in enumerate(tasks):
         if not isinstance(t, dict) or set(t) != TASK_KEYS:
             raise ValueError(f"metadata tasks[{i}]: expected the keys {sorted(TASK_KEYS)}, got "

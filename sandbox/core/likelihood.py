@@ -2,7 +2,7 @@
 
 For task k and a candidate duration T (phase :math:`z_j = \\min(t_j / T, 1)`: past
 its end a motion holds its final state), the human
-observations :math:`y \\in \\mathbb{R}^{sP}` have the marginal (eq. 12, 16)
+observations :math:`y \\in \\mathbb{R}^{sP}` have the marginal (eq. 12, 15)
 
 .. math::  y \\sim \\mathcal{N}(\\Phi\\mu_h, \\; \\Phi(\\Lambda_h + U_hU_h^T)\\Phi^T + R),
            \\quad \\Phi = I_P \\otimes \\Psi, \\; R = \\Sigma_y \\otimes I_s .
@@ -40,6 +40,7 @@ observation instead, as older public code does.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.linalg
@@ -48,6 +49,9 @@ from scipy.linalg import lapack
 from sandbox.core.interaction import LOG_2PI
 from sandbox.core.promp import WeightDistribution
 from sandbox.core.validation import FloatArray
+
+if TYPE_CHECKING:
+    from sandbox.core.model import IProMP
 
 
 @dataclass(frozen=True, eq=False)
@@ -107,7 +111,7 @@ class Scorer:
         A fitted model.
     """
 
-    def __init__(self, model) -> None:
+    def __init__(self, model: IProMP) -> None:
         model._require_fit()
         self.basis = model.basis
         P, N = model.n_human, model.basis.n_basis
@@ -152,7 +156,7 @@ class Scorer:
         """Per group: :func:`_b_part` of the rows observing it and the likelihood's
         constant per dim."""
         present = self.present(values)
-        out = []
+        out: list[tuple | None] = []
         for g in self.groups:
             rows = present[g.modality]
             s_g = int(rows.sum())
@@ -192,7 +196,7 @@ class Scorer:
                 factors.append(np.empty((0, self.R + 1, self.R + 1)))
                 continue
             Kt, eps, gamma_term, offset = self._stats(parts, k, slice(a, b), b - a)
-            ll, L = factor_scores(Kt, eps, gamma_term, offset)
+            ll, L = factor_scores(Kt, eps, gamma_term, offset)   # eq. 12
             loglik.append(ll)
             factors.append(L)
         return Scores(loglik, factors)
@@ -303,9 +307,9 @@ def _make_groups(kappa: FloatArray, modality_dims, pad: FloatArray) -> list[Grou
     groups = []
     for m, dims in enumerate(modality_dims):
         values: list[float] = []
-        for v in kappa[:, dims].ravel():
-            if not any(abs(v - u) <= 1e-9 * max(abs(u), 1e-300) for u in values):
-                values.append(float(v))
+        for x in kappa[:, dims].ravel():
+            if not any(abs(x - u) <= 1e-9 * max(abs(u), 1e-300) for u in values):
+                values.append(float(x))
         for v in values:
             same = np.abs(kappa[:, dims] - v) <= 1e-9 * max(abs(v), 1e-300)   # (K, |dims|)
             used = same.any(axis=0)
@@ -370,7 +374,7 @@ def factor_scores(Kt: FloatArray, eps: FloatArray, gamma_term: FloatArray,
 
 def _cholesky(aug: FloatArray) -> FloatArray:
     try:
-        return np.linalg.cholesky(aug)
+        return np.asarray(np.linalg.cholesky(aug), dtype=np.float64)
     except np.linalg.LinAlgError:
         return np.stack([_cholesky_one(m) for m in aug])
 
@@ -378,7 +382,7 @@ def _cholesky(aug: FloatArray) -> FloatArray:
 def _cholesky_one(m: FloatArray) -> FloatArray:
     """Cholesky of one augmented matrix whose last pivot may be lost to round-off."""
     try:
-        return np.linalg.cholesky(m)
+        return np.asarray(np.linalg.cholesky(m), dtype=np.float64)
     except np.linalg.LinAlgError:
         R = m.shape[0] - 1
         L = np.zeros_like(m)
@@ -408,7 +412,7 @@ def condition_robot(weights: WeightDistribution, factor: FloatArray, n_human: in
     -------
     WeightDistribution
         Over the Q robot dims: mean :math:`\\mu_r + U_r K^{-1} e`, factor
-        :math:`U_r L_K^{-T}`, regulariser :math:`\\Lambda_r` (eq. 9 restricted to the
+        :math:`U_r L_K^{-T}`, regulariser :math:`\\Lambda_r` (eq. 8 restricted to the
         robot block).
     """
     N = weights.n_basis
@@ -418,5 +422,5 @@ def condition_robot(weights: WeightDistribution, factor: FloatArray, n_human: in
     U_r = weights.factor[n_human * N:]
     kinv_e = scipy.linalg.solve_triangular(LK, g, lower=True, trans="T")
     new_factor = scipy.linalg.solve_triangular(LK, U_r.T, lower=True).T
-    mean = weights.mean[n_human * N:] + U_r @ kinv_e
+    mean = weights.mean[n_human * N:] + U_r @ kinv_e          # eq. 8
     return WeightDistribution(mean, new_factor, weights.reg[n_human:], N)

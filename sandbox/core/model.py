@@ -3,7 +3,7 @@
 :class:`IProMP` is what users fit and save. For every task k it holds the
 weight distribution over P human + Q robot dims (:mod:`sandbox.core.promp`), the
 nominal duration :math:`T_{nom,k}` and the Gaussian prior of the speed factor
-:math:`\\alpha = T / T_{nom,k}` (paper eq. 11); shared by all tasks are the
+:math:`\\alpha = T / T_{nom,k}` (paper eq. 10); shared by all tasks are the
 basis, the observation modalities (:mod:`sandbox.core.modality`), their
 observation noise :math:`\\Sigma_y`, the scale of signal modalities and the
 task priors p(k).
@@ -56,7 +56,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
@@ -68,6 +68,7 @@ from sandbox.core.demos import (
     check_spread,
     modalities_of,
 )
+from sandbox.core.io import ModelFile, read_model, save_model
 from sandbox.core.limits import (
     MAX_ABS_VALUE,
     MAX_DURATION_S,
@@ -78,6 +79,9 @@ from sandbox.core.limits import (
 from sandbox.core.modality import Modality
 from sandbox.core.promp import WeightDistribution, fit_weights
 from sandbox.core.validation import FloatArray, check_mapping, check_number, check_positive
+
+if TYPE_CHECKING:
+    from sandbox.core.familiarity import Calibration
 
 #: Default noise floor of signal modalities, in their normalised units (see IProMP).
 SIGNAL_FLOOR = 1.0
@@ -308,7 +312,7 @@ class IProMP:
                             {k: check_number(v, f"priors[{k!r}]", low=0.0)
                              for k, v in check_mapping(priors, "priors").items()})
         self._fitted = False
-        self.calibration = None
+        self.calibration: Calibration | None = None
 
     # ------------------------------------------------------------------ fit
     def fit(self, demos: Sequence[DemonstrationLike]) -> IProMP:
@@ -345,13 +349,14 @@ class IProMP:
         z = (times - times[0]) / (times[-1] - times[0])
         human = human[:end]
         robot = robot[:end]
-        wd = fit_weights(z, np.hstack([human, robot]), self.basis, self.ridge)
+        wd = fit_weights(z, np.hstack([human, robot]), self.basis, self.ridge)   # eq. 2, 5
         err = human - self.basis.evaluate(z) @ wd[:P].T
         ok = np.isfinite(err)
         clean = np.where(np.isfinite(human), human, 0.0)
         moments = np.stack([np.isfinite(human).sum(axis=0), clean.sum(axis=0),
                             (clean**2).sum(axis=0)]).astype(float)
-        return DemoFit(str(demo.task), wd.ravel(), (np.where(ok, err, 0.0) ** 2).sum(axis=0),
+        return DemoFit(str(demo.task), wd.ravel(),      # eq. 6: concatenated dim after dim
+                       (np.where(ok, err, 0.0) ** 2).sum(axis=0),
                        np.maximum(ok.sum(axis=0) - n, 1).astype(float),
                        float(times[-1] - times[0]), moments)
 
@@ -385,10 +390,10 @@ class IProMP:
         floors = self.floors(modalities)
         sigma2 = np.maximum(self.noise_scale * residual / dof, floors**2)
         divide = np.r_[scale, np.ones(Q)].repeat(self.basis.n_basis)
-        weights = {k: np.array(v) / divide for k, v in weights.items()}
-        for k, w in weights.items():
+        arrays = {k: np.array(v) / divide for k, v in weights.items()}
+        for k, w in arrays.items():
             check_spread(k, w)
-        self._set_fit(weights,
+        self._set_fit(arrays,
                       {k: np.array(v) for k, v in durations.items()}, sigma2, P, Q,
                       names_from, modalities, scale)
         return self
@@ -420,7 +425,7 @@ class IProMP:
             dist = WeightDistribution(dist.mean, dist.factor, reg, n)
             T = durations[k]
             t_nom = float(T.mean())
-            a_std = float(np.std(T / t_nom, ddof=1)) if T.size > 1 else 0.0
+            a_std = float(np.std(T / t_nom, ddof=1)) if T.size > 1 else 0.0   # eq. 10
             tasks.append(
                 TaskModel(k, dist, t_nom, 1.0, max(a_std, self.min_alpha_std), int(T.size))
             )
@@ -489,17 +494,41 @@ class IProMP:
 
     def save(self, path) -> None:
         """Save as ``.npz`` + JSON metadata (no pickle); see :mod:`sandbox.core.io`."""
-        from sandbox.core.io import save_model
-
         self._require_fit()
         save_model(self, path)
 
     @classmethod
     def load(cls, path) -> IProMP:
-        """Load a model saved by :meth:`save`; refuses corrupt or foreign files."""
-        from sandbox.core.io import load_model
+        """Load a model saved by :meth:`save`; refuses corrupt or foreign files (``ValueError``)."""
+        content = read_model(path)
+        try:
+            return cls._from_file(content)
+        except ValueError as error:   # hyperparameters the constructor refuses
+            raise ValueError(f"model file {str(path)!r}: {error}") from None
 
-        return load_model(path)
+    @classmethod
+    def _from_file(cls, f: ModelFile) -> IProMP:
+        """The fitted model a checked :class:`~sandbox.core.io.ModelFile` describes."""
+        meta = f.meta
+        v1: dict[str, Any] = ({"settle_tol": None, "arrive_tol": None}
+                              if meta["format_version"] == 1 else {})
+        basis = meta["basis"]
+        model = cls(n_basis=basis["n_basis"], basis_width=basis["width"],
+                    basis_margin=basis["margin"], normalized_basis=basis["normalized"], **v1,
+                    **meta["hyperparameters"])
+        model.task_models = tuple(
+            TaskModel(t["name"], w, t["nominal_duration"], t["alpha_mean"], t["alpha_std"],
+                      t["n_demos"]) for t, w in zip(meta["tasks"], f.weights))
+        model.noise = f.noise
+        model.scale = f.scale
+        model.modalities = meta["modalities"]
+        model.n_human, model.n_robot = meta["n_human"], meta["n_robot"]
+        model.human_names = tuple(d for m in meta["modalities"] for d in m.dims)
+        model.robot_names = tuple(meta["robot_names"])
+        model.priors = np.array([t["prior"] for t in meta["tasks"]], dtype=np.float64)
+        model.calibration = f.calibration
+        model._fitted = True
+        return model
 
     def __repr__(self) -> str:
         if not self._fitted:

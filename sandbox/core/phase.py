@@ -1,8 +1,8 @@
-"""Phase (speed) estimation from partial observations (paper eq. 11-14).
+"""Phase (speed) estimation from partial observations (paper eq. 10-13).
 
 For task k the speed factor is :math:`\\alpha = T / T_{nom,k}` with prior
 :math:`\\mathcal{N}(\\mu_\\alpha, \\sigma_\\alpha^2)`. Given observations up to
-:math:`t_{last}`, the MAP estimate (eq. 14)
+:math:`t_{last}`, the MAP estimate (eq. 13)
 
 .. math::  \\alpha^* = \\arg\\max_\\alpha \\; \\log p(y | \\alpha, \\theta_k) + \\log p(\\alpha)
 
@@ -119,7 +119,7 @@ def log_alpha_prior(alpha: FloatArray, mean: float, std: float) -> FloatArray:
 def estimate_phase(scorer: Scorer, tasks, times: FloatArray, values: FloatArray, *,
                    n_candidates: int = 50, width: float = 3.0, refine_steps: int = 1,
                    mode: str = "joint", stats=None) -> PhaseEstimate:
-    """MAP speed factor of every task given observations (eq. 14).
+    """MAP speed factor of every task given observations (eq. 11-13).
 
     Parameters
     ----------
@@ -157,9 +157,9 @@ def estimate_phase(scorer: Scorer, tasks, times: FloatArray, values: FloatArray,
     grid = []
     for k in range(K):
         T = durations[spans[k, 0]:spans[k, 1]]
-        lp = log_alpha_prior(T / nominal[k], a_mean[k], a_std[k])
-        f = scores.loglik[k] + lp
-        i = int(np.argmax(f))
+        lp = log_alpha_prior(T / nominal[k], a_mean[k], a_std[k])   # eq. 10: alpha = T / T_nom
+        f = scores.loglik[k] + lp                 # eq. 11: log posterior (eq. 12 + prior)
+        i = int(np.argmax(f))                     # eq. 13
         w = np.exp(f - f[i])
         grid.append((T, w / w.sum()))
         best_T[k], best_ll[k], best_lp[k] = T[i], scores.loglik[k][i], lp[i]
@@ -210,7 +210,7 @@ def _refine(score_pairs, times, values, tasks, brackets, nominal, a_mean, a_std,
     xs = np.array([x for _, x in trial])
     lls, facs = score_pairs(times, values, xs, ks)
     lps = log_alpha_prior(xs / nominal[ks], a_mean[ks], a_std[ks])
-    new = [None] * len(brackets)
+    new: list[tuple | None] = [None] * len(brackets)
     for j, (k, x) in enumerate(trial):
         ll, lp = float(lls[j]), float(lps[j])
         x0, x1, x2, f0, f1, f2 = brackets[k]

@@ -3,14 +3,16 @@
 Both are fed human observations as they arrive (:meth:`observe`) and can be
 asked at any time for the robot command (:meth:`command`): the mean joint
 targets and their covariance at time t. The command is a piecewise-linear plan
-over time. Before the first update the plan is the moment-matched mixture of the
-task priors (each at its mean duration, weighted by p(k)).
+over time (:mod:`sandbox.core.plan`: interpolation, blending, jumps); the
+observations are kept by :mod:`sandbox.core.stream`. Before the first update the
+plan is the moment-matched mixture of the task priors (each at its mean
+duration, weighted by p(k)).
 
 * :class:`DynamicPredictor` updates every ``dow_t`` seconds (a dynamic
   observation window): it re-estimates the speed of every task, the task
   posterior and the conditioned robot distribution of the most probable task,
   then blends the new distribution into the plan from the update time on
-  (eq. 17-19): the current plan with a falling sigmoid, the new one with a
+  (eq. 16-18): the current plan with a falling sigmoid, the new one with a
   rising sigmoid centred ``blend_delay`` after the update.
 * :class:`StaticPredictor` (Maeda et al. 2017) updates once, after observing a
   fraction ``ratio`` of the expected duration.
@@ -34,23 +36,22 @@ from __future__ import annotations
 
 import time as _time
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from sandbox.core.blending import blend_unchecked, sigmoid_activations
 from sandbox.core.familiarity import chosen, statistic
 from sandbox.core.inference import Prediction, predict
 from sandbox.core.likelihood import Scorer
 from sandbox.core.limits import (
     MAX_CANDIDATES,
     MAX_LATTICE_FLOATS,
-    MAX_PLAN_STEPS,
     MAX_TIME_S,
     MIN_MEDIAN_DT_S,
     check_time,
 )
 from sandbox.core.phase import Lattice
-from sandbox.core.promp import WeightDistribution, trajectory_distribution
+from sandbox.core.plan import Blending, Plan, check_steps
 from sandbox.core.statistics import StreamStatistics
 from sandbox.core.stream import ObservationStream
 from sandbox.core.validation import (
@@ -63,6 +64,9 @@ from sandbox.core.validation import (
     check_number,
     check_positive,
 )
+
+if TYPE_CHECKING:
+    from sandbox.core.model import IProMP
 
 LIKELIHOODS = ("joint", "marginal")
 WINDOW_MODES = ("all", "latest")
@@ -119,8 +123,9 @@ class Update:
 class _Predictor:
     """Shared machinery of the two predictors (see the module docstring)."""
 
-    def __init__(self, model, *, observe=None, subsample: int = 5, likelihood: str = "joint",
-                 n_candidates: int = 50, width: float = 3.0, refine_steps: int = 1,
+    def __init__(self, model: IProMP, *, observe=None, subsample: int = 5,
+                 likelihood: str = "joint", n_candidates: int = 50, width: float = 3.0,
+                 refine_steps: int = 1,
                  dt: float = 0.01, blend_rate: float = 50.0, blend_delay: float = 0.1,
                  blend: bool = True, horizon: float = 0.0, incremental: bool = True,
                  until_end: bool = True, end_prob: float = 0.9,
@@ -141,6 +146,8 @@ class _Predictor:
         self.end_prob = check_fraction(end_prob, "end_prob")
         self.max_time = check_positive(max_time, "max_time")
         self._incremental = check_bool(incremental, "incremental") and self.likelihood == "joint"
+        self._blending = Blending(self.dt, self.blend_rate, self.blend_delay, self.blend,
+                                  self.horizon)
         self.stream = ObservationStream(model, observe, subsample)
         self.scorer = Scorer(model)
         self.subsample = self.stream.subsample
@@ -163,13 +170,7 @@ class _Predictor:
                  "the blend (blend_delay + 10/blend_rate)": self.blend_delay
                  + 10.0 / self.blend_rate}
         for what, span in spans.items():
-            self._check_steps(span / self.dt, f"{what}, {span:g} s,")
-
-    def _check_steps(self, steps: float, what: str) -> None:
-        if not steps <= MAX_PLAN_STEPS:
-            raise ValueError(f"plan: {what} would take {steps:.3g} knots of dt={self.dt:g} s, "
-                             f"more than limits.MAX_PLAN_STEPS={MAX_PLAN_STEPS}; raise dt or "
-                             f"shorten that span")
+            check_steps(span / self.dt, f"{what}, {span:g} s,", self.dt)
 
     # -------------------------------------------------------------- public
     def reset(self) -> None:
@@ -180,7 +181,7 @@ class _Predictor:
         self.updates: list[Update] = []
         self._prediction: Prediction | None = None
         self._stats = StreamStatistics(self.scorer, self._lattice) if self._incremental else None
-        self._plan_t, self._plan_mean, self._plan_cov = self._prior_plan()
+        self._plan = Plan.prior(self.model, self.dt)
 
     def observe(self, t: float, y) -> Update | None:
         """Receive one human observation; update if a window boundary was reached.
@@ -223,22 +224,16 @@ class _Predictor:
             Joint targets (rad).
         cov : ndarray, shape (Q, Q)
         """
-        pt = self._plan_t
-        t = min(max(check_number(t, "t"), pt[0]), pt[-1])   # the plan holds at its ends
-        i = int(np.clip(np.searchsorted(pt, t, side="right"), 1, pt.size - 1))
-        span = pt[i] - pt[i - 1]
-        w = float(np.clip((t - pt[i - 1]) / span, 0.0, 1.0)) if span > 0 else 1.0
-        mean = (1 - w) * self._plan_mean[i - 1] + w * self._plan_mean[i]
-        cov = (1 - w) * self._plan_cov[i - 1] + w * self._plan_cov[i]
-        return mean, cov
+        return self._plan.at(check_number(t, "t"))   # the plan holds at its ends
 
     def commands(self, times) -> tuple[FloatArray, FloatArray]:
         """Planned commands at many ``times`` (s): means (T, Q) and covariances (T, Q, Q)."""
-        return self._interp(check_array(times, "times", 1))
+        return self._plan.interpolate(check_array(times, "times", 1))
 
     def plan(self) -> tuple[FloatArray, FloatArray, FloatArray]:
         """The whole current plan: knot times (n,), means (n, Q), covariances (n, Q, Q)."""
-        return self._plan_t.copy(), self._plan_mean.copy(), self._plan_cov.copy()
+        plan = self._plan
+        return plan.times.copy(), plan.mean.copy(), plan.cov.copy()
 
     def prediction(self, times) -> tuple[FloatArray, FloatArray]:
         """The latest update's robot distribution at ``times`` (unblended; holds after its end).
@@ -279,7 +274,7 @@ class _Predictor:
     def task(self) -> str:
         """Most probable task now."""
         post = self.task_posterior
-        return max(post, key=post.get)
+        return max(post, key=lambda name: post[name])
 
     @property
     def alpha(self) -> float:
@@ -345,7 +340,9 @@ class _Predictor:
         elif self.until_end and prediction.ended_probability(t) >= self.end_prob:
             ends = True                          # this update decides; later ones hold it
         k = prediction.task_index
-        jump = self._blend_in(t, prediction.robot, prediction.duration)
+        basis = self.model.basis
+        self._plan, jump = self._plan.blended(t, lambda ts: prediction.trajectory(basis, ts),
+                                              prediction.duration, self._blending)
         self.ended = self.ended or ends
         self._prediction = prediction
         upd = Update(float(t), int(n_observations), self.model.tasks[k],
@@ -406,67 +403,6 @@ class _Predictor:
         times, values = self.observations()
         keep = times <= t
         return times[keep], values[keep]
-
-    def _prior_plan(self):
-        tasks, P, p = self.model.task_models, self.model.n_human, self.model.priors
-        end = max(t.mean_duration for t in tasks)
-        self._check_steps(end / self.dt + 1, f"the prior plan to {end:g} s")
-        knots = np.arange(0.0, end + self.dt, self.dt)
-        means, covs = [], []
-        for task in tasks:
-            robot = task.weights.dims(slice(P, None))
-            z = np.clip(knots / task.mean_duration, 0.0, 1.0)
-            m, c = trajectory_distribution(robot, self.model.basis, z)
-            means.append(m)
-            covs.append(c)
-        means, covs = np.array(means), np.array(covs)
-        mean = np.tensordot(p, means, axes=1)
-        dev = means - mean
-        cov = np.tensordot(p, covs + dev[..., :, None] * dev[..., None, :], axes=1)
-        return knots, mean, cov
-
-    def _blend_in(self, t: float, robot: WeightDistribution, duration: float) -> float:
-        keep = self._plan_t < t                       # knot t is added below: no duplicate
-        # At least until the blend has completed (the rising sigmoid within e^-10 of 1):
-        # an update after the predicted end must still take over the plan.
-        settled = t + self.blend_delay + 10.0 / self.blend_rate
-        end = max(duration, self._plan_t[-1], t + self.horizon, settled)
-        first = (np.floor(t / self.dt + 1e-9) + 1.0) * self.dt
-        self._check_steps(np.count_nonzero(keep) + (end - first) / self.dt + 2,
-                          f"an update at {t:g} s, planning to {end:g} s,")
-        new_t = np.arange(first, end + self.dt, self.dt)
-        new_t = new_t[new_t > t + 1e-9]
-        old_mean, old_cov = self._interp(np.concatenate([[t], new_t]))
-        old_now, old_new = (old_mean[:1], old_cov[:1]), (old_mean[1:], old_cov[1:])
-        mean, cov = trajectory_distribution(robot, self.model.basis,
-                                            np.clip(new_t / duration, 0.0, 1.0))
-        if self.blend:
-            fall, rise = sigmoid_activations(new_t, t + self.blend_delay, self.blend_rate)
-            # Past the falling sigmoid's numerically irrelevant tail (< 1e-12; it only
-            # falls) the product is the new distribution: blend only the steps before.
-            n = int(np.searchsorted(-fall, -1e-12))
-            rise[rise < 1e-12] = 0.0
-            head = blend_unchecked(np.stack([old_new[0][:n], mean[:n]]),
-                                   np.stack([old_new[1][:n], cov[:n]]),
-                                   np.stack([fall[:n], rise[:n]]))
-            mean = np.concatenate([head[0], mean[n:]])
-            cov = np.concatenate([head[1], cov[n:] / rise[n:, None, None]])
-        jump = float(np.linalg.norm(mean[0] - old_new[0][0])) if new_t.size else 0.0
-        self._plan_t = np.concatenate([self._plan_t[keep], [t], new_t])
-        self._plan_mean = np.concatenate([self._plan_mean[keep], old_now[0], mean])
-        self._plan_cov = np.concatenate([self._plan_cov[keep], old_now[1], cov])
-        return jump
-
-    def _interp(self, times: FloatArray) -> tuple[FloatArray, FloatArray]:
-        pt = self._plan_t
-        i = np.clip(np.searchsorted(pt, times, side="right"), 1, pt.size - 1)
-        span = pt[i] - pt[i - 1]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            w = np.where(span > 0, np.clip((times - pt[i - 1]) / span, 0.0, 1.0), 1.0)
-        mean = (1 - w)[:, None] * self._plan_mean[i - 1] + w[:, None] * self._plan_mean[i]
-        cov = ((1 - w)[:, None, None] * self._plan_cov[i - 1]
-               + w[:, None, None] * self._plan_cov[i])
-        return mean, cov
 
 
 class DynamicPredictor(_Predictor):
@@ -554,7 +490,8 @@ class DynamicPredictor(_Predictor):
     'left'
     """
 
-    def __init__(self, model, dow_t: float = 0.2, *, window: str = "all", **options) -> None:
+    def __init__(self, model: IProMP, dow_t: float = 0.2, *, window: str = "all",
+                 **options) -> None:
         self.dow_t = check_positive(dow_t, "dow_t")
         if self.dow_t < MIN_MEDIAN_DT_S:
             raise ValueError(f"dow_t: expected at least {MIN_MEDIAN_DT_S:g} s, got {dow_t!r}")
@@ -610,7 +547,7 @@ class StaticPredictor(_Predictor):
         As for :class:`DynamicPredictor` (``subsample``, ``likelihood``, ...).
     """
 
-    def __init__(self, model, ratio: float = 0.5, *, expected_duration: float | None = None,
+    def __init__(self, model: IProMP, ratio: float = 0.5, *, expected_duration: float | None = None,
                  **options) -> None:
         self.ratio = check_fraction(ratio, "ratio")
         self.expected_duration = (None if expected_duration is None

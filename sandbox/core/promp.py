@@ -1,4 +1,4 @@
-"""Weights of single demonstrations and the weight distribution across them (eq. 1-5).
+"""Weights of single demonstrations and the weight distribution across them (eq. 1-4, 6).
 
 A demonstration with D dims is represented by D weight vectors of N entries,
 concatenated dim after dim: :math:`\\omega = [\\omega_1^T, \\ldots, \\omega_D^T]^T`
@@ -65,7 +65,7 @@ def fit_weights(
 def _ridge_solve(psi: FloatArray, y: FloatArray, ridge: float) -> FloatArray:
     gram = psi.T @ psi
     gram[np.diag_indices_from(gram)] += ridge * max(np.trace(gram) / gram.shape[0], 1e-300)
-    return scipy.linalg.solve(gram, psi.T @ y, assume_a="pos")
+    return scipy.linalg.solve(gram, psi.T @ y, assume_a="pos")   # eq. 2 (with a ridge)
 
 
 @dataclass(frozen=True, eq=False)
@@ -164,7 +164,7 @@ def _thin(factor: FloatArray) -> FloatArray:
 def trajectory_distribution(
     dist: WeightDistribution, basis: GaussianBasis, z: FloatArray
 ) -> tuple[FloatArray, FloatArray]:
-    """Per-step mean and covariance of the trajectory at phases ``z`` (eq. 5).
+    """Per-step mean and covariance of the trajectory at phases ``z`` (eq. 4, without the noise).
 
     Parameters
     ----------
@@ -181,11 +181,11 @@ def trajectory_distribution(
     """
     psi = basis.evaluate(np.asarray(z, dtype=np.float64))
     D, N = dist.n_dims, dist.n_basis
-    mean = psi @ dist.mean.reshape(D, N).T
+    mean = psi @ dist.mean.reshape(D, N).T                 # eq. 1, 4: psi_t^T mu
     r = dist.factor.shape[1]
     A = (psi @ dist.factor.reshape(D, N, r).transpose(1, 0, 2).reshape(N, D * r))
     A = A.reshape(-1, D, r)
-    cov = A @ A.transpose(0, 2, 1)
+    cov = A @ A.transpose(0, 2, 1)                         # eq. 4: psi_t^T Sigma psi_t
     idx = np.arange(D)
     cov[:, idx, idx] += dist.reg[None, :] * (psi**2).sum(axis=1)[:, None]
     return mean, cov

@@ -1,4 +1,4 @@
-"""Task recognition: posterior over k task models (paper eq. 15-16).
+"""Task recognition: posterior over k task models (paper eq. 14-15).
 
 .. math::  p(k | y) \\propto p(y | \\theta_k, \\alpha^*_k)\\, p(k)
 
@@ -33,6 +33,6 @@ def task_posterior(log_likelihood: FloatArray, priors: FloatArray) -> FloatArray
     if np.any(p < 0) or p.sum() <= 0:
         raise ValueError(f"priors: expected non-negative values with a positive sum, got {p}")
     with np.errstate(divide="ignore"):
-        score = ll + np.log(p)
+        score = ll + np.log(p)          # eq. 14 (ll: eq. 15 at the MAP speed)
     weights = np.exp(score - score.max())
     return weights / weights.sum()

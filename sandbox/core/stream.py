@@ -18,6 +18,7 @@ window. At most :data:`~sandbox.core.limits.MAX_OBSERVATIONS` rows are kept.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -31,11 +32,14 @@ from sandbox.core.modality import Modality, select, slices
 from sandbox.core.promp import trajectory_distribution
 from sandbox.core.validation import FloatArray, check_array, check_integer
 
+if TYPE_CHECKING:
+    from sandbox.core.model import IProMP
+
 #: Phases at which :func:`observation_bounds` evaluates the tasks.
 _RANGE_PHASES = np.linspace(0.0, 1.0, 101)
 
 
-def observation_bounds(model) -> tuple[FloatArray, FloatArray]:
+def observation_bounds(model: IProMP) -> tuple[FloatArray, FloatArray]:
     """Range of accepted human values, in the model's normalised units.
 
     The range the model was fitted on is derived from the model itself (old
@@ -87,7 +91,7 @@ class ObservationStream:
         :func:`observation_bounds` of the model (normalised units).
     """
 
-    def __init__(self, model, observe: Sequence[str] | str | None = None,
+    def __init__(self, model: IProMP, observe: Sequence[str] | str | None = None,
                  subsample: int = 5) -> None:
         subsample = check_integer(subsample, "subsample", 1, MAX_SUBSAMPLE)
         self.modalities: tuple[Modality, ...] = tuple(model.modalities)

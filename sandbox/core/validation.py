@@ -72,8 +72,8 @@ def check_array(
     if shape is not None:
         for axis, size in enumerate(shape):
             if size is not None and arr.shape[axis] != size:
-                want = tuple("n" if s is None else s for s in shape)
-                raise ValueError(f"{name}: expected shape {want}, got {_describe(arr)}")
+                wanted = tuple("n" if s is None else s for s in shape)
+                raise ValueError(f"{name}: expected shape {wanted}, got {_describe(arr)}")
     if arr.ndim and arr.shape[0] < min_len:
         raise ValueError(f"{name}: expected at least {min_len} rows, got {arr.shape[0]}")
     if np.isinf(arr).any():

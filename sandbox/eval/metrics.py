@@ -87,7 +87,7 @@ def window_metric(errors: dict[str, Sequence[float]], gamma: Sequence[float]) ->
     for g, key in zip(gamma, ("e_p", "e_q", "e_phi")):
         e = np.asarray(errors[key], dtype=float)
         top = e.max()
-        out += g * (e / top if top > 0 else np.zeros_like(e))
+        out += g * (e / top if top > 0 else np.zeros_like(e))      # eq. 20
     return out.tolist()
 
 

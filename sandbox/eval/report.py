@@ -84,7 +84,7 @@ def build_report(trials: list[dict], config: dict, dataset: str, runtime_s: floa
                            n_boot, draws),
     }
     report["window_metric"], report["best_window"] = _window_metric(report, windows)
-    report["differences"] = {
+    report["differences"] = {                                   # eq. 19: static - dynamic
         f: {w: {m: report["static"][f]["mean"][m] - report["dynamic"][w]["mean"][m]
                 for m in MEASURES} for w in windows} for f in ratios}
     report["static_recognition"] = {

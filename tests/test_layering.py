@@ -1,0 +1,253 @@
+"""The import graph, read with ``ast``: no cycle, and no arrow the layering forbids.
+
+The layering (DESIGN.md section 2 and issue 16; the README's developer section
+draws it): the core imports only numpy, scipy and itself; the robot package
+nothing of the project; data may use the core and the robot (the synthetic
+generator solves Baxter's IK); the viewer draws the robot; the environments are
+sim + robot + human (data) and may render with the viewer, and reach the core
+only through a policy; the evaluation runs the core on data; the policies-and-
+episodes layer (``policies``, ``scenarios``, ``scenario_files``, ``recording``,
+``teleop``; it becomes ``sandbox/episodes/``) joins policies and environments;
+benchmarks may use all of that; the commands everything.
+
+Every import counts, also one inside a function (a late import still ties the
+modules together); only imports under ``if TYPE_CHECKING:`` are left out (they
+never run). Today's known breaks are listed in :data:`KNOWN` with the item of
+issue 16 that removes them; an entry no longer needed fails
+:func:`test_known_breaks_are_still_needed`, so the list only shrinks.
+"""
+
+from __future__ import annotations
+
+import ast
+import functools
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+
+from tests.conftest import REPO
+
+EPISODES = {"policies", "scenarios", "scenario_files", "recording", "teleop"}
+COMMANDS = {"commands", "cli", "__main__"}
+#: Parts each part may import (besides itself and the neutral root package).
+ALLOWED = {
+    "core": set(),
+    "robot": set(),
+    "data": {"core", "robot"},
+    "viz": {"robot"},
+    "envs": {"robot", "data", "viz"},
+    "eval": {"core", "data", "robot"},
+    "episodes": {"core", "data", "robot", "envs", "viz"},
+    "bench": {"core", "data", "robot", "envs", "viz", "eval", "episodes"},
+    "commands": {"core", "data", "robot", "envs", "viz", "eval", "episodes", "bench"},
+}
+#: Known breaks: (importing part, imported module or package) -> the change that removes it.
+KNOWN = {
+    # Issue 16 item 3: the check_* validators move to a neutral module every part may use.
+    ("robot", "sandbox.core.validation"): "issue 16 item 3 (validators in a neutral module)",
+    ("viz", "sandbox.core.validation"): "issue 16 item 3 (validators in a neutral module)",
+    ("envs", "sandbox.core.validation"): "issue 16 item 3 (validators in a neutral module)",
+    # Issue 16 item 2: Q_HOME lives in sandbox/data/synthetic/base.py (robot -> data).
+    ("robot", "sandbox.data.synthetic"): "issue 16 item 2 (robot facts in sandbox/robot)",
+    # Issue 16 item 1: viz/benchmark.py drives an env with a policy; benchmarks move to bench/.
+    ("viz", "sandbox.envs"): "issue 16 item 1 (benchmarks under sandbox/bench)",
+    ("viz", "sandbox.policies"): "issue 16 item 1 (benchmarks under sandbox/bench)",
+    # eval/grid.py reads its grid file with scenario_files.read_mapping; a file reader in
+    # the neutral module of item 3 (or in data) removes it. Not named in the issue.
+    ("eval", "sandbox.scenario_files"): "issue 16 item 3 (a neutral module), not yet named",
+}
+#: Known cycles (sets of modules) -> the change that removes them.
+KNOWN_CYCLES = {
+    frozenset({"sandbox.robot", "sandbox.robot.kinematics", "sandbox.data.synthetic",
+               "sandbox.data.synthetic.families", "sandbox.data.synthetic.generator",
+               "sandbox.data.synthetic.intent", "sandbox.data.synthetic.registry",
+               "sandbox.data.synthetic.robot"}):
+        "issue 16 item 2 (Q_HOME into sandbox/robot: the robot -> data import goes)",
+    # Not named in issue 16 (its target "no import cycle" covers them): executors opens a
+    # DaskExecutor late, which reuses the executors' helpers; tune evaluates with sweep's
+    # Evaluation late, and sweep_summary writes with sweep's write_atomic late.
+    frozenset({"sandbox.eval.dask_executor", "sandbox.eval.executors"}):
+        "not in issue 16's items: a follow-up of its 'no import cycle' target",
+    frozenset({"sandbox.eval.grid", "sandbox.eval.sweep", "sandbox.eval.sweep_summary",
+               "sandbox.eval.tune"}):
+        "not in issue 16's items: a follow-up of its 'no import cycle' target",
+}
+
+
+def modules() -> dict[str, Path]:
+    """Every module of the package by dotted name (``envs/`` installs as ``sandbox.envs``)."""
+    out = {}
+    for folder, package in ((REPO / "sandbox", "sandbox"), (REPO / "envs", "sandbox.envs")):
+        for path in sorted(folder.rglob("*.py")):
+            parts = [p for p in path.relative_to(folder).with_suffix("").parts
+                     if p != "__init__"]
+            out[".".join([package, *parts])] = path
+    return out
+
+
+def _runtime_nodes(tree: ast.AST) -> Iterator[ast.AST]:
+    """All nodes except the bodies of ``if TYPE_CHECKING:`` blocks."""
+    stack = [tree]
+    while stack:
+        node = stack.pop()
+        yield node
+        for child in ast.iter_child_nodes(node):
+            if isinstance(child, ast.If) and "TYPE_CHECKING" in ast.unparse(child.test):
+                stack.extend(child.orelse)
+            else:
+                stack.append(child)
+
+
+def imports(name: str, path: Path, known: dict[str, Path]) -> set[str]:
+    """Project modules ``name`` imports (``from P import m`` of a submodule m: P.m)."""
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    out = set()
+    for node in _runtime_nodes(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            out.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                up = package.split(".")[: len(package.split(".")) - node.level + 1]
+                base = ".".join(up + ([base] if base else []))
+            subs = {f"{base}.{a.name}" for a in node.names} & set(known)
+            out.update(subs or {base})
+    return {m for m in out if m == "sandbox" or m.startswith("sandbox.")}
+
+
+@functools.cache
+def _graph() -> dict[str, frozenset[str]]:
+    known = modules()
+    return {name: frozenset(imports(name, path, known) & set(known))
+            for name, path in known.items()}
+
+
+def graph() -> dict[str, set[str]]:
+    """Module -> the project modules it imports (read once per session)."""
+    return {name: set(targets) for name, targets in _graph().items()}
+
+
+def part(module: str) -> str:
+    names = module.split(".")
+    top = names[1] if len(names) > 1 else ""
+    if top in EPISODES:
+        return "episodes"
+    if top in COMMANDS:
+        return "commands"
+    if top in ("", "urdf"):
+        return "root"                    # the package itself and the URDF data files
+    return top
+
+
+def breaks() -> dict[tuple[str, str], list[str]]:
+    """Arrows the layering forbids: (part, imported module) -> importing modules."""
+    out: dict[tuple[str, str], list[str]] = {}
+    for a, targets in graph().items():
+        for b in targets:
+            pa, pb = part(a), part(b)
+            if pb not in (pa, "root") and pb not in ALLOWED[pa]:
+                out.setdefault((pa, b), []).append(a)
+    return out
+
+
+def _known(key: tuple[str, str]) -> tuple[str, str] | None:
+    pa, b = key
+    for kp, km in KNOWN:
+        if kp == pa and (b == km or b.startswith(km + ".")):
+            return (kp, km)
+    return None
+
+
+def cycles(g: dict[str, set[str]]) -> list[frozenset[str]]:
+    """Strongly connected components of more than one module (Tarjan, iterative)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on: set[str] = set()
+    out = []
+    for root in g:
+        if root in index:
+            continue
+        work = [(root, iter(sorted(g[root])))]
+        index[root] = low[root] = len(index)
+        stack.append(root)
+        on.add(root)
+        while work:
+            v, it = work[-1]
+            w = next(it, None)
+            if w is not None:
+                if w not in index:
+                    index[w] = low[w] = len(index)
+                    stack.append(w)
+                    on.add(w)
+                    work.append((w, iter(sorted(g[w]))))
+                elif w in on:
+                    low[v] = min(low[v], index[w])
+                continue
+            work.pop()
+            if work:
+                low[work[-1][0]] = min(low[work[-1][0]], low[v])
+            if low[v] == index[v]:
+                comp = set()
+                while True:
+                    w = stack.pop()
+                    on.discard(w)
+                    comp.add(w)
+                    if w == v:
+                        break
+                if len(comp) > 1:
+                    out.append(frozenset(comp))
+    return out
+
+
+def test_the_graph_is_read():
+    g = graph()
+    assert "sandbox.core.predictor" in g and "sandbox.envs.handover" in g
+    assert "sandbox.core.plan" in g["sandbox.core.predictor"]
+    assert "sandbox.core.io" in g["sandbox.core.model"]
+
+
+def test_no_import_cycle():
+    found = {c: KNOWN_CYCLES.get(c) for c in cycles(graph())}
+    new = [sorted(c) for c, why in found.items() if why is None]
+    assert not new, f"import cycles: {new}"
+
+
+def test_io_and_model_do_not_import_each_other():
+    g = graph()
+    assert "sandbox.core.model" not in g["sandbox.core.io"]
+
+
+def test_no_import_breaks_the_layering():
+    new = {key: mods for key, mods in breaks().items() if _known(key) is None}
+    assert not new, f"imports the layering forbids (part, module): importers {new}"
+
+
+def test_known_breaks_are_still_needed():
+    used = {_known(key) for key in breaks()}
+    stale = [k for k in KNOWN if k not in used]
+    stale_cycles = [sorted(c) for c in KNOWN_CYCLES if c not in set(cycles(graph()))]
+    assert not stale and not stale_cycles, (
+        f"fixed, so remove from KNOWN / KNOWN_CYCLES: {stale} {stale_cycles}")
+
+
+def test_core_imports_only_numpy_scipy_and_the_standard_library():
+    allowed = set(sys.stdlib_module_names) | {"numpy", "scipy", "sandbox"}
+    bad = {}
+    for name, path in modules().items():
+        if part(name) != "core":
+            continue
+        for node in _runtime_nodes(ast.parse(path.read_text(encoding="utf-8"))):
+            names = ([a.name for a in node.names] if isinstance(node, ast.Import)
+                     else [node.module or ""] if isinstance(node, ast.ImportFrom)
+                     and not node.level else [])
+            for n in names:
+                if n.split(".")[0] not in allowed or (n.startswith("sandbox")
+                                                       and part(n) not in ("core", "root")):
+                    bad.setdefault(name, []).append(n)
+    assert not bad, bad
+
+
+def test_cycle_finder_finds_a_cycle():
+    g = {"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}
+    assert cycles(g) == [frozenset({"a", "b", "c"})]
