@@ -37,8 +37,10 @@ import gymnasium as gym
 
 from sandbox.envs.handover import BaxterHandoverEnv
 from sandbox.envs.task import RewardWeights
-from sandbox.envs.vector import VECTOR_ENTRY_POINT
 
+#: What ``gym.make_vec`` calls (:func:`sandbox.envs.vector.make_vector_env`; named, not
+#: imported, so the vector module may read :data:`_VARIANTS` without an import cycle).
+VECTOR_ENTRY_POINT = "sandbox.envs.vector:make_vector_env"
 #: Steps before truncation (6 s at the default 50 Hz).
 MAX_EPISODE_STEPS = 300
 

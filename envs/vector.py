@@ -21,10 +21,10 @@ from typing import Any
 import gymnasium as gym
 from gymnasium.vector import AsyncVectorEnv, AutoresetMode, SyncVectorEnv, VectorEnv
 
+from sandbox.envs import _VARIANTS
+
 #: Start method of the async workers made by :func:`make_vector_env`.
 VECTOR_CONTEXT = "forkserver"
-#: The ``vector_entry_point`` registered for every id.
-VECTOR_ENTRY_POINT = "sandbox.envs.vector:make_vector_env"
 #: Vectorizers :func:`make_vector_env` builds.
 VECTORIZERS = ("async", "sync")
 
@@ -78,8 +78,6 @@ def make_vector_env(num_envs: int = 1, *, family: str = "objects", observe_body:
 
 def env_id_of(family: str, observe_body: bool) -> str:
     """The registered id made with these arguments (``ValueError`` if there is none)."""
-    from sandbox.envs import _VARIANTS
-
     for env_id, variant_family, body in _VARIANTS:
         if (variant_family, body) == (family, observe_body):
             return env_id

@@ -18,7 +18,7 @@ observed position modalities).
 is (:mod:`sandbox.data.cache`); ``--clear`` empties it.
 
 ``export`` writes a folder's or a synthetic set's demonstrations as a Minari
-dataset (``--minari-id sandbox/NAME-v0``; layout in :mod:`sandbox.minari_io`),
+dataset (``--minari-id sandbox/NAME-v0``; layout in :mod:`sandbox.data.minari_io`),
 which ``fit --data minari:ID`` fits from.
 """
 
@@ -149,8 +149,8 @@ def _export(args: argparse.Namespace) -> int:
 
     import sandbox.envs
     from sandbox.data.datasets import load_dataset
+    from sandbox.data.minari_io import default_env_id, export_demonstrations, require_minari
     from sandbox.data.recorded import SkippedTrialWarning
-    from sandbox.minari_io import default_env_id, export_demonstrations, require_minari
 
     minari = require_minari()
     env_id = args.env_id or default_env_id(args.data)

@@ -119,7 +119,7 @@ def _recorder(args):
     ``--record-minari``. The id is checked before anything is played."""
     if args.record_minari is None:
         return (lambda env: env), (lambda env, name: None)
-    from sandbox.minari_io import check_new_dataset_id, collect, save_collected
+    from sandbox.data.minari_io import check_new_dataset_id, collect, save_collected
 
     dataset_id = check_new_dataset_id(args.record_minari)
 

@@ -27,7 +27,7 @@ from sandbox.data.limits import MAX_GRID_SAMPLES, MAX_RATE_HZ
 from sandbox.data.spec import DataSpec, resolve
 
 SYNTHETIC_PREFIX = "synthetic:"
-#: Prefix of a Minari dataset id (:mod:`sandbox.minari_io`, optional extra).
+#: Prefix of a Minari dataset id (:mod:`sandbox.data.minari_io`, optional extra).
 MINARI_PREFIX = "minari:"
 #: Demonstrations per task of a synthetic set when ``n_per_task`` is not given.
 DEFAULT_SYNTHETIC_PER_TASK = 20
@@ -71,7 +71,7 @@ def load_dataset(
     data : str or Path
         A dataset folder, ``"synthetic:NAME"``, or ``"minari:ID"``: a Minari
         dataset written by ``python -m sandbox data export`` (optional extra,
-        :mod:`sandbox.minari_io`; stored preprocessed, so ``preprocess`` must be
+        :mod:`sandbox.data.minari_io`; stored preprocessed, so ``preprocess`` must be
         the export's).
     spec : DataSpec or path, optional
         What a folder's columns are (a :class:`~sandbox.data.spec.DataSpec` or a
@@ -157,7 +157,7 @@ def _recorded(root, tasks, n_per_task, preprocess, options) -> list[Demonstratio
 
 def _minari(dataset_id, layout, observe, tasks, n_per_task, preprocess, options):
     """A Minari dataset written by ``python -m sandbox data export``."""
-    from sandbox.minari_io import load_for_fit
+    from sandbox.data.minari_io import load_for_fit
 
     if options:
         raise ValueError(f"{sorted(options)}: only used for recorded folders, not minari:ID")
