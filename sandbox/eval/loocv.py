@@ -20,6 +20,7 @@ For each trial this module computes, on the same kept observations
 
 from __future__ import annotations
 
+import signal
 import time
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass, field
@@ -220,6 +221,11 @@ def _init(train, test, fits, config) -> None:
 
 
 def _init_worker(init, initargs: tuple) -> None:
+    # Ctrl-C reaches the whole process group: only the parent handles it. It cancels the
+    # trials not started and the pool ends with the running ones; a worker killed by the
+    # signal would break the pool, whose thread then fails on the cancelled trials
+    # (InvalidStateError, printed as a traceback by Python 3.11).
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     init(*initargs)
     _STATE["blas"] = one_blas_thread()     # kept for the worker's lifetime
 
