@@ -12,10 +12,12 @@ restarted after its process died, so no worker depends on another's memory.
 A worker that dies marks the task it was running "suspicious"; the scheduler
 gives up on a task after ``distributed.scheduler.allowed-failures`` deaths
 (:class:`distributed.KilledWorker`) and :func:`~sandbox.eval.executors.run_tasks`
-then retries it once. The local cluster sets that limit to 0 and sends each
-worker one task at a time (``worker-saturation`` 1.0), so a task is retried
-once in all, as with local processes; a running scheduler applies its own
-configuration first (3 by default). The local cluster's workers do not run
+then retries it once. The scheduler counts a death against every task assigned
+to the dead worker, running or waiting, so no more tasks are submitted than
+there are worker threads (:meth:`DaskExecutor.capacity`): a task is never
+charged with a death it did not cause. The local cluster sets that limit to 0,
+so a task is retried once in all, as with local processes; a running scheduler
+applies its own configuration first (3 by default). The local cluster's workers do not run
 Dask's statistical profiler (it samples the running task every 10 ms).
 """
 
@@ -112,10 +114,11 @@ class DaskExecutor:
         return max(1, sum(self.client.nthreads().values()))
 
     def capacity(self) -> int:
-        """Tasks kept submitted: twice the worker threads. The scheduler holds the extra
-        ones (a worker of the local cluster is sent one at a time) and starts one as soon
-        as a worker is free, without a round trip to this process."""
-        return 2 * self.slots()
+        """Tasks kept submitted: one per worker thread. A task waiting behind another on a
+        worker would count that worker's death as its own (the scheduler marks every
+        task assigned to a dead worker, running or not) and could fail without having
+        run; the scheduler sends a new task to an idle worker."""
+        return self.slots()
 
     def submit(self, task: Task):
         """Start ``task`` on the cluster (a fresh key per attempt); returns its future."""

@@ -16,8 +16,8 @@ lanes are started with ``OMP_NUM_THREADS``, ``MKL_NUM_THREADS`` and
 ``OPENBLAS_NUM_THREADS`` set to 1), so every executor computes the same bits.
 
 :func:`run_tasks` keeps at most ``executor.capacity()`` tasks submitted (one per
-lane; twice the worker threads on Dask, whose scheduler holds the extra ones
-until a worker is free, so no worker waits for this process), retries a failed
+lane or Dask worker thread: a task queued behind another would die with it if
+that worker's process died), retries a failed
 task (its worker died, or it raised) once, then reports it as failed and goes
 on with the others.
 
