@@ -10,8 +10,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from sandbox.core.validation import check_array, check_integer, check_number, check_positive
 from sandbox.envs.task import RewardWeights
+from sandbox.validation import check_array, check_integer, check_number, check_positive
 
 #: Arguments of :class:`sandbox.viz.Viewer` accepted in ``viewer_options`` ("human" mode).
 VIEWER_KEYS = ("fps", "record", "resolution", "camera", "target", "fov", "floor_z", "realtime",

@@ -24,8 +24,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sandbox import urdf
-from sandbox.core.validation import check_array, check_positive, check_times
 from sandbox.envs.pybullet import Simulation
+from sandbox.validation import check_array, check_positive, check_times
 
 FloatArray = NDArray[np.float64]
 

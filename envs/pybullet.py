@@ -17,8 +17,8 @@ import pybullet
 from numpy.typing import ArrayLike, NDArray
 from pybullet_utils.bullet_client import BulletClient
 
-from sandbox.core.validation import check_positive
 from sandbox.robot.bullet import BulletBaxter, _quiet, load_baxter
+from sandbox.validation import check_positive
 
 FloatArray = NDArray[np.float64]
 IDENTITY = (0.0, 0.0, 0.0, 1.0)

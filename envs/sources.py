@@ -231,8 +231,8 @@ def waypoint_motion(waypoint_times, waypoints, rng: np.random.Generator, *,
     HumanMotion
         ``meta["waypoints"]`` and ``meta["waypoint_times"]`` hold the script.
     """
-    from sandbox.core.validation import check_array, check_positive, check_times
     from sandbox.data.synthetic.tracker import TrackerModel, apply_tracker
+    from sandbox.validation import check_array, check_positive, check_times
 
     waypoint_times = check_times(waypoint_times, "waypoint_times")
     if waypoint_times[0] < 0:

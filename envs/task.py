@@ -26,11 +26,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sandbox import urdf
-from sandbox.core.validation import check_positive
 from sandbox.data.synthetic.robot import GRASP_OFFSET
 from sandbox.envs.human import HumanHand
 from sandbox.envs.pybullet import Simulation
 from sandbox.envs.robot import BaxterArm
+from sandbox.validation import check_positive
 
 FloatArray = NDArray[np.float64]
 

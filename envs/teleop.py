@@ -26,9 +26,9 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from sandbox.core.validation import check_array, check_positive
 from sandbox.data.synthetic.base import HAND_START
 from sandbox.envs.human import BODY_DIMS
+from sandbox.validation import check_array, check_positive
 
 FloatArray = NDArray[np.float64]
 

@@ -38,10 +38,10 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike
 
-from sandbox.core.validation import FloatArray, check_array, check_positive, check_times
 from sandbox.data.spec import ROBOT_COLUMNS
 from sandbox.data.synthetic.robot import kinematics, robot_meeting
 from sandbox.data.writer import RIGHT_ARM_COLUMNS, next_trial_path, write_trial
+from sandbox.validation import FloatArray, check_array, check_positive, check_times
 
 #: Right-arm posture of the recordings and of the environment (rad), ``right_s0 ... right_w2``.
 Q_RIGHT = (-0.285, -1.031, 0.907, 1.601, -0.482, 1.124, -0.208)

@@ -38,7 +38,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sandbox.core import DynamicPredictor, IProMP, StaticPredictor
-from sandbox.core.validation import check_array, check_positive
+from sandbox.validation import check_array, check_positive
 
 FloatArray = NDArray[np.float64]
 
@@ -322,7 +322,7 @@ class RecordedRobotPolicy(_Steering):
 
     def __init__(self, times, robot, task: str, *, control_hz: float = 50.0,
                  close_radius: float = 0.045, max_velocity=None) -> None:
-        from sandbox.core.validation import check_times
+        from sandbox.validation import check_times
 
         t = check_times(times, "times")
         self._times = t - t[0]

@@ -43,13 +43,14 @@ expected and what came; :func:`run_scenario_file` runs it.
 
 from __future__ import annotations
 
-import json
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-SUFFIXES = (".json", ".yaml", ".yml")
+from sandbox.validation import MAPPING_SUFFIXES, read_mapping
+
+SUFFIXES = MAPPING_SUFFIXES
 FAMILIES = {"diverging": "sandbox/BaxterHandoverDiverging-v1",
             "objects": "sandbox/BaxterHandover-v1"}
 TOP_KEYS = ("name", "family", "seed", "object", "speed", "time_limit", "observe", "human",
@@ -139,35 +140,6 @@ def resolve(path: str | Path) -> Path:
     names = sorted(p.stem for p in EXAMPLES.glob("*") if p.suffix in SUFFIXES)
     raise ValueError(f"scenario: expected an existing .json/.yaml file or an example name "
                      f"({', '.join(names)}), got {str(path)!r}")
-
-
-def read_mapping(path: Path, what: str = "scenario") -> Any:
-    """Parse a JSON or YAML file (by suffix); syntax errors become ``ValueError``.
-
-    ``what`` names the file in messages (``"scenario"``, ``"grid"``, ...).
-    """
-    if path.suffix.lower() not in SUFFIXES:
-        raise ValueError(f"{what} {path}: expected a .json, .yaml or .yml file, "
-                         f"got suffix {path.suffix!r}")
-    text = path.read_text(encoding="utf-8")
-    if path.suffix.lower() == ".json":
-        try:
-            return json.loads(text)
-        except json.JSONDecodeError as error:
-            raise ValueError(f"{what} {path}: invalid JSON at line {error.lineno}, column "
-                             f"{error.colno}: {error.msg}") from error
-    try:
-        import yaml
-    except ImportError as error:  # pragma: no cover - pyyaml is a dependency
-        raise ValueError(f"{what} {path}: YAML files need PyYAML (pip install pyyaml); "
-                         f"or write the {what} as JSON") from error
-    try:
-        return yaml.safe_load(text)
-    except yaml.YAMLError as error:
-        mark = getattr(error, "problem_mark", None)
-        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        problem = getattr(error, "problem", None) or str(error)
-        raise ValueError(f"{what} {path}: invalid YAML{where}: {problem}") from error
 
 
 def load_scenario(path: str | Path, *, observe: list[str] | str | None = None,

@@ -39,7 +39,7 @@ from typing import Any
 
 import numpy as np
 
-from sandbox.core.validation import check_choice
+from sandbox.validation import check_choice
 
 #: Scenario name -> (environment id, synthetic family).
 SCENARIOS = {

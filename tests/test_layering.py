@@ -1,7 +1,9 @@
 """The import graph, read with ``ast``: no cycle, and no arrow the layering forbids.
 
 The layering (DESIGN.md section 2 and issue 16; the README's developer section
-draws it): the core imports only numpy, scipy and itself; the robot package
+draws it): ``sandbox/validation.py`` (the ``check_*`` validators and the
+JSON/YAML reader) is neutral: every part may import it and it imports nothing
+of the project; the core imports only numpy, scipy and itself; the robot package
 nothing of the project; data may use the core and the robot (the synthetic
 generator solves Baxter's IK); the viewer draws the robot; the environments are
 sim + robot + human (data) and may render with the viewer, and reach the core
@@ -32,6 +34,7 @@ EPISODES = {"policies", "scenarios", "scenario_files", "recording", "teleop",
 COMMANDS = {"commands", "cli", "__main__"}
 #: Parts each part may import (besides itself and the neutral root package).
 ALLOWED = {
+    "validation": set(),                # neutral: sandbox/validation.py, used by every part
     "core": set(),
     "robot": set(),
     "data": {"core", "robot"},
@@ -42,20 +45,16 @@ ALLOWED = {
     "bench": {"core", "data", "robot", "envs", "viz", "eval", "episodes"},
     "commands": {"core", "data", "robot", "envs", "viz", "eval", "episodes", "bench"},
 }
+for _part, _allowed in ALLOWED.items():
+    if _part != "validation":
+        _allowed.add("validation")
 #: Known breaks: (importing part, imported module or package) -> the change that removes it.
 KNOWN = {
-    # Issue 16 item 3: the check_* validators move to a neutral module every part may use.
-    ("robot", "sandbox.core.validation"): "issue 16 item 3 (validators in a neutral module)",
-    ("viz", "sandbox.core.validation"): "issue 16 item 3 (validators in a neutral module)",
-    ("envs", "sandbox.core.validation"): "issue 16 item 3 (validators in a neutral module)",
     # Issue 16 item 2: Q_HOME lives in sandbox/data/synthetic/base.py (robot -> data).
     ("robot", "sandbox.data.synthetic"): "issue 16 item 2 (robot facts in sandbox/robot)",
     # Issue 16 item 1: viz/benchmark.py drives an env with a policy; benchmarks move to bench/.
     ("viz", "sandbox.envs"): "issue 16 item 1 (benchmarks under sandbox/bench)",
     ("viz", "sandbox.policies"): "issue 16 item 1 (benchmarks under sandbox/bench)",
-    # eval/grid.py reads its grid file with scenario_files.read_mapping; a file reader in
-    # the neutral module of item 3 (or in data) removes it. Not named in the issue.
-    ("eval", "sandbox.scenario_files"): "issue 16 item 3 (a neutral module), not yet named",
     # data/minari_io.py: fit --data minari:ID reads datasets (data), but exporting one names
     # a registered env id (envs). The export half moves to sandbox/episodes/ with item 1.
     ("data", "sandbox.envs"): "issue 16 item 1 (Minari export in the episodes layer)",
@@ -246,10 +245,20 @@ def test_core_imports_only_numpy_scipy_and_the_standard_library():
                      else [node.module or ""] if isinstance(node, ast.ImportFrom)
                      and not node.level else [])
             for n in names:
-                if n.split(".")[0] not in allowed or (n.startswith("sandbox")
-                                                       and part(n) not in ("core", "root")):
+                if n.split(".")[0] not in allowed or (
+                        n.startswith("sandbox") and part(n) not in ("core", "root", "validation")):
                     bad.setdefault(name, []).append(n)
     assert not bad, bad
+
+
+def test_the_neutral_module_loads_only_numpy_and_the_standard_library():
+    """What every part imports may not pull a heavy or project import in at load time
+    (PyYAML is imported inside ``read_mapping``, when a file is read)."""
+    tree = ast.parse((REPO / "sandbox" / "validation.py").read_text(encoding="utf-8"))
+    loaded = [a.name for node in tree.body if isinstance(node, ast.Import) for a in node.names]
+    loaded += [node.module or "" for node in tree.body if isinstance(node, ast.ImportFrom)]
+    allowed = set(sys.stdlib_module_names) | {"numpy", "__future__"}
+    assert loaded and all(n.split(".")[0] in allowed for n in loaded), loaded
 
 
 def test_cycle_finder_finds_a_cycle():

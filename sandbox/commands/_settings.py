@@ -61,7 +61,7 @@ def load(path: str | Path | None) -> dict[str, Any]:
     """The checked settings of ``path`` (``{}`` for None); errors name the file and key."""
     if path is None:
         return {}
-    from sandbox.scenario_files import read_mapping
+    from sandbox.validation import read_mapping
 
     path = Path(path)
     if not path.is_file():

@@ -44,7 +44,7 @@ def add_arguments(parser) -> None:
 def _check(args) -> None:
     from pathlib import Path
 
-    from sandbox.core.validation import check_positive
+    from sandbox.validation import check_positive
 
     if not args.no_html and Path(args.out).suffix.lower() not in (".html", ".htm"):
         raise ValueError(f"--out: expected a file name ending in .html, got {args.out!r}")

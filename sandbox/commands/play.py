@@ -138,7 +138,7 @@ def run(args) -> int:
     args.record = _recorder(args)
     if args.scenario is not None:
         return _scenario(args)
-    from sandbox.core.validation import check_positive
+    from sandbox.validation import check_positive
     from sandbox.viz.server import check_host
 
     check_positive(args.dow, "--dow")

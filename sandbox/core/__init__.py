@@ -16,7 +16,7 @@ Modules: :mod:`~sandbox.core.basis`, :mod:`~sandbox.core.promp`,
 :mod:`~sandbox.core.predictor` (with :mod:`~sandbox.core.stream`, the observation
 stream), :mod:`~sandbox.core.modality`, :mod:`~sandbox.core.io` (with
 :mod:`~sandbox.core.archive`, the checked ``.npz`` reader). At the public
-boundary: :mod:`~sandbox.core.validation` (``check_*``, only ``ValueError``),
+boundary: :mod:`~sandbox.validation` (``check_*``, only ``ValueError``),
 :mod:`~sandbox.core.limits` (every size limit, documented) and
 :mod:`~sandbox.core.demos` (what ``fit`` accepts).
 

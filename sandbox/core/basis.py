@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from sandbox.core.limits import MAX_N_BASIS
-from sandbox.core.validation import (
+from sandbox.validation import (
     FloatArray,
     check_array,
     check_bool,

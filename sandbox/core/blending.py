@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sandbox.core.validation import FloatArray, check_array
+from sandbox.validation import FloatArray, check_array
 
 
 def sigmoid_activations(times: FloatArray, center: float, rate: float

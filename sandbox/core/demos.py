@@ -24,7 +24,7 @@ import numpy as np
 
 from sandbox.core.limits import MAX_ABS_VALUE, MAX_DIMS, MIN_RELATIVE_SPREAD, check_duration
 from sandbox.core.modality import Modality, check_modalities, default_modalities
-from sandbox.core.validation import FloatArray, check_array, check_times
+from sandbox.validation import FloatArray, check_array, check_times
 
 ATTRIBUTES = ("times", "human", "robot", "task")
 

@@ -53,7 +53,7 @@ from sandbox.core.limits import MAX_SUBSAMPLE
 from sandbox.core.phase import Lattice
 from sandbox.core.statistics import StreamStatistics
 from sandbox.core.stream import ObservationStream
-from sandbox.core.validation import (
+from sandbox.validation import (
     FloatArray,
     check_array,
     check_choice,

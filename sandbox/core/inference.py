@@ -20,7 +20,7 @@ from sandbox.core.phase import ended_probability, estimate_phase
 from sandbox.core.promp import WeightDistribution, trajectory_distribution
 from sandbox.core.recognition import task_posterior
 from sandbox.core.statistics import StreamStatistics
-from sandbox.core.validation import FloatArray
+from sandbox.validation import FloatArray
 
 if TYPE_CHECKING:
     from sandbox.core.model import IProMP

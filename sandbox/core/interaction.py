@@ -19,7 +19,7 @@ import numpy as np
 import scipy.linalg
 
 from sandbox.core.basis import GaussianBasis
-from sandbox.core.validation import FloatArray, check_array
+from sandbox.validation import FloatArray, check_array
 
 LOG_2PI = float(np.log(2.0 * np.pi))
 

@@ -64,7 +64,7 @@ from sandbox.core.limits import (
 )
 from sandbox.core.modality import Modality, check_modalities, default_modalities
 from sandbox.core.promp import WeightDistribution
-from sandbox.core.validation import check_number
+from sandbox.validation import check_number
 
 if TYPE_CHECKING:
     from sandbox.core.model import IProMP

@@ -48,7 +48,7 @@ from scipy.linalg import lapack
 
 from sandbox.core.interaction import LOG_2PI
 from sandbox.core.promp import WeightDistribution
-from sandbox.core.validation import FloatArray
+from sandbox.validation import FloatArray
 
 if TYPE_CHECKING:
     from sandbox.core.model import IProMP

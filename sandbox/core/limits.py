@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from sandbox.core.validation import check_number
+from sandbox.validation import check_number
 
 #: Longest demonstration or trial accepted (s). Handovers last 1-10 s; a
 #: minute leaves ample room. Raise it with ``max_duration=`` (``IProMP``).

@@ -78,7 +78,7 @@ from sandbox.core.limits import (
 )
 from sandbox.core.modality import Modality
 from sandbox.core.promp import WeightDistribution, fit_weights
-from sandbox.core.validation import FloatArray, check_mapping, check_number, check_positive
+from sandbox.validation import FloatArray, check_mapping, check_number, check_positive
 
 if TYPE_CHECKING:
     from sandbox.core.familiarity import Calibration

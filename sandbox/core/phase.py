@@ -31,7 +31,7 @@ import numpy as np
 from sandbox.core.interaction import LOG_2PI
 from sandbox.core.likelihood import Scorer
 from sandbox.core.limits import MAX_LATTICE_FLOATS
-from sandbox.core.validation import FloatArray
+from sandbox.validation import FloatArray
 
 
 @dataclass(frozen=True, eq=False)

@@ -26,7 +26,7 @@ import numpy as np
 from sandbox.core.blending import blend_unchecked, sigmoid_activations
 from sandbox.core.limits import MAX_PLAN_STEPS
 from sandbox.core.promp import trajectory_distribution
-from sandbox.core.validation import FloatArray
+from sandbox.validation import FloatArray
 
 if TYPE_CHECKING:
     from sandbox.core.model import IProMP

@@ -54,7 +54,7 @@ from sandbox.core.phase import Lattice
 from sandbox.core.plan import Blending, Plan, check_steps
 from sandbox.core.statistics import StreamStatistics
 from sandbox.core.stream import ObservationStream
-from sandbox.core.validation import (
+from sandbox.validation import (
     FloatArray,
     check_array,
     check_bool,

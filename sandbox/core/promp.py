@@ -23,7 +23,7 @@ import numpy as np
 import scipy.linalg
 
 from sandbox.core.basis import GaussianBasis
-from sandbox.core.validation import FloatArray, check_array, check_positive
+from sandbox.validation import FloatArray, check_array, check_positive
 
 
 def fit_weights(

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sandbox.core.validation import FloatArray, check_array
+from sandbox.validation import FloatArray, check_array
 
 
 def task_posterior(log_likelihood: FloatArray, priors: FloatArray) -> FloatArray:

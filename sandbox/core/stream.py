@@ -30,7 +30,7 @@ from sandbox.core.limits import (
 )
 from sandbox.core.modality import Modality, select, slices
 from sandbox.core.promp import trajectory_distribution
-from sandbox.core.validation import FloatArray, check_array, check_integer
+from sandbox.validation import FloatArray, check_array, check_integer
 
 if TYPE_CHECKING:
     from sandbox.core.model import IProMP

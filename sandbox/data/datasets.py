@@ -21,10 +21,10 @@ from typing import Any
 
 import numpy as np
 
-from sandbox.core.validation import check_array, check_choice, check_positive
 from sandbox.data.demonstration import Demonstration, stack_tasks
 from sandbox.data.limits import MAX_GRID_SAMPLES, MAX_RATE_HZ
 from sandbox.data.spec import DataSpec, resolve
+from sandbox.validation import check_array, check_choice, check_integer, check_positive
 
 SYNTHETIC_PREFIX = "synthetic:"
 #: Prefix of a Minari dataset id (:mod:`sandbox.data.minari_io`, optional extra).
@@ -108,9 +108,9 @@ def load_dataset(
         :class:`sandbox.data.recorded.SkippedTrialWarning`.
     """
     check_choice(preprocess, "preprocess", PREPROCESS)
-    _check_int(seed, "seed", 0)
+    check_integer(seed, "seed", 0)
     if n_per_task is not None:
-        _check_int(n_per_task, "n_per_task", 1, MAX_SYNTHETIC_PER_TASK)
+        check_integer(n_per_task, "n_per_task", 1, MAX_SYNTHETIC_PER_TASK)
     if tasks is not None:
         if isinstance(tasks, (str, bytes)) or not isinstance(tasks, Iterable):
             raise ValueError(f"tasks: expected a list of task names, got {tasks!r}")
@@ -135,15 +135,6 @@ def load_dataset(
     if rate_hz is not None:
         demos = [resample_uniform(d, rate_hz) for d in demos]
     return demos
-
-
-def _check_int(value: Any, name: str, low: int, high: int | None = None) -> int:
-    """``value`` as an int after checking it is an integer in ``[low, high]``."""
-    ok = isinstance(value, (int, np.integer)) and not isinstance(value, bool)
-    if not ok or value < low or (high is not None and value > high):
-        bound = f">= {low}" if high is None else f"from {low} to {high}"
-        raise ValueError(f"{name}: expected an integer {bound}, got {value!r}")
-    return int(value)
 
 
 def _recorded(root, tasks, n_per_task, preprocess, options) -> list[Demonstration]:

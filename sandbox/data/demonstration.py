@@ -15,7 +15,7 @@ from sandbox.core.modality import (
     select,
     slices,
 )
-from sandbox.core.validation import FloatArray, check_array, check_times
+from sandbox.validation import FloatArray, check_array, check_times
 
 
 def _default_names(prefix: str, n: int) -> tuple[str, ...]:

@@ -52,8 +52,8 @@ from filterpy.kalman import KalmanFilter
 from numpy.typing import ArrayLike
 from scipy.stats import chi2
 
-from sandbox.core.validation import FloatArray, check_array, check_fraction, check_positive
 from sandbox.data import kalman
+from sandbox.validation import FloatArray, check_array, check_fraction, check_positive
 
 #: Per-sample status codes of :func:`filter_track` (index into :data:`STATUS_NAMES`).
 WAITING, MISSING, ACCEPTED, REJECTED, INIT, RESET, STALE = range(7)

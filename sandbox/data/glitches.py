@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from sandbox.core.validation import FloatArray, check_array, check_positive
+from sandbox.validation import FloatArray, check_array, check_positive
 
 
 @dataclass(frozen=True)

@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from sandbox.core.validation import FloatArray
+from sandbox.validation import FloatArray
 
 # Status codes: the same as sandbox.data.filtering's (kept in step by its tests).
 WAITING, MISSING, ACCEPTED, REJECTED, INIT, RESET, STALE = range(7)

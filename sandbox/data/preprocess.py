@@ -41,11 +41,11 @@ from typing import Any
 import numpy as np
 
 from sandbox.core.modality import Modality, default_modalities
-from sandbox.core.validation import FloatArray, check_choice, check_positive
 from sandbox.data.demonstration import Demonstration
 from sandbox.data.filtering import FilterConfig, filter_track, smooth_track
 from sandbox.data.glitches import excursions, find_glitches
 from sandbox.data.signals import preprocess_signal
+from sandbox.validation import FloatArray, check_choice, check_positive
 
 PREPROCESS = ("none", "causal", "smooth")
 #: Width (s) of the running-median window used to find excursions ("smooth").

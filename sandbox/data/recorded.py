@@ -45,7 +45,6 @@ from typing import Any
 import numpy as np
 
 from sandbox.core.modality import Modality
-from sandbox.core.validation import FloatArray, check_positive
 from sandbox.data.cache import TrialCache, resolve_cache
 from sandbox.data.demonstration import Demonstration
 from sandbox.data.limits import MAX_DURATION_S
@@ -66,6 +65,7 @@ from sandbox.data.trialfile import (  # noqa: F401 - re-exported: the loader's p
     check_plausible,
     read_trial_table,
 )
+from sandbox.validation import FloatArray, check_positive
 
 
 class SkippedTrialWarning(UserWarning):

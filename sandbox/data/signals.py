@@ -65,7 +65,7 @@ from math import factorial
 import numpy as np
 from numpy.typing import ArrayLike
 
-from sandbox.core.validation import FloatArray, check_array, check_choice, check_positive
+from sandbox.validation import FloatArray, check_array, check_choice, check_positive
 
 #: Preprocessing modes of :func:`preprocess_signal`.
 MODES = ("none", "causal", "smooth")

@@ -20,7 +20,6 @@ from pathlib import Path
 import numpy as np
 
 from sandbox.core.modality import Modality
-from sandbox.core.validation import FloatArray
 from sandbox.data.limits import (
     JOINT_LIMIT_TOL_RAD,
     MAX_ABS_VALUE,
@@ -32,6 +31,7 @@ from sandbox.data.limits import (
     joint_limits,
 )
 from sandbox.data.spec import HAND, ROBOT_COLUMNS, TIME_COLUMN, DataSpec
+from sandbox.validation import FloatArray
 
 HUMAN_COLUMNS = HAND.dims
 

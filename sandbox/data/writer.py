@@ -32,8 +32,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike
 
-from sandbox.core.validation import check_times
 from sandbox.data.spec import ROBOT_COLUMNS, TIME_COLUMN
+from sandbox.validation import check_times
 
 _FRAMES = ("head", "neck", "torso", "left_shoulder", "left_elbow", "left_hand",
            "right_shoulder", "right_elbow", "right_hand")

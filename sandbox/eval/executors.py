@@ -43,6 +43,7 @@ from multiprocessing import get_context
 from pathlib import Path
 
 from sandbox.eval.loocv import EvalConfig, fold, prepare
+from sandbox.validation import check_integer
 
 #: Environment of the worker processes: one BLAS thread each, as Dask's nanny sets.
 WORKER_ENV = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
@@ -141,10 +142,8 @@ def _maybe_crash(key: str) -> None:
 
 # ---------------------------------------------------------------- driver
 def check_workers(workers) -> int:
-    """``workers`` as an int after checking it is a positive integer."""
-    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise ValueError(f"--workers: expected a positive integer, got {workers!r}")
-    return workers
+    """``workers`` as an int after checking it is an integer >= 1."""
+    return check_integer(workers, "--workers", 1)
 
 
 def open_executor(workers: int = 1, scheduler: str | None = None, timeout: float = TIMEOUT):

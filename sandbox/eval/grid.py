@@ -42,9 +42,9 @@ from pathlib import Path
 from typing import Any
 
 from sandbox.core.predictor import LIKELIHOODS, WINDOW_MODES
-from sandbox.core.validation import check_choice, check_fraction, check_integer, check_positive
 from sandbox.eval.loocv import EvalConfig
 from sandbox.eval.tune import RATIO, WINDOW
+from sandbox.validation import check_choice, check_fraction, check_integer, check_positive
 
 #: Grid names that are another name of an :class:`EvalConfig` field.
 ALIASES = {"window": "window_mode"}
@@ -151,7 +151,7 @@ def read_grid(path: str | Path) -> list[dict[str, Any]]:
         The file is missing or unreadable, an option is unknown, a list is empty,
         or a value is not what its option takes; the message names the option.
     """
-    from sandbox.scenario_files import read_mapping
+    from sandbox.validation import read_mapping
 
     path = Path(path)
     if not path.is_file():

@@ -20,7 +20,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from scipy.stats import chi2
 
-from sandbox.core.validation import FloatArray
+from sandbox.validation import FloatArray
 
 
 def joint_rms(q_hat: FloatArray, q: FloatArray) -> float:

@@ -22,9 +22,9 @@ import pybullet
 from numpy.typing import ArrayLike, NDArray
 from pybullet_utils.bullet_client import BulletClient
 
-from sandbox.core.validation import check_array
 from sandbox.robot.assets import urdf_path
 from sandbox.robot.kinematics import ARM_JOINTS
+from sandbox.validation import check_array
 
 FloatArray = NDArray[np.float64]
 #: Left gripper finger joints (prismatic, m); the right one mirrors the left (URDF mimic).

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from sandbox.core.validation import check_array, check_positive
+from sandbox.validation import check_array, check_positive
 
 FloatArray = NDArray[np.float64]
 #: ``forward(q (n, 7), jacobian: bool) -> (pose (n, 4, 4), jacobian (n, 6, 7) or None)``

@@ -26,10 +26,10 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from sandbox.core.validation import check_array
 from sandbox.robot import ik as _ik
 from sandbox.robot.assets import source_urdf_path
 from sandbox.robot.urdf import UrdfJoint, chain_to, read_joints
+from sandbox.validation import check_array
 
 FloatArray = NDArray[np.float64]
 

@@ -17,7 +17,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from sandbox.core.validation import check_array, check_positive
+from sandbox.validation import check_array, check_positive
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]

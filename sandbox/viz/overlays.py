@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from sandbox.core.validation import check_array
+from sandbox.validation import check_array
 from sandbox.viz import objects
 from sandbox.viz.geometry import FloatArray, polyline_tube, sample_paths, task_colors, tube
 from sandbox.viz.panel import NEUTRAL, Panel

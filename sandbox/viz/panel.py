@@ -28,7 +28,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from sandbox.core.validation import check_positive
+from sandbox.validation import check_positive
 from sandbox.viz import objects
 
 #: Colour (RGBA) of the board, of the unsure warning, of a task the panel has no colour for.

@@ -24,7 +24,7 @@ import meshcat
 import numpy as np
 from numpy.typing import ArrayLike
 
-from sandbox.core.validation import check_array, check_positive
+from sandbox.validation import check_array, check_positive
 from sandbox.viz.meshes import DEFAULT_RESOLUTION
 from sandbox.viz.mirror import BodyMirror
 from sandbox.viz.scene import Scene

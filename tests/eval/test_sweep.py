@@ -200,7 +200,7 @@ def test_results_are_written_atomically(trials, tmp_path, monkeypatch):
 
 # ---------------------------------------------------------------- executors
 def test_workers_must_be_a_positive_integer():
-    with pytest.raises(ValueError, match="--workers: expected a positive integer, got 0"):
+    with pytest.raises(ValueError, match="--workers: expected an integer >= 1, got 0"):
         executors.open_executor(0)
 
 

@@ -68,9 +68,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sandbox.core.validation import FloatArray, check_array, check_positive, check_times
-from sandbox.data.synthetic.base import check_rng
 from sandbox.data.synthetic.two_link import UP, check_outward, elbow_positions
+from sandbox.validation import FloatArray, check_array, check_positive, check_rng, check_times
 
 #: Winter (2009), Fig. 4.1: segment lengths as fractions of body height.
 UPPER_ARM, FOREARM, SHOULDER_BREADTH = 0.186, 0.146, 0.259

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sandbox.core.validation import FloatArray
+from sandbox.validation import FloatArray
 
 HUMAN_NAMES = ("human_left_hand_x", "human_left_hand_y", "human_left_hand_z")
 ROBOT_NAMES = ("left_s0", "left_s1", "left_e0", "left_e1", "left_w0", "left_w1", "left_w2")
@@ -48,13 +48,6 @@ def skewed_minimum_jerk(s: np.ndarray, skew: float = 1.0) -> np.ndarray:
     return minimum_jerk(s**skew)
 
 
-def check_rng(rng: object) -> np.random.Generator:
-    """Return ``rng`` after checking it is a ``numpy.random.Generator``."""
-    if not isinstance(rng, np.random.Generator):
-        raise ValueError(f"rng: expected a numpy.random.Generator, got {type(rng).__name__}")
-    return rng
-
-
 def child_rng(rng: np.random.Generator) -> np.random.Generator:
     """An independent generator spawned from ``rng``'s seed sequence.
 
@@ -66,13 +59,6 @@ def child_rng(rng: np.random.Generator) -> np.random.Generator:
     if hasattr(rng, "spawn"):
         return rng.spawn(1)[0]
     return np.random.default_rng(rng.bit_generator._seed_seq.spawn(1)[0])  # pragma: no cover
-
-
-def check_count(value: object, name: str, minimum: int) -> int:
-    """Return ``value`` as an int after checking it is an integer >= ``minimum``."""
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
-        raise ValueError(f"{name}: expected an integer >= {minimum}, got {value!r}")
-    return int(value)
 
 
 def sample_times(duration: float, rate_hz: float) -> FloatArray:

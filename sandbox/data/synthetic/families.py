@@ -20,12 +20,12 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from sandbox.core.validation import check_positive
 from sandbox.data.demonstration import Demonstration
 from sandbox.data.synthetic.arm import ArmModel
 from sandbox.data.synthetic.generator import generate
 from sandbox.data.synthetic.tasks import TaskSpec, Variability
 from sandbox.data.synthetic.tracker import TrackerModel
+from sandbox.validation import check_positive
 
 #: The objects of Experiment 1: where (m) the hand ends on average, and how long (s) it takes.
 OBJECTS = (

@@ -13,13 +13,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from sandbox.core.validation import FloatArray, check_positive
 from sandbox.data.demonstration import Demonstration
 from sandbox.data.synthetic.arm import ArmModel
 from sandbox.data.synthetic.base import (
     ROBOT_NAMES,
-    check_count,
-    check_rng,
     sample_times,
 )
 from sandbox.data.synthetic.human import reach_positions
@@ -39,6 +36,7 @@ from sandbox.data.synthetic.tasks import (
     redraw_end,
 )
 from sandbox.data.synthetic.tracker import TrackerModel
+from sandbox.validation import FloatArray, check_integer, check_positive, check_rng
 
 
 def handover_target(spec: TaskSpec, draw: DemoDraw) -> FloatArray:
@@ -197,11 +195,11 @@ def generate(
     -------
     list of Demonstration
     """
-    n = check_count(n_per_task, "n_per_task", 1)
+    n = check_integer(n_per_task, "n_per_task", 1)
     check_rng(rng)
     rate_hz = check_positive(rate_hz, "rate_hz")
     ik_tol = check_positive(ik_tol, "ik_tol")
-    max_redraws = check_count(max_redraws, "max_redraws", 0)
+    max_redraws = check_integer(max_redraws, "max_redraws", 0)
     tracker = TrackerModel() if tracker is None else tracker
     observe = check_observe(observe)
     if not isinstance(tracker, TrackerModel) or not isinstance(variability, Variability):

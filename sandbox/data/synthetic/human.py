@@ -22,8 +22,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from sandbox.core.validation import FloatArray
 from sandbox.data.synthetic.base import minimum_jerk, skewed_minimum_jerk
+from sandbox.validation import FloatArray
 
 
 @dataclass(frozen=True)

@@ -15,10 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sandbox.core.validation import FloatArray, check_fraction, check_positive
 from sandbox.data.demonstration import Demonstration
 from sandbox.data.synthetic.arm import ArmModel
-from sandbox.data.synthetic.base import ROBOT_NAMES, check_rng, sample_times
+from sandbox.data.synthetic.base import ROBOT_NAMES, sample_times
 from sandbox.data.synthetic.families import DIVERGING_VARIABILITY, OBJECTS, diverging_specs
 from sandbox.data.synthetic.generator import handover_target
 from sandbox.data.synthetic.human import reach_positions, switch_paths
@@ -27,6 +26,7 @@ from sandbox.data.synthetic.robot import joint_trajectory, kinematics, solve_han
 from sandbox.data.synthetic.tasks import DemoDraw, TaskSpec, Variability, draw_demo, make_reach
 from sandbox.data.synthetic.tasks import redraw_end as _redraw_end
 from sandbox.data.synthetic.tracker import TrackerModel
+from sandbox.validation import FloatArray, check_fraction, check_positive, check_rng
 
 #: Families an intent switch can be drawn from.
 SWITCH_FAMILIES = ("diverging", "objects")

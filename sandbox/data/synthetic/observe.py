@@ -15,10 +15,10 @@ from typing import Any
 import numpy as np
 
 from sandbox.core.modality import Modality
-from sandbox.core.validation import FloatArray
 from sandbox.data.spec import ARM, HAND
 from sandbox.data.synthetic.arm import ArmModel, arm_positions, arm_rng
 from sandbox.data.synthetic.tracker import TrackerModel, track_arm, track_hand
+from sandbox.validation import FloatArray
 
 #: The modalities a synthetic set can carry, by name.
 SYNTHETIC_MODALITIES: dict[str, Modality] = {"hand": HAND, "arm": ARM}

@@ -53,8 +53,8 @@ from typing import Any
 import numpy as np
 from scipy.ndimage import median_filter, uniform_filter1d
 
-from sandbox.core.validation import FloatArray, check_array, check_positive
 from sandbox.data.demonstration import Demonstration
+from sandbox.validation import FloatArray, check_array, check_positive
 
 #: Statistics computed by :func:`realism_stats`, in report order.
 STATISTICS = ("duration", "path_length", "peak_speed", "reach_time", "end_spread", "start_spread")

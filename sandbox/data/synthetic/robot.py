@@ -18,8 +18,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from sandbox.core.validation import FloatArray
 from sandbox.data.synthetic.base import Q_HOME, skewed_minimum_jerk
+from sandbox.validation import FloatArray
 
 #: Median position (m) of the gripper tip relative to the hand's resting point.
 GRASP_OFFSET = np.array([0.005, -0.010, -0.020])

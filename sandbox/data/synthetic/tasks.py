@@ -18,9 +18,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from sandbox.core.validation import FloatArray, check_positive
 from sandbox.data.synthetic.base import HAND_START
 from sandbox.data.synthetic.human import Reach
+from sandbox.validation import FloatArray, check_positive
 
 #: Median detour (rad) of the recorded arm motions from the straight joint-space
 #: line at mid-motion (kinesthetic demonstrations are not straight in joint space).

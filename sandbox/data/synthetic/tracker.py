@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sandbox.core.validation import FloatArray, check_positive
+from sandbox.validation import FloatArray, check_positive
 
 
 @dataclass(frozen=True)

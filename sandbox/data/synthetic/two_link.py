@@ -30,7 +30,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from sandbox.core.validation import FloatArray, check_array, check_positive
+from sandbox.validation import FloatArray, check_array, check_positive
 
 UP = np.array([0.0, 0.0, 1.0])
 

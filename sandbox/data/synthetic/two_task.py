@@ -13,7 +13,6 @@ from typing import Any
 import numpy as np
 
 from sandbox.core.modality import Modality
-from sandbox.core.validation import FloatArray
 from sandbox.data.demonstration import Demonstration
 from sandbox.data.synthetic.arm import ArmModel, arm_positions
 from sandbox.data.synthetic.base import (
@@ -24,6 +23,7 @@ from sandbox.data.synthetic.base import (
     minimum_jerk,
 )
 from sandbox.data.synthetic.observe import SYNTHETIC_MODALITIES, check_observe
+from sandbox.validation import FloatArray
 
 
 def _observed(

@@ -1,4 +1,9 @@
-"""Validators for the public boundary of the core.
+"""Validators for the public boundary of every part of the project.
+
+A neutral module (it imports only numpy, PyYAML and the standard library):
+the core, the robot, the data, the viewer, the environments and the
+commands all check their inputs with it, so importing it ties no part to
+another (``tests/test_layering.py``).
 
 Each ``check_*`` converts its input (arrays to a fresh float64 array: the
 caller's array is never modified or aliased; scalars to a Python float, int or
@@ -8,7 +13,10 @@ came: never ``TypeError`` or ``OverflowError``, whatever the input.
 
 from __future__ import annotations
 
+import json
 from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -185,3 +193,46 @@ def check_choice(value: str, name: str, choices: Sequence[str]) -> str:
     if not isinstance(value, str) or value not in choices:
         raise ValueError(f"{name}: expected one of {list(choices)}, got {_show(value)}")
     return value
+
+
+def check_rng(rng: object) -> np.random.Generator:
+    """Return ``rng`` after checking it is a ``numpy.random.Generator``."""
+    if not isinstance(rng, np.random.Generator):
+        raise ValueError(f"rng: expected a numpy.random.Generator, got {type(rng).__name__}")
+    return rng
+
+
+#: Suffixes :func:`read_mapping` reads.
+MAPPING_SUFFIXES = (".json", ".yaml", ".yml")
+
+
+def read_mapping(path: Path, what: str = "scenario") -> Any:
+    """Parse a JSON or YAML file (by suffix); syntax errors become ``ValueError``.
+
+    ``what`` names the file in messages (``"scenario"``, ``"grid"``,
+    ``"settings"``). The content is returned as parsed: the caller checks its
+    keys and values.
+    """
+    path = Path(path)
+    if path.suffix.lower() not in MAPPING_SUFFIXES:
+        raise ValueError(f"{what} {path}: expected a .json, .yaml or .yml file, "
+                         f"got suffix {path.suffix!r}")
+    text = path.read_text(encoding="utf-8")
+    if path.suffix.lower() == ".json":
+        try:
+            return json.loads(text)
+        except json.JSONDecodeError as error:
+            raise ValueError(f"{what} {path}: invalid JSON at line {error.lineno}, column "
+                             f"{error.colno}: {error.msg}") from error
+    try:
+        import yaml
+    except ImportError as error:  # pragma: no cover - pyyaml is a dependency
+        raise ValueError(f"{what} {path}: YAML files need PyYAML (pip install pyyaml); "
+                         f"or write the {what} as JSON") from error
+    try:
+        return yaml.safe_load(text)
+    except yaml.YAMLError as error:
+        mark = getattr(error, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        problem = getattr(error, "problem", None) or str(error)
+        raise ValueError(f"{what} {path}: invalid YAML{where}: {problem}") from error
