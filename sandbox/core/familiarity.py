@@ -23,7 +23,7 @@ elapsed time are stored (:class:`Calibration`). The familiarity of an update is
 then a p-value-like score in (0, 1]: the share of held-out training updates
 that chose the same task at about the same elapsed time and fitted worse
 (:meth:`Calibration.familiarity`). The
-threshold below which :attr:`~sandbox.core.predictor._Predictor.familiar` is
+threshold below which :attr:`~sandbox.core.updating.PredictorBase.familiar` is
 False is the ``alpha`` quantile of each calibration motion's *lowest*
 familiarity over its updates, so a motion like the training ones is called
 unfamiliar at some update with probability about ``alpha``.
