@@ -91,7 +91,7 @@ from sandbox.core.modality import Modality
 from sandbox.validation import FloatArray, check_mapping, check_number, check_positive
 
 if TYPE_CHECKING:
-    from sandbox.core.familiarity import Calibration
+    from sandbox.core.calibration import Calibration
 
 #: Default noise floor of signal modalities, in their normalised units (see IProMP).
 SIGNAL_FLOOR = 1.0
