@@ -12,11 +12,14 @@ matrix, :math:`\\mu_\\omega, \\Sigma_\\omega` weight distribution,
 Modules: :mod:`~sandbox.core.basis`, :mod:`~sandbox.core.promp`,
 :mod:`~sandbox.core.model` (with :mod:`~sandbox.core.fitting`, the steps of a fit),
 :mod:`~sandbox.core.interaction` (dense reference),
-:mod:`~sandbox.core.likelihood` (fast path), :mod:`~sandbox.core.phase`,
+:mod:`~sandbox.core.likelihood` (fast path; its linear algebra in
+:mod:`~sandbox.core.factor`), :mod:`~sandbox.core.phase`,
 :mod:`~sandbox.core.recognition`, :mod:`~sandbox.core.blending`,
-:mod:`~sandbox.core.predictor` (with :mod:`~sandbox.core.stream`, the observation
-stream), :mod:`~sandbox.core.modality`, :mod:`~sandbox.core.io` (with
-:mod:`~sandbox.core.archive`, the checked ``.npz`` reader). At the public
+:mod:`~sandbox.core.predictor` (with :mod:`~sandbox.core.updating`, the machinery both
+predictors share, and :mod:`~sandbox.core.stream`, the observation stream),
+:mod:`~sandbox.core.familiarity` (with :mod:`~sandbox.core.calibration`),
+:mod:`~sandbox.core.modality`, :mod:`~sandbox.core.io` (with :mod:`~sandbox.core.archive`,
+the checked ``.npz`` reader). At the public
 boundary: :mod:`~sandbox.validation` (``check_*``, only ``ValueError``),
 :mod:`~sandbox.core.limits` (every size limit, documented) and
 :mod:`~sandbox.core.demos` (what ``fit`` accepts).
@@ -72,7 +75,7 @@ EQUATIONS: dict[int, tuple[str, tuple[str, ...]]] = {
         ("sandbox.core.fitting.fit_one",)),
     7: ("block-diagonal basis matrix H_t", ("sandbox.core.interaction.observation_matrix",)),
     8: ("Kalman conditioning of the weights on the observations",
-        ("sandbox.core.interaction.condition", "sandbox.core.likelihood.condition_robot")),
+        ("sandbox.core.interaction.condition", "sandbox.core.factor.condition_robot")),
     9: ("masked H: robot rows zero (unobserved)",
         ("sandbox.core.interaction.observation_matrix", "sandbox.core.interaction._masked")),
     10: ("speed factor alpha = T_i / T_nom",
