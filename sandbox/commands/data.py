@@ -284,7 +284,8 @@ def _filter_table(path, columns):
 def _check_filter(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from sandbox.data.filtering import FilterConfig, holdout_errors
+    from sandbox.data.filtercheck import holdout_errors
+    from sandbox.data.filtering import FilterConfig
     from sandbox.data.glitches import find_glitches
     from sandbox.data.recorded import find_trials
 
