@@ -165,7 +165,15 @@ def run_sweep(executor, trials: Mapping, points: list[dict], out: str | Path, *,
     todo = [job for job, k in zip(jobs, keys) if k not in results]
     if results:
         log(f"{len(results)} of {len(set(keys))} configurations already done in {out}")
-    failed: dict[str, str] = {}
+    failed = _evaluate(evaluation, todo, points, keys, results, out, log)
+    return write_summary(out, points, keys, results, failed, data or {})
+
+
+def _evaluate(evaluation: Evaluation, todo: list, points: list[dict], keys: list[str],
+              results: dict, out: Path, log: Callable[[str], None]) -> dict:
+    """Run the jobs ``todo``; store each result in ``results`` and in ``out`` as it ends.
+    Returns the failed configurations' errors by key."""
+    failed: dict = {}
     for n, done in enumerate(evaluation.run(todo), 1):
         point = points[keys.index(done.key)]
         if done.report is None:
@@ -176,7 +184,7 @@ def run_sweep(executor, trials: Mapping, points: list[dict], out: str | Path, *,
         write_atomic(_result_path(out, done.key), json.dumps(results[done.key], indent=1))
         log(f"[{n}/{len(todo)}] {label(point)}: J = {results[done.key]['row']['J']:.3f} "
             f"({done.report['runtime_s']:.1f} s of work)")
-    return write_summary(out, points, keys, results, failed, data or {})
+    return failed
 
 
 def _result(key: str, point: dict, config: EvalConfig, report: dict) -> dict:
