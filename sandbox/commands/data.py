@@ -284,15 +284,14 @@ def _filter_table(path, columns):
 def _check_filter(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from sandbox.data.filtering import FilterConfig, holdout_errors
+    from sandbox.data.filtercheck import holdout_errors
+    from sandbox.data.filtering import FilterConfig
     from sandbox.data.glitches import find_glitches
-    from sandbox.data.recorded import find_trials
+    from sandbox.data.recorded import Columns, find_trials
 
     settings = {"accel_std": args.accel_std, "noise_std": args.noise_std,
                 "time_jitter_std": args.jitter_std, "gate_prob": args.gate_prob}
     config = FilterConfig(**{k: v for k, v in settings.items() if v is not None})
-    from sandbox.data.recorded import Columns
-
     spec = _observation.data_spec(args)
     points = [cols for m in spec.observed(_split(args.observe)) if m.kind == "position"
               for cols in _points(m.dims)]

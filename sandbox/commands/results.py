@@ -49,6 +49,28 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
+    from pathlib import Path
+
+    out = _out_folder(args)
+    readme = Path(args.readme)
+    text = _readme_text(readme) if args.update_readme else ""
+    out.mkdir(parents=True, exist_ok=True)
+    spec = _observation.data_spec(args)
+    observe = _observation.observe(args, spec)
+    reports = _evaluate_sets(args, out, spec, observe)
+    section = "\n".join(_section(args, out, spec, reports))
+    _outputs.write_text(out / "results.md", section[len(START):-len(END)].strip() + "\n")
+    print(f"results: {out}/results.md")
+    if args.update_readme:
+        head, rest = text.split(START, 1)
+        _outputs.write_text(readme, head + section + rest.split(END, 1)[1])
+        print(f"updated {readme}")
+    return 0
+
+
+def _evaluate_sets(args, out, spec, observe) -> dict:
+    """Leave-one-out of the recorded set (``--data``) and the synthetic ones: reports,
+    tables and figures written to ``out``; returns the reports by set name."""
     import json
     from pathlib import Path
 
@@ -57,12 +79,6 @@ def run(args) -> int:
     from sandbox.eval.plots import plot_report
     from sandbox.eval.report import build_report, to_markdown
 
-    out = _out_folder(args)
-    readme = Path(args.readme)
-    text = _readme_text(readme) if args.update_readme else ""
-    out.mkdir(parents=True, exist_ok=True)
-    spec = _observation.data_spec(args)
-    observe = _observation.observe(args, spec)
     sets = [("diverging", "synthetic:diverging"), ("objects", "synthetic:objects")]
     if args.data:
         sets.insert(0, ("recorded", args.data))
@@ -82,6 +98,16 @@ def run(args) -> int:
         plot_report(rep, out / name, other)
         reports[name] = rep
         print(f"{name}: {sum(rep['n_trials'].values())} trials in {runtime:.1f} s")
+    return reports
+
+
+def _section(args, out, spec, reports: dict) -> list[str]:
+    """The lines of the README's results section, START to END (the modality comparison
+    of ``--compare`` is computed here)."""
+    from pathlib import Path
+
+    from sandbox.eval.report import to_markdown
+
     body = [START, "", _summary_table(reports), ""]
     compare = _compare_sets(args.compare)
     if args.data and compare:
@@ -110,14 +136,7 @@ def run(args) -> int:
         body.append(f"![Experiment 1 vs 2]({(out / 'diverging').as_posix()}"
                     "/average_comparison.png)\n")
     body.append(END)
-    section = "\n".join(body)
-    _outputs.write_text(out / "results.md", section[len(START):-len(END)].strip() + "\n")
-    print(f"results: {out}/results.md")
-    if args.update_readme:
-        head, rest = text.split(START, 1)
-        _outputs.write_text(readme, head + section + rest.split(END, 1)[1])
-        print(f"updated {readme}")
-    return 0
+    return body
 
 
 def _out_folder(args):

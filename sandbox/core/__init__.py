@@ -10,12 +10,16 @@ matrix, :math:`\\mu_\\omega, \\Sigma_\\omega` weight distribution,
 :math:`T_{nom}` nominal duration, ``dow_t`` dynamic observation window.
 
 Modules: :mod:`~sandbox.core.basis`, :mod:`~sandbox.core.promp`,
-:mod:`~sandbox.core.model`, :mod:`~sandbox.core.interaction` (dense reference),
-:mod:`~sandbox.core.likelihood` (fast path), :mod:`~sandbox.core.phase`,
+:mod:`~sandbox.core.model` (with :mod:`~sandbox.core.fitting`, the steps of a fit),
+:mod:`~sandbox.core.interaction` (dense reference),
+:mod:`~sandbox.core.likelihood` (fast path; its linear algebra in
+:mod:`~sandbox.core.factor`), :mod:`~sandbox.core.phase`,
 :mod:`~sandbox.core.recognition`, :mod:`~sandbox.core.blending`,
-:mod:`~sandbox.core.predictor` (with :mod:`~sandbox.core.stream`, the observation
-stream), :mod:`~sandbox.core.modality`, :mod:`~sandbox.core.io` (with
-:mod:`~sandbox.core.archive`, the checked ``.npz`` reader). At the public
+:mod:`~sandbox.core.predictor` (with :mod:`~sandbox.core.updating`, the machinery both
+predictors share, and :mod:`~sandbox.core.stream`, the observation stream),
+:mod:`~sandbox.core.familiarity` (with :mod:`~sandbox.core.calibration`),
+:mod:`~sandbox.core.modality`, :mod:`~sandbox.core.io` (with :mod:`~sandbox.core.archive`,
+the checked ``.npz`` reader). At the public
 boundary: :mod:`~sandbox.validation` (``check_*``, only ``ValueError``),
 :mod:`~sandbox.core.limits` (every size limit, documented) and
 :mod:`~sandbox.core.demos` (what ``fit`` accepts).
@@ -60,22 +64,22 @@ EQUATIONS: dict[int, tuple[str, tuple[str, ...]]] = {
         ("sandbox.core.promp.trajectory_distribution",)),
     2: ("weights of one trajectory by least squares (here with a ridge)",
         ("sandbox.core.promp.fit_weights", "sandbox.core.promp._ridge_solve",
-         "sandbox.core.model.IProMP.demo_fit")),
+         "sandbox.core.fitting.fit_one")),
     3: ("design matrix Psi: basis functions at every step",
         ("sandbox.core.basis.GaussianBasis.evaluate",)),
     4: ("trajectory distribution: psi^T mu_w, psi^T Sigma_w psi (+ sigma_y)",
         ("sandbox.core.promp.trajectory_distribution", "sandbox.core.plan.Plan.prior")),
     5: ("state vector: P human dims, then Q robot dims",
-        ("sandbox.core.model.IProMP.demo_fit",)),
+        ("sandbox.core.fitting.fit_one",)),
     6: ("weight vector: all dims' weights concatenated",
-        ("sandbox.core.model.IProMP.demo_fit",)),
+        ("sandbox.core.fitting.fit_one",)),
     7: ("block-diagonal basis matrix H_t", ("sandbox.core.interaction.observation_matrix",)),
     8: ("Kalman conditioning of the weights on the observations",
-        ("sandbox.core.interaction.condition", "sandbox.core.likelihood.condition_robot")),
+        ("sandbox.core.interaction.condition", "sandbox.core.factor.condition_robot")),
     9: ("masked H: robot rows zero (unobserved)",
         ("sandbox.core.interaction.observation_matrix", "sandbox.core.interaction._masked")),
     10: ("speed factor alpha = T_i / T_nom",
-         ("sandbox.core.model.IProMP._set_fit", "sandbox.core.phase.estimate_phase")),
+         ("sandbox.core.fitting.task_models", "sandbox.core.phase.estimate_phase")),
     11: ("phase posterior p(alpha | y) ~ p(y | alpha) p(alpha)",
          ("sandbox.core.phase.estimate_phase",)),
     12: ("likelihood of the observations given alpha (weights integrated out)",

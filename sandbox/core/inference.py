@@ -3,7 +3,7 @@
 :func:`predict` is one update of the method (paper sec. 2): the MAP speed of
 every task (:mod:`sandbox.core.phase`), the task posterior
 (:mod:`sandbox.core.recognition`), and the robot weights of the most probable
-task conditioned on the observations (eq. 8, :func:`~sandbox.core.likelihood.condition_robot`).
+task conditioned on the observations (eq. 8, :func:`~sandbox.core.factor.condition_robot`).
 The online predictors (:mod:`sandbox.core.predictor`) call it at every window;
 the evaluation calls it for static predictions and the oracle.
 """
@@ -15,7 +15,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from sandbox.core.likelihood import Scorer, condition_robot
+from sandbox.core.factor import condition_robot
+from sandbox.core.likelihood import Scorer
 from sandbox.core.phase import ended_probability, estimate_phase
 from sandbox.core.promp import WeightDistribution, trajectory_distribution
 from sandbox.core.recognition import task_posterior

@@ -70,7 +70,7 @@ if TYPE_CHECKING:
     from sandbox.core.model import IProMP
 
 if TYPE_CHECKING:
-    from sandbox.core.familiarity import Calibration
+    from sandbox.core.calibration import Calibration
 
 FORMAT = "handover-sandbox/iprompt"
 FORMAT_VERSION = 2
@@ -230,7 +230,7 @@ def _read_model(path: Path) -> ModelFile:
 
 def _calibration(archive, entry, n_tasks: int):
     """The familiarity calibration if the file has one (checked), else None."""
-    from sandbox.core.familiarity import LEVELS, Calibration
+    from sandbox.core.calibration import LEVELS, Calibration
 
     if entry is None:
         return None

@@ -55,8 +55,7 @@ Choices this project makes (DESIGN.md section 3):
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -68,135 +67,34 @@ from sandbox.core.demos import (
     check_spread,
     modalities_of,
 )
+from sandbox.core.fitting import (
+    DemoFit,
+    DemonstrationLike,
+    TaskModel,
+    by_task,
+    check_fits,
+    check_floor,
+    fit_one,
+    motion_end,
+    observation_noise,
+    signal_scale,
+    task_models,
+    task_priors,
+)
 from sandbox.core.io import ModelFile, read_model, save_model
 from sandbox.core.limits import (
-    MAX_ABS_VALUE,
     MAX_DURATION_S,
     MAX_RELATIVE,
-    MIN_NOISE_STD,
     MIN_REGULARIZER,
 )
 from sandbox.core.modality import Modality
-from sandbox.core.promp import WeightDistribution, fit_weights
 from sandbox.validation import FloatArray, check_mapping, check_number, check_positive
 
 if TYPE_CHECKING:
-    from sandbox.core.familiarity import Calibration
+    from sandbox.core.calibration import Calibration
 
 #: Default noise floor of signal modalities, in their normalised units (see IProMP).
 SIGNAL_FLOOR = 1.0
-
-
-class DemonstrationLike(Protocol):
-    """What :meth:`IProMP.fit` needs of a demonstration (see ``sandbox.data.Demonstration``).
-
-    ``modalities`` (a sequence of :class:`~sandbox.core.modality.Modality`) and
-    ``human_names`` are optional: without them the human dims are one position
-    modality ``"hand"``.
-    """
-
-    times: Any
-    human: Any
-    robot: Any
-    task: str
-
-
-@dataclass(frozen=True, eq=False)
-class TaskModel:
-    """One task's interaction primitive.
-
-    Attributes
-    ----------
-    name : str
-    weights : WeightDistribution
-        Over the P human dims (normalised units) followed by the Q robot dims.
-    nominal_duration : float
-        :math:`T_{nom}` (s).
-    alpha_mean, alpha_std : float
-        Prior of the speed factor :math:`\\alpha = T/T_{nom}`.
-    n_demos : int
-    """
-
-    name: str
-    weights: WeightDistribution
-    nominal_duration: float
-    alpha_mean: float
-    alpha_std: float
-    n_demos: int
-
-    @property
-    def mean_duration(self) -> float:
-        """Prior mean duration :math:`\\mu_\\alpha T_{nom}` (s)."""
-        return self.alpha_mean * self.nominal_duration
-
-
-@dataclass(frozen=True, eq=False)
-class DemoFit:
-    """What :meth:`IProMP.demo_fit` keeps of one demonstration (raw units).
-
-    Attributes
-    ----------
-    task : str
-    weights : ndarray, shape ((P+Q)*N,)
-        Of the motion (up to its end, see :func:`motion_end`).
-    residual : ndarray, shape (P,)
-        Sum of squared residuals of the human dims' basis fit.
-    dof : ndarray, shape (P,)
-        Their degrees of freedom (valid samples - N).
-    duration : float
-        Of the motion (s).
-    moments : ndarray, shape (3, P)
-        Count, sum and sum of squares of each human dim's valid samples (for
-        the scale of signal modalities).
-    """
-
-    task: str
-    weights: FloatArray
-    residual: FloatArray
-    dof: FloatArray
-    duration: float
-    moments: FloatArray
-
-
-def motion_end(times, robot, settle_tol: float | None, human=None,
-               arrive_tol: float | None = None) -> int:
-    """Index of the last sample of a demonstration's motion.
-
-    The motion is over once both partners have arrived:
-
-    * the robot, at the first sample after which it stays within ``settle_tol``
-      (rad, Euclidean norm over joints) of its final configuration;
-    * the human (if ``human`` and ``arrive_tol`` are given), at the first sample
-      where the hand (the first three human dims) comes within ``arrive_tol`` (m)
-      of its farthest distance from where it started.
-
-    ``None`` for a tolerance skips that partner; with neither, the last sample.
-    At least the first two samples are kept.
-
-    Parameters
-    ----------
-    times : ndarray, shape (T,)
-    robot : ndarray, shape (T, Q)
-    settle_tol : float or None
-    human : ndarray, shape (T, P), optional
-        NaN where missing.
-    arrive_tol : float or None
-    """
-    last = len(times) - 1
-    ends = []
-    if settle_tol is not None:
-        robot = np.asarray(robot, dtype=np.float64)
-        away = np.flatnonzero(np.linalg.norm(robot - robot[-1], axis=1) > settle_tol)
-        ends.append(away[-1] + 1 if away.size else last)
-    if arrive_tol is not None and human is not None and np.shape(human)[1] >= 3:
-        hand = np.asarray(human, dtype=np.float64)[:, :3]
-        ok = np.isfinite(hand).all(axis=1)
-        if ok.any():
-            reach = np.where(ok, np.linalg.norm(hand - hand[np.argmax(ok)], axis=1), -np.inf)
-            ends.append(int(np.argmax(reach >= reach.max() - arrive_tol)))
-    if not ends:
-        return last
-    return int(min(max(max(ends), 1), last))
 
 
 class IProMP:
@@ -297,9 +195,9 @@ class IProMP:
             raise ValueError(f"regularizer: expected at least {MIN_REGULARIZER:g} "
                              f"(limits.MIN_REGULARIZER), got {regularizer!r}")
         self.noise_scale = check_positive(noise_scale, "noise_scale", high=MAX_RELATIVE)
-        self.noise_floor = _check_floor(noise_floor, "noise_floor")
-        self.signal_floor = _check_floor(signal_floor, "signal_floor")
-        self.noise_floors = {k: _check_floor(v, f"noise_floors[{k!r}]")
+        self.noise_floor = check_floor(noise_floor, "noise_floor")
+        self.signal_floor = check_floor(signal_floor, "signal_floor")
+        self.noise_floors = {k: check_floor(v, f"noise_floors[{k!r}]")
                              for k, v in check_mapping(noise_floors, "noise_floors").items()}
         self.settle_tol = (None if settle_tol is None
                            else check_positive(settle_tol, "settle_tol"))
@@ -343,22 +241,9 @@ class IProMP:
         demonstration is checked as :meth:`fit` checks it (``ValueError``).
         """
         times, human, robot = check_demo(demo, "demo", self.max_duration)
-        P, n = human.shape[1], self.basis.n_basis
         end = self.motion_end(times, robot, human) + 1
-        times = times[:end]
-        z = (times - times[0]) / (times[-1] - times[0])
-        human = human[:end]
-        robot = robot[:end]
-        wd = fit_weights(z, np.hstack([human, robot]), self.basis, self.ridge)   # eq. 2, 5
-        err = human - self.basis.evaluate(z) @ wd[:P].T
-        ok = np.isfinite(err)
-        clean = np.where(np.isfinite(human), human, 0.0)
-        moments = np.stack([np.isfinite(human).sum(axis=0), clean.sum(axis=0),
-                            (clean**2).sum(axis=0)]).astype(float)
-        return DemoFit(str(demo.task), wd.ravel(),      # eq. 6: concatenated dim after dim
-                       (np.where(ok, err, 0.0) ** 2).sum(axis=0),
-                       np.maximum(ok.sum(axis=0) - n, 1).astype(float),
-                       float(times[-1] - times[0]), moments)
+        return fit_one(str(demo.task), times[:end], human[:end], robot[:end], self.basis,
+                       self.ridge)
 
     def motion_end(self, times, robot, human) -> int:
         """:func:`motion_end` with this model's tolerances."""
@@ -371,31 +256,18 @@ class IProMP:
         model keeps. Everything the model learns, the scale of signal
         modalities included, comes from ``fits`` alone.
         """
-        _check_fits(fits, self.basis.n_basis)
-        weights: dict[str, list] = {}
-        durations: dict[str, list] = {}
-        for f in fits:
-            weights.setdefault(f.task, []).append(f.weights)
-            durations.setdefault(f.task, []).append(f.duration)
-        small = [k for k, v in weights.items() if len(v) < 2]
-        if small:
-            raise ValueError(f"demos: expected at least two demonstrations per task, "
-                             f"got one for {small}")
+        check_fits(fits, self.basis.n_basis)
+        weights, durations = by_task(fits)
         P = fits[0].residual.size
         Q = fits[0].weights.size // self.basis.n_basis - P
         modalities = modalities_of(names_from, P)
-        scale = _scale(modalities, np.sum([f.moments for f in fits], axis=0))
-        residual = np.sum([f.residual for f in fits], axis=0) / scale**2
-        dof = np.sum([f.dof for f in fits], axis=0)
-        floors = self.floors(modalities)
-        sigma2 = np.maximum(self.noise_scale * residual / dof, floors**2)
+        scale = signal_scale(modalities, np.sum([f.moments for f in fits], axis=0))
+        sigma2 = observation_noise(fits, scale, self.floors(modalities), self.noise_scale)
         divide = np.r_[scale, np.ones(Q)].repeat(self.basis.n_basis)
         arrays = {k: np.array(v) / divide for k, v in weights.items()}
         for k, w in arrays.items():
             check_spread(k, w)
-        self._set_fit(arrays,
-                      {k: np.array(v) for k, v in durations.items()}, sigma2, P, Q,
-                      names_from, modalities, scale)
+        self._set_fit(arrays, durations, sigma2, P, Q, names_from, modalities, scale)
         return self
 
     def floors(self, modalities: Sequence[Modality]) -> FloatArray:
@@ -407,36 +279,16 @@ class IProMP:
         return np.array(out)
 
     def _set_fit(self, weights, durations, sigma2, P, Q, first, modalities, scale) -> None:
-        n = self.basis.n_basis
-        dists = {
-            k: WeightDistribution.from_weights(w, self.regularizer, n) for k, w in weights.items()
-        }
-        kappa = np.empty(P)
-        start = 0
-        for m in modalities:       # one kappa per modality, from its own dims only
-            dims = slice(start, start + m.size)
-            var = np.mean([d.reg[dims] / self.regularizer for d in dists.values()])
-            kappa[dims] = self.regularizer * var / sigma2[dims].mean()
-            start += m.size
-        tasks = []
-        for k, dist in dists.items():
-            reg = dist.reg.copy()
-            reg[:P] = kappa * sigma2
-            dist = WeightDistribution(dist.mean, dist.factor, reg, n)
-            T = durations[k]
-            t_nom = float(T.mean())
-            a_std = float(np.std(T / t_nom, ddof=1)) if T.size > 1 else 0.0   # eq. 10
-            tasks.append(
-                TaskModel(k, dist, t_nom, 1.0, max(a_std, self.min_alpha_std), int(T.size))
-            )
-        self.task_models = tuple(tasks)
+        tasks = task_models(weights, durations, sigma2, modalities, self.regularizer,
+                            self.basis.n_basis, self.min_alpha_std)
+        self.task_models = tasks
         self.noise = sigma2
         self.scale = np.asarray(scale, dtype=np.float64)
         self.modalities = tuple(modalities)
         self.n_human, self.n_robot = P, Q
         self.human_names = tuple(d for m in self.modalities for d in m.dims)
         self.robot_names = tuple(getattr(first, "robot_names", ()) or ())
-        self.priors = _priors([t.name for t in tasks], self._prior_spec)
+        self.priors = task_priors([t.name for t in tasks], self._prior_spec)
         self.calibration = None          # of a previous fit, if any: no longer valid
         self._fitted = True
 
@@ -476,7 +328,7 @@ class IProMP:
         self._require_fit()
         spec = {k: check_number(v, f"priors[{k!r}]", low=0.0)
                 for k, v in check_mapping(priors, "priors").items()}
-        self.priors = _priors(self.tasks, spec)
+        self.priors = task_priors(self.tasks, spec)
         return self
 
     def calibrate(self, demos, streams=None, **options):
@@ -538,59 +390,3 @@ class IProMP:
             f"P={self.n_human}, Q={self.n_robot}, n_basis={self.basis.n_basis})"
         )
 
-
-def _scale(modalities: Sequence[Modality], moments: FloatArray) -> FloatArray:
-    """Standard deviation of each signal dim over the pooled samples; 1 for positions."""
-    count, total, squares = moments
-    scale = np.ones(count.size)
-    start = 0
-    for m in modalities:
-        dims = np.arange(start, start + m.size)
-        start += m.size
-        if m.kind != "signal":
-            continue
-        n = np.maximum(count[dims], 1.0)
-        var = squares[dims] / n - (total[dims] / n) ** 2
-        std = np.sqrt(np.maximum(var, 0.0))
-        bad = (count[dims] < 2) | ~(std > 1e-12 * np.maximum(np.abs(total[dims] / n), 1.0))
-        if bad.any():
-            names = [m.dims[i] for i in np.flatnonzero(bad)]
-            raise ValueError(f"modality {m.name!r}: signal dims {names} are constant or missing "
-                             f"in every training demonstration; nothing to normalise by")
-        scale[dims] = std
-    return scale
-
-
-def _check_floor(value, name: str) -> float:
-    """A noise floor: a number in [MIN_NOISE_STD, MAX_ABS_VALUE] (limits)."""
-    v = check_positive(value, name, high=MAX_ABS_VALUE)
-    if v < MIN_NOISE_STD:
-        raise ValueError(f"{name}: expected at least {MIN_NOISE_STD:g} (limits.MIN_NOISE_STD), "
-                         f"got {value!r}")
-    return v
-
-
-def _check_fits(fits, n_basis: int) -> None:
-    """Per-demo fits of one layout: DemoFit instances with one P and one D*N."""
-    if isinstance(fits, (str, bytes)) or not hasattr(fits, "__len__") or len(fits) == 0:
-        raise ValueError("fits: expected a non-empty sequence of DemoFit")
-    if not all(isinstance(f, DemoFit) for f in fits):
-        raise ValueError("fits: expected DemoFit instances (IProMP.demo_fit)")
-    sizes = {(f.residual.size, f.weights.size) for f in fits}
-    if len(sizes) != 1 or next(iter(sizes))[1] % n_basis:
-        raise ValueError(f"fits: expected one layout (P, D*N with N={n_basis}), "
-                         f"got {sorted(sizes)}")
-
-
-def _priors(tasks: Sequence[str], spec: Mapping[str, float] | None) -> FloatArray:
-    if spec is None:
-        return np.full(len(tasks), 1.0 / len(tasks))
-    unknown = set(spec) - set(tasks)
-    if unknown:
-        raise ValueError(f"priors: unknown tasks {sorted(unknown)}; tasks are {list(tasks)}")
-    p = np.array([spec.get(t, 0.0) for t in tasks], dtype=np.float64)
-    if not np.all(np.isfinite(p)) or np.any(p < 0) or p.sum() <= 0:
-        raise ValueError(f"priors: expected non-negative numbers with a positive sum, got {spec}")
-    if not np.isfinite(p.sum()):
-        p = p / p.max()      # huge priors: scale first, or the sum overflows
-    return p / p.sum()

@@ -36,8 +36,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from sandbox.core.factor import factor_scores
 from sandbox.core.interaction import LOG_2PI
-from sandbox.core.likelihood import Scorer, Scores, factor_scores
+from sandbox.core.likelihood import Scorer, Scores
 from sandbox.core.phase import Lattice
 
 

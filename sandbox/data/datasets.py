@@ -107,6 +107,18 @@ def load_dataset(
         Grouped by task. Trials that cannot be used are skipped with a
         :class:`sandbox.data.recorded.SkippedTrialWarning`.
     """
+    # Over 60 lines only by this docstring (its parameters); the body is steps.
+    tasks = _check_selection(preprocess, seed, n_per_task, tasks)
+    demos = _load(data, resolve(spec), spec is not None, observe, seed, tasks, n_per_task,
+                  preprocess, {"cache": cache, "on_trial": on_trial}, options)
+    if rate_hz is not None:
+        demos = [resample_uniform(d, rate_hz) for d in demos]
+    return demos
+
+
+def _check_selection(preprocess: str, seed: int, n_per_task: int | None,
+                     tasks: Sequence[str] | None) -> list[str] | None:
+    """``ValueError`` unless the options are valid; returns ``tasks`` as a list (or None)."""
     check_choice(preprocess, "preprocess", PREPROCESS)
     check_integer(seed, "seed", 0)
     if n_per_task is not None:
@@ -115,26 +127,29 @@ def load_dataset(
         if isinstance(tasks, (str, bytes)) or not isinstance(tasks, Iterable):
             raise ValueError(f"tasks: expected a list of task names, got {tasks!r}")
         tasks = list(tasks)
-    layout = resolve(spec)
+    return tasks
+
+
+def _load(data: str | Path, layout: DataSpec, spec_given: bool, observe, seed: int,
+          tasks: list[str] | None, n_per_task: int | None, preprocess: str, folder: dict,
+          options: dict) -> list[Demonstration]:
+    """The demonstrations of a synthetic set, a Minari dataset or a folder (``folder``:
+    the folder-only ``cache`` and ``on_trial``)."""
     if isinstance(data, str) and data.startswith(SYNTHETIC_PREFIX):
         observed = [m.name for m in layout.observed(observe)]
-        demos = _synthetic(data[len(SYNTHETIC_PREFIX):], seed, tasks, n_per_task, preprocess,
-                           {"observe": observed, **options})
-    elif isinstance(data, str) and data.startswith(MINARI_PREFIX):
-        demos = _minari(data[len(MINARI_PREFIX):], layout, observe, tasks, n_per_task,
-                        preprocess, options)
-    elif isinstance(data, (str, Path)) and Path(data).is_dir():
-        given = {"observe": observe, "cache": cache, "on_trial": on_trial, **options}
+        return _synthetic(data[len(SYNTHETIC_PREFIX):], seed, tasks, n_per_task, preprocess,
+                          {"observe": observed, **options})
+    if isinstance(data, str) and data.startswith(MINARI_PREFIX):
+        return _minari(data[len(MINARI_PREFIX):], layout, observe, tasks, n_per_task,
+                       preprocess, options)
+    if isinstance(data, (str, Path)) and Path(data).is_dir():
+        given = {"observe": observe, **folder, **options}
         if "columns" not in options:          # columns= is shorthand for a hand-only spec
             given["spec"] = layout
-        elif spec is not None:
+        elif spec_given:
             raise ValueError("spec and columns: expected one of them, got both")
-        demos = _recorded(Path(data), tasks, n_per_task, preprocess, given)
-    else:
-        raise ValueError(f"data: expected {_spec_options()}, got {str(data)!r}")
-    if rate_hz is not None:
-        demos = [resample_uniform(d, rate_hz) for d in demos]
-    return demos
+        return _recorded(Path(data), tasks, n_per_task, preprocess, given)
+    raise ValueError(f"data: expected {_spec_options()}, got {str(data)!r}")
 
 
 def _recorded(root, tasks, n_per_task, preprocess, options) -> list[Demonstration]:

@@ -154,21 +154,36 @@ def load_trial(
         counts, the time span and unit, value magnitudes and, for columns named
         after Baxter's joints, the URDF joint limits.
     """
+    # Over 60 lines only by this docstring (nine documented parameters); the body is steps.
     check_options(preprocess, **options)
     max_duration = check_positive(max_duration, "max_duration")
     spec = _spec(spec, columns)
     modalities = spec.observed(observe)
     path = _path(path, "path")
     task = task or path.parent.name
-    store, key = resolve_cache(cache), ""
-    if store is not None:
-        key = store.key(path, task=task, spec=spec.to_dict(), observe=[m.name for m in modalities],
-                        preprocess=preprocess, max_duration=max_duration, options=options)
-        found = store.get(key)
-        if isinstance(found, str):
-            raise TrialError(f"{path}: {found}")
-        if found is not None:
-            return found
+    store = resolve_cache(cache)
+    key = "" if store is None else store.key(
+        path, task=task, spec=spec.to_dict(), observe=[m.name for m in modalities],
+        preprocess=preprocess, max_duration=max_duration, options=options)
+    found = _cached(store, key, path)
+    if found is not None:
+        return found
+    return _load_and_keep(store, key, path, task, spec, modalities, preprocess, max_duration,
+                          options)
+
+
+def _cached(store: TrialCache | None, key: str, path: Path) -> Demonstration | None:
+    """The trial the cache holds under ``key`` (None if none); a cached refusal is raised."""
+    found = None if store is None else store.get(key)
+    if isinstance(found, str):
+        raise TrialError(f"{path}: {found}")
+    return found
+
+
+def _load_and_keep(store: TrialCache | None, key: str, path: Path, task: str, spec: DataSpec,
+                   modalities, preprocess: str, max_duration: float,
+                   options: dict) -> Demonstration:
+    """Load the trial; keep it, or why it was refused, in the cache (if any)."""
     try:
         demo = _load_trial(path, task, spec, modalities, preprocess, max_duration, options)
     except TrialError as error:

@@ -26,7 +26,7 @@ from __future__ import annotations
 import logging
 import uuid
 
-from sandbox.eval.executors import Task, check_workers, install, run_task, uninstall
+from sandbox.eval.tasks import Task, check_workers, install, run_task, uninstall
 
 INSTALL_HINT = 'pip install -e ".[dask]"'
 #: Configuration of the scheduler of ``scheduler="local"`` (see the module docstring).
@@ -46,7 +46,7 @@ else:
 
 
 class _Trials(WorkerPlugin):
-    """Installs the trials in each worker process (:func:`~sandbox.eval.executors.install`)."""
+    """Installs the trials in each worker process (:func:`~sandbox.eval.tasks.install`)."""
 
     idempotent = True
 

@@ -1,8 +1,9 @@
 """Where a sweep's tasks run: local worker processes or a Dask cluster, one retry per task.
 
 A task is one configuration and a chunk of its leave-one-out folds
-(:class:`Task`); :func:`run_task` computes it in a worker from the trials
-installed there once (:func:`install`). Two executors run tasks:
+(:class:`~sandbox.eval.tasks.Task`); :func:`~sandbox.eval.tasks.run_task` computes it
+in a worker from the trials installed there once (:mod:`sandbox.eval.tasks`, the
+worker side both executors share). Two executors run tasks:
 
 * :class:`ProcessExecutor` (default): ``workers`` single-process
   :class:`~concurrent.futures.ProcessPoolExecutor` lanes (``spawn`` start
@@ -21,18 +22,12 @@ that worker's process died), retries a failed
 task (its worker died, or it raised) once, then reports it as failed and goes
 on with the others.
 
-Test hook: a worker running a task whose configuration key starts with
-``$SANDBOX_TEST_SWEEP_CRASH`` kills its own process (``os._exit``). With
-``KEY@FILE`` it dies only while ``FILE`` has no line yet, with ``KEY*N@FILE``
-while it has fewer than N lines, appending one line before dying (so the
-file counts the deaths). Several entries are separated by commas.
+Test hook: :data:`~sandbox.eval.tasks.CRASH_HOOK` (see :mod:`sandbox.eval.tasks`).
 """
 
 from __future__ import annotations
 
 import os
-import threading
-import time
 from collections import deque
 from collections.abc import Iterable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
@@ -40,10 +35,16 @@ from concurrent.futures.process import BrokenProcessPool
 from contextlib import contextmanager
 from dataclasses import dataclass
 from multiprocessing import get_context
-from pathlib import Path
 
-from sandbox.eval.loocv import EvalConfig, fold, prepare
-from sandbox.validation import check_integer
+from sandbox.eval.tasks import (
+    CRASH_HOOK,
+    Task,
+    check_workers,
+    install,
+    install_all,
+    run_task,
+    uninstall,
+)
 
 #: Environment of the worker processes: one BLAS thread each, as Dask's nanny sets.
 WORKER_ENV = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
@@ -51,19 +52,12 @@ WORKER_ENV = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THRE
 RETRIES = 1
 #: Default wait (s) for a Dask scheduler to answer.
 TIMEOUT = 10.0
-CRASH_HOOK = "SANDBOX_TEST_SWEEP_CRASH"
+__all__ = ["CRASH_HOOK", "DROPPED", "RETRIES", "TIMEOUT", "WORKER_ENV", "Outcome",
+           "ProcessExecutor", "Task", "check_workers", "describe", "install", "open_executor",
+           "run_task", "run_tasks", "uninstall"]
+
 #: The error of a task not run because its configuration had already failed.
 DROPPED = "not run: another part of its configuration failed"
-
-
-@dataclass(frozen=True)
-class Task:
-    """One unit of work: folds ``folds`` of the configuration keyed ``key`` on trials ``data``."""
-
-    key: str
-    config: EvalConfig
-    folds: tuple[int, ...]
-    data: str
 
 
 @dataclass(frozen=True)
@@ -76,76 +70,7 @@ class Outcome:
     error: str | None = None
 
 
-# ---------------------------------------------------------------- worker side
-_DATA: dict[str, tuple[list, list]] = {}
-_PREPARED: dict = {}
-_KEEP = 4   # configurations whose prepared trials a worker keeps
-_FK: list = []
-_LOCK = threading.Lock()   # a Dask worker may run tasks on several threads
-
-
-def install(token: str, train, test) -> None:
-    """Keep the trials ``token`` names in this process (workers call it once)."""
-    _DATA[token] = (list(train), list(test))
-
-
-def _install_all(data: dict[str, tuple[list, list]]) -> None:
-    for token, (train, test) in data.items():
-        install(token, train, test)
-
-
-def uninstall(token: str) -> None:
-    """Forget the trials ``token`` names, and what was prepared from them."""
-    _DATA.pop(token, None)
-    for ident in [k for k in _PREPARED if k[0] == token]:
-        del _PREPARED[ident]
-
-
-def run_task(task: Task) -> tuple[list[dict], float]:
-    """The results of the task's folds, in order, and the seconds they took (in a worker)."""
-    from sandbox.robot import BaxterKinematics
-
-    _maybe_crash(task.key)
-    start = time.perf_counter()
-    if task.data not in _DATA:
-        raise RuntimeError(f"trials {task.data[:12]} are not installed in this worker "
-                           f"(pid {os.getpid()})")
-    ident = (task.data, task.config)
-    with _LOCK:
-        if ident not in _PREPARED:
-            while len(_PREPARED) >= _KEEP:
-                _PREPARED.pop(next(iter(_PREPARED)))
-            _PREPARED[ident] = prepare(*_DATA[task.data], task.config)
-        train, test, fits = _PREPARED[ident]
-        if not _FK:
-            _FK.append(BaxterKinematics().fk)
-        fk = _FK[0]
-    trials = [fold(train, test, fits, task.config, i, fk) for i in task.folds]
-    return trials, time.perf_counter() - start
-
-
-def _maybe_crash(key: str) -> None:
-    """The test hook (see the module docstring)."""
-    for entry in filter(None, os.environ.get(CRASH_HOOK, "").split(",")):
-        head, _, marker = entry.partition("@")
-        prefix, _, times = head.partition("*")
-        if not key.startswith(prefix):
-            continue
-        if marker:
-            deaths = Path(marker).read_text().count("\n") if Path(marker).exists() else 0
-            if deaths >= int(times or 1):
-                continue
-            with open(marker, "a") as f:
-                f.write(f"{os.getpid()}\n")
-        os._exit(3)
-
-
 # ---------------------------------------------------------------- driver
-def check_workers(workers) -> int:
-    """``workers`` as an int after checking it is an integer >= 1."""
-    return check_integer(workers, "--workers", 1)
-
-
 def open_executor(workers: int = 1, scheduler: str | None = None, timeout: float = TIMEOUT):
     """An executor (a context manager): local processes, or Dask if ``scheduler`` is given.
 
@@ -268,7 +193,7 @@ class ProcessExecutor:
         if not self._data:
             raise RuntimeError("load the trials (load()) before submitting tasks")
         lane = self._idle.pop() if self._idle else ProcessPoolExecutor(
-            1, mp_context=self._context, initializer=_install_all, initargs=(self._data,))
+            1, mp_context=self._context, initializer=install_all, initargs=(self._data,))
         with _environment(WORKER_ENV):   # a new lane's process starts at its first submit
             future = lane.submit(run_task, task)
         self._busy[future] = lane

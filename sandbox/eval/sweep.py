@@ -3,8 +3,10 @@
 :func:`sweep` is ``python -m sandbox sweep``: it reads a grid
 (:mod:`sandbox.eval.grid`), loads the trials once, and evaluates every
 configuration on every leave-one-out fold. The work is split into tasks of one
-configuration and a chunk of its folds (:func:`chunk_folds`), run by an
-executor (:mod:`sandbox.eval.executors`). A configuration's results do not
+configuration and a chunk of its folds
+(:func:`~sandbox.eval.evaluation.chunk_folds`), run by an executor
+(:mod:`sandbox.eval.executors`) through an
+:class:`~sandbox.eval.evaluation.Evaluation`. A configuration's results do not
 depend on the executor, the number of workers or the chunks.
 
 The output folder holds:
@@ -24,29 +26,18 @@ from __future__ import annotations
 
 import hashlib
 import json
-import math
-import os
 import sys
-import tempfile
-from collections import Counter
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import replace
 from pathlib import Path
-from typing import Any, NamedTuple
-
-import numpy as np
 
 import sandbox
-from sandbox.eval.executors import DROPPED, Task, open_executor, run_tasks
+from sandbox.eval.evaluation import Evaluation, canonical, config_key, write_atomic
+from sandbox.eval.executors import open_executor
 from sandbox.eval.grid import config_for, label
 from sandbox.eval.loocv import EvalConfig
-from sandbox.eval.report import build_report
-from sandbox.eval.tune import BOOTSTRAP, config_row
+from sandbox.eval.tune import config_row
 
-#: Tasks per worker thread the folds are split into: configurations differ in cost (the
-#: marginal likelihood takes about twice the joint one's time), and the last task to end
-#: leaves the other workers idle, so tasks are kept small (a few seconds to tens of seconds).
-TASKS_PER_SLOT = 32
 MANIFEST = "sweep.json"
 
 
@@ -54,141 +45,12 @@ def _stderr(text: str) -> None:
     print(text, file=sys.stderr, flush=True)
 
 
-def data_token(train, test) -> str:
-    """A hash of the trials' contents (times, values, labels, modalities, meta)."""
-    digest = hashlib.sha256()
-    for demo in list(train) + list(test):
-        for array in (demo.times, demo.human, demo.robot):
-            digest.update(np.ascontiguousarray(array, dtype=float).tobytes())
-        digest.update(repr((demo.task, demo.source, demo.human_names, demo.robot_names,
-                            [(m.name, m.kind) for m in demo.modalities])).encode())
-        for name in sorted(demo.meta):
-            value = demo.meta[name]
-            digest.update(name.encode())
-            digest.update(np.asarray(value).tobytes() if isinstance(value, np.ndarray)
-                          else repr(value).encode())
-    return digest.hexdigest()
-
-
-def _canonical(value: Any) -> str:
-    return json.dumps(value, sort_keys=True, default=str)
-
-
-def config_key(config: EvalConfig, token: str) -> str:
-    """The key of a configuration's result: its full options, the trials, the version."""
-    text = _canonical({"config": config.to_dict(), "data": token,
-                       "version": sandbox.__version__})
-    return hashlib.sha256(text.encode()).hexdigest()[:32]
-
-
-def chunk_folds(n_folds: int, n_configs: int, slots: int,
-                chunk_size: int | None = None) -> list[tuple[int, ...]]:
-    """The folds split into consecutive chunks, about :data:`TASKS_PER_SLOT` tasks per slot."""
-    if chunk_size is None:
-        per_config = math.ceil(TASKS_PER_SLOT * slots / max(1, n_configs))
-        chunk_size = math.ceil(n_folds / max(1, min(n_folds, per_config)))
-    if chunk_size < 1:
-        raise ValueError(f"chunk_size: expected a positive integer, got {chunk_size!r}")
-    return [tuple(range(i, min(i + chunk_size, n_folds))) for i in range(0, n_folds, chunk_size)]
-
-
-class Evaluated(NamedTuple):
-    """A configuration's evaluation: its key and report, or why it failed."""
-
-    key: str
-    config: EvalConfig
-    report: dict | None
-    error: str | None
-
-
-class Evaluation:
-    """Leave-one-out of configurations on sets of trials, on an executor.
-
-    Parameters
-    ----------
-    executor : ProcessExecutor or DaskExecutor
-        Where the tasks run (:func:`~sandbox.eval.executors.open_executor`).
-    dataset : str
-        The ``dataset`` label of the reports.
-    chunk_size : int, optional
-        Folds per task (default: see :func:`chunk_folds`).
-    """
-
-    def __init__(self, executor, *, dataset: str = "", chunk_size: int | None = None) -> None:
-        self.executor, self.dataset, self.chunk_size = executor, dataset, chunk_size
-        self._folds: dict[str, int] = {}
-
-    def add(self, train, test) -> str:
-        """Install a set of trials in the executor's workers; returns its token.
-
-        ``train`` and ``test`` are the same trials preprocessed for training and as
-        test streams (:func:`~sandbox.eval.datasets.load_pair`).
-        """
-        if len(train) != len(test) or any(a.source != b.source or a.task != b.task
-                                          for a, b in zip(train, test)):
-            raise ValueError("train and test: expected the same trials in the same order")
-        counts = Counter(d.task for d in train)
-        if not counts or min(counts.values()) < 3:
-            raise ValueError(f"trials: expected at least 3 per task for leave-one-out (each fold "
-                             f"fits on the 2 or more others), got {dict(counts)}")
-        token = data_token(train, test)
-        if token not in self._folds:
-            self.executor.load(token, train, test)
-            self._folds[token] = len(train)
-        return token
-
-    def run(self, jobs: Sequence[tuple[EvalConfig, str]]) -> Iterator[Evaluated]:
-        """Evaluate each ``(config, token)``; yield each distinct one as its last task ends."""
-        jobs = list({config_key(c, t): (c, t) for c, t in jobs}.items())
-        tasks: list[Task] = []
-        for key, (config, token) in jobs:
-            n_folds = self._folds[token]
-            for folds in chunk_folds(n_folds, len(jobs), self.executor.slots(), self.chunk_size):
-                tasks.append(Task(key, config, folds, token))
-        expected = {key: sum(t.key == key for t in tasks) for key, _ in jobs}
-        configs = {key: config for key, (config, _) in jobs}
-        parts: dict[str, list] = {key: [] for key, _ in jobs}
-        failed: set[str] = set()     # configurations whose other tasks need not run
-        for outcome in run_tasks(self.executor, tasks, dropped=failed):
-            key = outcome.task.key
-            parts[key].append(outcome)
-            if outcome.error is not None:
-                failed.add(key)
-            if len(parts[key]) == expected[key]:
-                yield self._assemble(key, configs[key], parts.pop(key))
-
-    def _assemble(self, key: str, config: EvalConfig, outcomes: list) -> Evaluated:
-        errors = sorted({o.error for o in outcomes if o.error not in (None, DROPPED)})
-        if errors:
-            return Evaluated(key, config, None, "; ".join(errors))
-        outcomes = sorted(outcomes, key=lambda o: o.task.folds[0])
-        trials = [t for o in outcomes for t in o.trials]
-        seconds = sum(o.seconds for o in outcomes)
-        report = build_report(trials, config.to_dict(), self.dataset, seconds, n_boot=BOOTSTRAP)
-        return Evaluated(key, config, report, None)
-
-
 # ---------------------------------------------------------------- the output folder
-def write_atomic(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file in the same folder."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
 def manifest(points: list[dict], base: EvalConfig, data: dict) -> dict:
     """What a sweep is (``sweep.json``): the points, the base configuration, the data options."""
-    body = {"points": json.loads(_canonical(points)), "base": json.loads(_canonical(
-        base.to_dict())), "data": json.loads(_canonical(data))}
-    body["fingerprint"] = hashlib.sha256(_canonical(body).encode()).hexdigest()[:32]
+    body = {"points": json.loads(canonical(points)), "base": json.loads(canonical(
+        base.to_dict())), "data": json.loads(canonical(data))}
+    body["fingerprint"] = hashlib.sha256(canonical(body).encode()).hexdigest()[:32]
     return body
 
 
@@ -275,7 +137,7 @@ def run_sweep(executor, trials: Mapping, points: list[dict], out: str | Path, *,
     force : bool
         Write into a folder holding another sweep.
     chunk_size : int, optional
-        Folds per task (default: see :func:`chunk_folds`).
+        Folds per task (default: see :func:`~sandbox.eval.evaluation.chunk_folds`).
     log : callable
         Receives one line per finished configuration.
 
@@ -303,7 +165,15 @@ def run_sweep(executor, trials: Mapping, points: list[dict], out: str | Path, *,
     todo = [job for job, k in zip(jobs, keys) if k not in results]
     if results:
         log(f"{len(results)} of {len(set(keys))} configurations already done in {out}")
-    failed: dict[str, str] = {}
+    failed = _evaluate(evaluation, todo, points, keys, results, out, log)
+    return write_summary(out, points, keys, results, failed, data or {})
+
+
+def _evaluate(evaluation: Evaluation, todo: list, points: list[dict], keys: list[str],
+              results: dict, out: Path, log: Callable[[str], None]) -> dict:
+    """Run the jobs ``todo``; store each result in ``results`` and in ``out`` as it ends.
+    Returns the failed configurations' errors by key."""
+    failed: dict = {}
     for n, done in enumerate(evaluation.run(todo), 1):
         point = points[keys.index(done.key)]
         if done.report is None:
@@ -314,11 +184,11 @@ def run_sweep(executor, trials: Mapping, points: list[dict], out: str | Path, *,
         write_atomic(_result_path(out, done.key), json.dumps(results[done.key], indent=1))
         log(f"[{n}/{len(todo)}] {label(point)}: J = {results[done.key]['row']['J']:.3f} "
             f"({done.report['runtime_s']:.1f} s of work)")
-    return write_summary(out, points, keys, results, failed, data or {})
+    return failed
 
 
 def _result(key: str, point: dict, config: EvalConfig, report: dict) -> dict:
-    return {"key": key, "point": json.loads(_canonical(point)), "config": config.to_dict(),
+    return {"key": key, "point": json.loads(canonical(point)), "config": config.to_dict(),
             "version": sandbox.__version__,
             "row": config_row(report, config, config.windows[0], config.ratios[0]),
             "report": report}

@@ -73,8 +73,8 @@ def write_summary(out: str | Path, points: list[dict], keys: list[str], results:
                   failed: dict, data: dict) -> dict:
     """Write ``summary.json``, ``summary.md`` and ``summary.png`` into ``out``; return the
     summary."""
+    from sandbox.eval.evaluation import write_atomic
     from sandbox.eval.plots import plot_sweep
-    from sandbox.eval.sweep import write_atomic
 
     out = Path(out)
     summary = summarise(points, keys, results, failed, data)

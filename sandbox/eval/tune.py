@@ -15,7 +15,7 @@ it lowers J by more than ``tol`` (0.05, about the trial-to-trial noise of J),
 so the defaults do not chase noise. The table of every run is returned.
 
 The configurations of each step are evaluated together by
-:class:`~sandbox.eval.sweep.Evaluation`, on local processes or a Dask cluster
+:class:`~sandbox.eval.evaluation.Evaluation`, on local processes or a Dask cluster
 (``scheduler``, see :func:`~sandbox.eval.executors.open_executor`).
 """
 
@@ -38,8 +38,6 @@ TARGETS = {"e_p": 0.05, "e_phi": 0.20, "miss": 0.30, "jump": 0.01}
 #: Dynamic window dow_t (s) scored by J, and observed ratio reported for the static formulation.
 WINDOW = 0.2
 RATIO = 0.3
-#: Bootstrap resamples of the reports tuning and sweeps compute.
-BOOTSTRAP = 200
 #: Floors (normalised units) tried for signal modalities, and (m) for position
 #: modalities other than the hand, when they are observed.
 SIGNAL_FLOORS = (0.1, 0.3, 0.5, 1.0)
@@ -81,8 +79,8 @@ def tune(train, test, *, base: EvalConfig | None = None, grid: dict | None = Non
     runs (:func:`~sandbox.eval.executors.open_executor`). A configuration whose
     evaluation failed (its worker died twice) is logged and is not a candidate.
     """
+    from sandbox.eval.evaluation import Evaluation
     from sandbox.eval.executors import TIMEOUT, open_executor
-    from sandbox.eval.sweep import Evaluation
 
     grid = GRID if grid is None else grid
     best = replace(base or EvalConfig(), windows=(window,), ratios=(ratio,))

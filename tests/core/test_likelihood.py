@@ -1,8 +1,9 @@
 import numpy as np
 import pytest
 
+from sandbox.core.factor import condition_robot
 from sandbox.core.interaction import condition, log_marginal_likelihood, observation_matrix
-from sandbox.core.likelihood import Scorer, condition_robot
+from sandbox.core.likelihood import Scorer
 from sandbox.core.model import IProMP
 
 from . import synth

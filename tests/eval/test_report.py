@@ -49,7 +49,7 @@ def test_report_keys_and_known_means():
 def test_tune_keeps_the_current_value_unless_clearly_better(monkeypatch):
     from contextlib import nullcontext
 
-    from sandbox.eval import executors, sweep
+    from sandbox.eval import evaluation, executors
     from sandbox.eval import tune as tune_mod
 
     fake = {0.01: 3.00, 0.02: 2.98, 0.04: 2.80}     # J by noise_floor
@@ -70,10 +70,11 @@ def test_tune_keeps_the_current_value_unless_clearly_better(monkeypatch):
 
         def run(self, jobs):
             for cfg, token in jobs:
-                yield sweep.Evaluated(sweep.config_key(cfg, token), cfg, report(cfg), None)
+                yield evaluation.Evaluated(evaluation.config_key(cfg, token), cfg, report(cfg),
+                                          None)
 
     monkeypatch.setattr(executors, "open_executor", lambda *a: nullcontext())
-    monkeypatch.setattr(sweep, "Evaluation", Evaluation)
+    monkeypatch.setattr(evaluation, "Evaluation", Evaluation)
     best, rows = tune_mod.tune([], [], grid={"noise_floor": (0.01, 0.02, 0.04)},
                                log=lambda _: None)
     assert best.noise_floor == 0.04 and len(rows) == 3

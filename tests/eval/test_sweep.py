@@ -8,17 +8,11 @@ import pytest
 
 import sandbox
 from sandbox.eval import executors
+from sandbox.eval.evaluation import chunk_folds, config_key, data_token
 from sandbox.eval.executors import ProcessExecutor, Task, run_task
 from sandbox.eval.grid import config_for, parse_grid, read_grid
 from sandbox.eval.loocv import EvalConfig
-from sandbox.eval.sweep import (
-    chunk_folds,
-    config_key,
-    data_token,
-    load_result,
-    run_sweep,
-    stored_results,
-)
+from sandbox.eval.sweep import load_result, run_sweep, stored_results
 
 REPO = Path(__file__).resolve().parents[2]
 BASE = EvalConfig(observe=("hand",), n_candidates=10, subsample=4)   # quick folds

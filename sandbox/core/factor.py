@@ -1,0 +1,124 @@
+"""The linear algebra of one likelihood evaluation (:mod:`sandbox.core.likelihood`).
+
+:func:`b_part` factors the block-diagonal part B of one modality for every
+speed candidate (step 1 of the likelihood's module docstring); :func:`factor_scores`
+takes one batched Cholesky of the augmented matrices (step 3) and returns the
+log-likelihoods with the factors; :func:`condition_robot` reuses a factor to
+condition the robot weights (eq. 8). Only numpy and scipy.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg
+from scipy.linalg import lapack
+
+from sandbox.core.promp import WeightDistribution
+from sandbox.validation import FloatArray
+
+
+def b_part(G: FloatArray, beta: FloatArray, yy: FloatArray, kappa: float):
+    """Per candidate: log|A|, W = G - kappa G A^-1 G, A^-1 beta, y^T(I+kappa Psi Psi^T)^-1 y."""
+    C, N, _ = G.shape
+    A = kappa * G
+    A[:, np.arange(N), np.arange(N)] += 1.0
+    L = np.linalg.cholesky(A)
+    ld = 2.0 * np.log(np.diagonal(L, axis1=1, axis2=2)).sum(axis=1)
+    Li = np.empty_like(L)
+    for c in range(C):   # triangular inverse of a factor of A >= I: backward stable
+        Li[c] = lapack.dtrtri(L[c], lower=1)[0]
+    Q = Li @ G
+    W = G - kappa * (Q.transpose(0, 2, 1) @ Q)
+    Lb = Li @ beta
+    ab = Li.transpose(0, 2, 1) @ Lb
+    gamma = yy - kappa * (Lb**2).sum(axis=1)
+    return ld, W, ab, gamma
+
+
+def factor_scores(Kt: FloatArray, eps: FloatArray, gamma_term: FloatArray,
+                  offset: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Log-likelihoods and augmented Cholesky factors from a pair's statistics.
+
+    Parameters
+    ----------
+    Kt : ndarray, shape (M, R+1, R+1)
+        :math:`\\tilde K` in the padded layout (U in the first r rows/columns,
+        zeros up to R, :math:`\\mu` at R). Overwritten with the augmented matrix.
+    eps : ndarray, shape (M, R+1)
+        :math:`\\epsilon`, same layout.
+    gamma_term : ndarray, shape (M,)
+        :math:`y^T B^{-1} y = \\sum_p \\gamma_p / \\sigma_p^2`.
+    offset : ndarray, shape (M,)
+        :math:`sP\\log 2\\pi + \\log|B|`.
+
+    Returns
+    -------
+    loglik : ndarray, shape (M,)
+    factors : ndarray, shape (M, R+1, R+1)
+    """
+    R = Kt.shape[1] - 1
+    e = eps[:, :R] - Kt[:, :R, R]                                  # U^T Phi^T B^-1 d
+    dbd = gamma_term - 2.0 * eps[:, R] + Kt[:, R, R]               # d^T B^-1 d
+    idx = np.arange(R)
+    Kt[:, idx, idx] += 1.0                                         # K = I + J
+    Kt[:, R, :R] = e
+    Kt[:, :R, R] = e
+    Kt[:, R, R] = dbd
+    L = _cholesky(Kt)
+    diag = np.diagonal(L, axis1=1, axis2=2)
+    logdet_k = 2.0 * np.log(diag[:, :R]).sum(axis=1)
+    return -0.5 * (offset + logdet_k + diag[:, R] ** 2), L
+
+
+def _cholesky(aug: FloatArray) -> FloatArray:
+    try:
+        return np.asarray(np.linalg.cholesky(aug), dtype=np.float64)
+    except np.linalg.LinAlgError:
+        return np.stack([_cholesky_one(m) for m in aug])
+
+
+def _cholesky_one(m: FloatArray) -> FloatArray:
+    """Cholesky of one augmented matrix whose last pivot may be lost to round-off."""
+    try:
+        return np.asarray(np.linalg.cholesky(m), dtype=np.float64)
+    except np.linalg.LinAlgError:
+        R = m.shape[0] - 1
+        L = np.zeros_like(m)
+        L[:R, :R] = np.linalg.cholesky(m[:R, :R])
+        g = scipy.linalg.solve_triangular(L[:R, :R], m[:R, R], lower=True)
+        L[R, :R] = g
+        L[R, R] = np.sqrt(max(m[R, R] - g @ g, 1e-300))
+        return L
+
+
+def condition_robot(weights: WeightDistribution, factor: FloatArray, n_human: int,
+                    rank: int) -> WeightDistribution:
+    """Posterior of the robot weights given the observations scored with ``factor``.
+
+    Parameters
+    ----------
+    weights : WeightDistribution
+        The task's prior over human + robot weights.
+    factor : ndarray, shape (R+1, R+1)
+        The augmented Cholesky factor of the chosen (candidate, task) pair.
+    n_human : int
+        P.
+    rank : int
+        r of this task (the factor is padded to R >= r).
+
+    Returns
+    -------
+    WeightDistribution
+        Over the Q robot dims: mean :math:`\\mu_r + U_r K^{-1} e`, factor
+        :math:`U_r L_K^{-T}`, regulariser :math:`\\Lambda_r` (eq. 8 restricted to the
+        robot block).
+    """
+    N = weights.n_basis
+    R = factor.shape[0] - 1
+    LK = factor[:rank, :rank]
+    g = factor[R, :rank]
+    U_r = weights.factor[n_human * N:]
+    kinv_e = scipy.linalg.solve_triangular(LK, g, lower=True, trans="T")
+    new_factor = scipy.linalg.solve_triangular(LK, U_r.T, lower=True).T
+    mean = weights.mean[n_human * N:] + U_r @ kinv_e          # eq. 8
+    return WeightDistribution(mean, new_factor, weights.reg[n_human:], N)
