@@ -50,8 +50,6 @@ for _part, _allowed in ALLOWED.items():
         _allowed.add("validation")
 #: Known breaks: (importing part, imported module or package) -> the change that removes it.
 KNOWN = {
-    # Issue 16 item 2: Q_HOME lives in sandbox/data/synthetic/base.py (robot -> data).
-    ("robot", "sandbox.data.synthetic"): "issue 16 item 2 (robot facts in sandbox/robot)",
     # Issue 16 item 1: viz/benchmark.py drives an env with a policy; benchmarks move to bench/.
     ("viz", "sandbox.envs"): "issue 16 item 1 (benchmarks under sandbox/bench)",
     ("viz", "sandbox.policies"): "issue 16 item 1 (benchmarks under sandbox/bench)",
@@ -61,11 +59,6 @@ KNOWN = {
 }
 #: Known cycles (sets of modules) -> the change that removes them.
 KNOWN_CYCLES = {
-    frozenset({"sandbox.robot", "sandbox.robot.kinematics", "sandbox.data.synthetic",
-               "sandbox.data.synthetic.families", "sandbox.data.synthetic.generator",
-               "sandbox.data.synthetic.intent", "sandbox.data.synthetic.registry",
-               "sandbox.data.synthetic.robot"}):
-        "issue 16 item 2 (Q_HOME into sandbox/robot: the robot -> data import goes)",
     # Not named in issue 16 (its target "no import cycle" covers them): executors opens a
     # DaskExecutor late, which reuses the executors' helpers; tune evaluates with sweep's
     # Evaluation late, and sweep_summary writes with sweep's write_atomic late.

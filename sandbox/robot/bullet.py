@@ -23,7 +23,7 @@ from numpy.typing import ArrayLike, NDArray
 from pybullet_utils.bullet_client import BulletClient
 
 from sandbox.robot.assets import urdf_path
-from sandbox.robot.kinematics import ARM_JOINTS
+from sandbox.robot.facts import ARM_JOINTS, TIP_LINK
 from sandbox.validation import check_array
 
 FloatArray = NDArray[np.float64]
@@ -181,7 +181,7 @@ def bullet_ik(
     target: ArrayLike,
     q_seed: ArrayLike,
     *,
-    link: str = "left_gripper",
+    link: str = TIP_LINK,
     tol: float = 0.01,
     max_rounds: int = 20,
 ) -> tuple[FloatArray, float]:

@@ -22,7 +22,6 @@ from sandbox.data.synthetic.base import (
 from sandbox.data.synthetic.human import reach_positions
 from sandbox.data.synthetic.observe import check_observe, observe_human
 from sandbox.data.synthetic.robot import (
-    GRASP_OFFSET,
     joint_trajectory,
     kinematics,
     solve_handover,
@@ -36,6 +35,7 @@ from sandbox.data.synthetic.tasks import (
     redraw_end,
 )
 from sandbox.data.synthetic.tracker import TrackerModel
+from sandbox.robot import GRASP_OFFSET
 from sandbox.validation import FloatArray, check_integer, check_positive, check_rng
 
 

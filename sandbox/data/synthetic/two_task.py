@@ -17,12 +17,12 @@ from sandbox.data.demonstration import Demonstration
 from sandbox.data.synthetic.arm import ArmModel, arm_positions
 from sandbox.data.synthetic.base import (
     HAND_START,
-    Q_HOME,
     ROBOT_NAMES,
     child_rng,
     minimum_jerk,
 )
 from sandbox.data.synthetic.observe import SYNTHETIC_MODALITIES, check_observe
+from sandbox.robot import Q_HOME
 from sandbox.validation import FloatArray
 
 
@@ -56,7 +56,7 @@ def two_task_demos(
 
     The hand reaches from near :data:`HAND_START` to an end point whose y differs
     by ``separation_m`` between the tasks, with a minimum-jerk (bell-shaped
-    speed) profile; the robot's joints move from :data:`Q_HOME` toward a
+    speed) profile; the robot's joints move from :data:`~sandbox.robot.Q_HOME` toward a
     configuration that is a fixed smooth function of the hand's end point, so the
     human -> robot relation is learnable.
 
