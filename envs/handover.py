@@ -11,7 +11,6 @@ from gymnasium import spaces
 from numpy.typing import NDArray
 
 from sandbox import urdf
-from sandbox.data.synthetic.base import Q_HOME
 from sandbox.envs.arguments import (  # noqa: F401 - VIEWER_KEYS re-exported
     VIEWER_KEYS,
     check_control_hz,
@@ -26,6 +25,7 @@ from sandbox.envs.robot import BaxterArm
 from sandbox.envs.sources import FAMILIES, family_tasks, recorded_motion, synthetic_motion
 from sandbox.envs.task import HandoverTask, RewardWeights, object_for
 from sandbox.envs.teleop import TeleopMotion
+from sandbox.robot import Q_HOME
 from sandbox.validation import check_array, check_positive
 
 FloatArray = NDArray[np.float64]

@@ -27,7 +27,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from sandbox.data.synthetic.base import Q_HOME
+from sandbox.robot import Q_HOME
 
 #: Gripper commands of the mapping.
 OPEN, CLOSE = -1.0, 1.0

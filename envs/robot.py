@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from sandbox.data.synthetic.base import Q_HOME
 from sandbox.envs.pybullet import Simulation
+from sandbox.robot import Q_HOME, TIP_LINK
 
 FloatArray = NDArray[np.float64]
 
@@ -19,8 +19,6 @@ FloatArray = NDArray[np.float64]
 Q_RIGHT = np.array([-0.285, -1.031, 0.907, 1.601, -0.482, 1.124, -0.208])
 RIGHT_JOINTS = ("right_s0", "right_s1", "right_e0", "right_e1", "right_w0", "right_w1",
                 "right_w2")
-#: Link whose origin is the gripper's fingertip point (0.158 m beyond the wrist flange).
-TIP_LINK = "left_gripper"
 #: Opening below which the gripper counts as closed (fraction of its travel).
 CLOSED_BELOW = 0.5
 
@@ -102,5 +100,5 @@ class BaxterArm:
         return self.gripper_opening() < CLOSED_BELOW
 
     def tip_position(self) -> FloatArray:
-        """World position (3,) m of the gripper's fingertip point (``left_gripper``)."""
+        """World position (3,) m of the gripper's fingertip point (:data:`TIP_LINK`)."""
         return self.sim.link_position(self.name, self.tip_link)

@@ -26,10 +26,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sandbox import urdf
-from sandbox.data.synthetic.robot import GRASP_OFFSET
 from sandbox.envs.human import HumanHand
 from sandbox.envs.pybullet import Simulation
 from sandbox.envs.robot import BaxterArm
+from sandbox.robot import FLOOR_Z, GRASP_OFFSET
 from sandbox.validation import check_positive
 
 FloatArray = NDArray[np.float64]
@@ -49,8 +49,6 @@ DEFAULT_OBJECT = "box"
 #: Grasp point of the held object relative to the tracked hand point (m): the
 #: median place where the recorded gripper tip met the hand.
 HOLD_OFFSET = GRASP_OFFSET
-#: Floor height in Baxter's base frame (m): the bottom of Baxter's pedestal.
-FLOOR_Z = -0.926
 #: Table placement (m): centre of its top surface, 0.74 m above the floor.
 TABLE_TOP = np.array([0.85, 0.1, FLOOR_Z + 0.74])
 

@@ -199,11 +199,11 @@ class HeldRobot:
     policy : IProMPPolicy
         Its predictor is fed every observation; its other attributes are this one's.
     q : array_like, shape (7,)
-        The held joint targets (rad); default the home pose :data:`~sandbox.data.synthetic.Q_HOME`.
+        The held joint targets (rad); default the home pose :data:`~sandbox.robot.Q_HOME`.
     """
 
     def __init__(self, policy, q: ArrayLike | None = None) -> None:
-        from sandbox.data.synthetic.base import Q_HOME
+        from sandbox.robot import Q_HOME
 
         self.policy = policy
         self._action = np.append(check_array(Q_HOME if q is None else q, "q", 1, shape=(7,)),

@@ -38,12 +38,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sandbox.core import DynamicPredictor, IProMP, StaticPredictor
+from sandbox.robot import TIP_LINK, joint_speed_limits
 from sandbox.validation import check_array, check_positive
 
 FloatArray = NDArray[np.float64]
 
-#: Speed limits (rad/s) of Baxter's left-arm joints ``left_s0 ... left_w2`` (from its URDF).
-MAX_VELOCITY = np.array([1.5, 1.5, 1.5, 1.5, 4.0, 4.0, 4.0])
 #: Observations per second the predictor is designed for.
 PREDICTOR_HZ = 20.0
 #: Predictor options a closed-loop policy changes from their defaults: the episode ends
@@ -145,7 +144,7 @@ class _Steering:
 
         self.dt = 1.0 / check_positive(control_hz, "control_hz")
         self.close_radius = check_positive(close_radius, "close_radius")
-        limits = MAX_VELOCITY if max_velocity is None else max_velocity
+        limits = joint_speed_limits() if max_velocity is None else max_velocity
         self.max_velocity = check_array(limits, "max_velocity", 1, shape=(7,))
         check_positive(float(self.max_velocity.min()), "max_velocity")
         self.kinematics = BaxterKinematics()
@@ -156,7 +155,7 @@ class _Steering:
         previous = q if self._target is None else self._target
         step = self.max_velocity * self.dt
         self._target = previous + np.clip(goal - previous, -step, step)
-        tip = self.kinematics.fk(q, link="left_gripper")
+        tip = self.kinematics.fk(q, link=TIP_LINK)
         close = np.linalg.norm(tip - np.asarray(obs["object"], dtype=float)) < self.close_radius
         return np.append(self._target, 1.0 if close else -1.0)
 
@@ -181,7 +180,8 @@ class IProMPPolicy(_Steering):
     close_radius : float
         Fingertip-to-object distance (m) under which the gripper closes.
     max_velocity : array_like, shape (7,), optional
-        Joint speed limits (rad/s); default :data:`MAX_VELOCITY`.
+        Joint speed limits (rad/s); default Baxter's URDF ``<limit velocity>``
+        (:func:`sandbox.robot.joint_speed_limits`).
     **options
         More options of the predictor (``blend_rate``, ``likelihood``...);
         ``until_end`` defaults to False here (:data:`CLOSED_LOOP`).

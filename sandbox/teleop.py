@@ -45,6 +45,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from sandbox.robot import TIP_LINK
+
 #: Key -> (axis, direction) of the hand motion.
 MOVES = {"w": (0, -1), "s": (0, 1), "a": (1, 1), "d": (1, -1), "r": (2, 1), "f": (2, -1)}
 SPEED_RANGE = (0.02, 0.6)
@@ -221,7 +223,7 @@ def _xyz(p) -> str:
     return f"({x:+.3f},{y:+.3f},{z:+.3f})"
 
 
-def meeting_point(predictor, kinematics, link: str = "left_gripper") -> np.ndarray:
+def meeting_point(predictor, kinematics, link: str = TIP_LINK) -> np.ndarray:
     """Where the robot's current plan ends (3,) m: the fingertip at its last mean joints.
 
     ``kinematics`` is a :class:`~sandbox.robot.BaxterKinematics` (``fk(q, link=...)``).
@@ -337,7 +339,7 @@ class _Loop:
             self.overlay.show(predictor, t, executed_q=self.obs["q"], truth=env.human_intent(t))
         if len(predictor.updates) > self.n_updates:
             self.n_updates = len(predictor.updates)
-            gripper = self.kinematics.fk(self.obs["q"], link="left_gripper")
+            gripper = self.kinematics.fk(self.obs["q"], link=TIP_LINK)
             meeting = meeting_point(predictor, self.kinematics)
             self.out(status_line(t, env.motion.position(t), self.obs["hand"], predictor,
                                  gripper=gripper, meeting=meeting))

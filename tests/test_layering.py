@@ -50,8 +50,6 @@ for _part, _allowed in ALLOWED.items():
         _allowed.add("validation")
 #: Known breaks: (importing part, imported module or package) -> the change that removes it.
 KNOWN = {
-    # Issue 16 item 2: Q_HOME lives in sandbox/data/synthetic/base.py (robot -> data).
-    ("robot", "sandbox.data.synthetic"): "issue 16 item 2 (robot facts in sandbox/robot)",
     # Issue 16 item 1: viz/benchmark.py drives an env with a policy; benchmarks move to bench/.
     ("viz", "sandbox.envs"): "issue 16 item 1 (benchmarks under sandbox/bench)",
     ("viz", "sandbox.policies"): "issue 16 item 1 (benchmarks under sandbox/bench)",
@@ -59,14 +57,8 @@ KNOWN = {
     # a registered env id (envs). The export half moves to sandbox/episodes/ with item 1.
     ("data", "sandbox.envs"): "issue 16 item 1 (Minari export in the episodes layer)",
 }
-#: Known cycles (sets of modules) -> the change that removes them.
-KNOWN_CYCLES = {
-    frozenset({"sandbox.robot", "sandbox.robot.kinematics", "sandbox.data.synthetic",
-               "sandbox.data.synthetic.families", "sandbox.data.synthetic.generator",
-               "sandbox.data.synthetic.intent", "sandbox.data.synthetic.registry",
-               "sandbox.data.synthetic.robot"}):
-        "issue 16 item 2 (Q_HOME into sandbox/robot: the robot -> data import goes)",
-}
+#: Known cycles (sets of modules) -> the change that removes them (none left).
+KNOWN_CYCLES: dict[frozenset[str], str] = {}
 
 
 def modules() -> dict[str, Path]:

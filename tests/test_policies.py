@@ -8,17 +8,17 @@ import numpy as np
 import pytest
 
 import sandbox.policies
-from sandbox.data.synthetic.base import Q_HOME
 from sandbox.envs.sources import synthetic_motion
 from sandbox.policies import (
-    MAX_VELOCITY,
     IProMPPolicy,
     RecordedRobotPolicy,
     StaticPolicy,
     fit_family_model,
     modality_values,
 )
-from sandbox.robot import BaxterKinematics
+from sandbox.robot import Q_HOME, BaxterKinematics, joint_speed_limits
+
+MAX_VELOCITY = joint_speed_limits()  # the policies' default
 
 
 @pytest.fixture(scope="module")

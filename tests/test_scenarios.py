@@ -10,7 +10,7 @@ import pytest
 
 import sandbox.envs  # noqa: F401  (registers the environments)
 import sandbox.scenarios
-from sandbox.data.synthetic.base import Q_HOME
+from sandbox.robot import Q_HOME
 from sandbox.scenarios import EpisodeResult, run_scenario, summarize
 
 

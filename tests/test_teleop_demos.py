@@ -14,8 +14,8 @@ import sandbox.data.writer
 from sandbox.cli import main
 from sandbox.data.recorded import TrialError, load_recorded, load_trial
 from sandbox.data.spec import BUILT_IN, ROBOT_COLUMNS
-from sandbox.data.synthetic.base import HAND_START, Q_HOME
-from sandbox.data.synthetic.robot import GRASP_OFFSET, IK_LINK, kinematics, robot_meeting
+from sandbox.data.synthetic.base import HAND_START
+from sandbox.data.synthetic.robot import kinematics, robot_meeting
 from sandbox.data.writer import RECORDED_COLUMNS, next_trial_path, write_trial
 from sandbox.demos_recording import (
     DemoRecorder,
@@ -24,6 +24,7 @@ from sandbox.demos_recording import (
     motion_span,
     teleop_trial,
 )
+from sandbox.robot import GRASP_OFFSET, Q_HOME, TIP_LINK
 
 DT = 0.02  # the environment's control step (s)
 LEFT = np.array([0.72, 0.26, 0.25])  # a handover place Baxter's left arm reaches
@@ -123,7 +124,7 @@ def test_the_robot_meets_the_hand_where_it_stopped_when_it_stopped():
     t = np.arange(0.0, 3.0, DT)
     q, error = robot_meeting(t, LEFT, 0.5, 1.7)
     assert q.shape == (t.size, 7) and error < 0.01
-    tip = kinematics().fk(q, link=IK_LINK)
+    tip = kinematics().fk(q, link=TIP_LINK)
     assert np.linalg.norm(tip[-1] - (LEFT + GRASP_OFFSET)) < 0.01
     np.testing.assert_allclose(q[t <= 0.5], np.broadcast_to(Q_HOME, q[t <= 0.5].shape))
     np.testing.assert_allclose(q[t >= 1.7], np.broadcast_to(q[-1], q[t >= 1.7].shape))

@@ -14,7 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
-from sandbox.robot.kinematics import ARM_JOINTS, BaxterKinematics, q_home
+from sandbox.robot.facts import ARM_JOINTS, TIP_LINK
+from sandbox.robot.kinematics import BaxterKinematics, q_home
 
 
 def front_targets(kin: BaxterKinematics, n: int, rng: np.random.Generator, link: str) -> np.ndarray:
@@ -139,9 +140,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             f"{np.round(1e3 * diff.mean(axis=0), 2)} mm, residual after removing it "
             f"{1e3 * np.linalg.norm(diff - diff.mean(axis=0), axis=1).mean():.2f} mm"
         )
-    for link in ("left_gripper", "left_hand_link"):
+    for link in (TIP_LINK, "left_hand_link"):
         bench_ik(kin, args.targets, link)
-    bench_bullet_ik(kin, args.bullet_targets, "left_gripper")
+    bench_bullet_ik(kin, args.bullet_targets, TIP_LINK)
     return 0
 
 

@@ -23,7 +23,7 @@ from numpy.typing import ArrayLike, NDArray
 from pybullet_utils.bullet_client import BulletClient
 
 from sandbox.robot.assets import urdf_path
-from sandbox.robot.kinematics import ARM_JOINTS
+from sandbox.robot.facts import ARM_JOINTS, TIP_LINK
 from sandbox.validation import check_array
 
 FloatArray = NDArray[np.float64]
@@ -181,7 +181,7 @@ def bullet_ik(
     target: ArrayLike,
     q_seed: ArrayLike,
     *,
-    link: str = "left_gripper",
+    link: str = TIP_LINK,
     tol: float = 0.01,
     max_rounds: int = 20,
 ) -> tuple[FloatArray, float]:
@@ -221,10 +221,6 @@ def bullet_ik(
     )
     if link not in baxter.links or baxter.links[link] < 0:
         raise ValueError(f"link: expected one of Baxter's moving links, got {link!r}")
-    movable = sorted(baxter.joints[name] for name in baxter.limits)
-    lows = [baxter.limits[n][0] for n in sorted(baxter.limits, key=baxter.joints.get)]
-    highs = [baxter.limits[n][1] for n in sorted(baxter.limits, key=baxter.joints.get)]
-    slot = [movable.index(i) for i in baxter.arm]
     saved = arm_positions(baxter)
     best_q, best_err = q, np.inf
     try:
@@ -235,19 +231,29 @@ def bullet_ik(
                 best_q, best_err = q, err
             if err <= tol or calls == max_rounds:
                 break
-            rest = [s[0] for s in baxter.client.getJointStates(baxter.body, movable)]
-            solution = baxter.client.calculateInverseKinematics(
-                baxter.body,
-                baxter.links[link],
-                target.tolist(),
-                lowerLimits=lows,
-                upperLimits=highs,
-                jointRanges=[h - lo for lo, h in zip(lows, highs, strict=True)],
-                restPoses=rest,
-                maxNumIterations=100,
-                residualThreshold=1e-5,
-            )
-            q = np.clip(np.array([solution[s] for s in slot]), baxter.lower, baxter.upper)
+            q = _bullet_ik_call(baxter, link, target)
     finally:
         reset_arm(baxter, saved)
     return best_q, best_err
+
+
+def _bullet_ik_call(baxter: BulletBaxter, link: str, target: FloatArray) -> FloatArray:
+    """One ``calculateInverseKinematics`` call from the current state: arm joints (7,) rad,
+    clipped to the limits."""
+    movable = sorted(baxter.joints[name] for name in baxter.limits)
+    lows = [baxter.limits[n][0] for n in sorted(baxter.limits, key=baxter.joints.get)]
+    highs = [baxter.limits[n][1] for n in sorted(baxter.limits, key=baxter.joints.get)]
+    slot = [movable.index(i) for i in baxter.arm]
+    rest = [s[0] for s in baxter.client.getJointStates(baxter.body, movable)]
+    solution = baxter.client.calculateInverseKinematics(
+        baxter.body,
+        baxter.links[link],
+        target.tolist(),
+        lowerLimits=lows,
+        upperLimits=highs,
+        jointRanges=[h - lo for lo, h in zip(lows, highs, strict=True)],
+        restPoses=rest,
+        maxNumIterations=100,
+        residualThreshold=1e-5,
+    )
+    return np.clip(np.array([solution[s] for s in slot]), baxter.lower, baxter.upper)

@@ -202,21 +202,10 @@ def _take(x, index):
 
 
 def solve(
-    forward: Forward,
-    targets: ArrayLike,
-    q_seed: ArrayLike,
-    lower: FloatArray,
-    upper: FloatArray,
-    *,
-    tol: float = 0.01,
-    orientations: ArrayLike | None = None,
-    angle_tol: float = 0.05,
-    angle_weight: float = 0.2,
-    max_iter: int = 50,
-    restarts: int = 6,
-    damping: float = 0.02,
-    max_step: float = 0.1,
-    q_rest: ArrayLike | None = None,
+    forward: Forward, targets: ArrayLike, q_seed: ArrayLike, lower: FloatArray,
+    upper: FloatArray, *, tol: float = 0.01, orientations: ArrayLike | None = None,
+    angle_tol: float = 0.05, angle_weight: float = 0.2, max_iter: int = 50, restarts: int = 6,
+    damping: float = 0.02, max_step: float = 0.1, q_rest: ArrayLike | None = None,
     rest_gain: float = 0.0,
 ) -> IKResult:
     """Solve inverse kinematics for n targets at once.
@@ -263,6 +252,18 @@ def solve(
     -------
     IKResult
     """
+    settings = _settings(tol, angle_tol, angle_weight, max_iter, restarts, damping, max_step,
+                         rest_gain)
+    targets, seed, orientations = _check_inputs(targets, q_seed, orientations, lower)
+    rest = (np.clip(seed, lower, upper) if q_rest is None
+            else _check_rest(q_rest, len(targets), len(lower)))
+    return _restarted(forward, targets, orientations, np.clip(seed, lower, upper), rest,
+                      (lower, upper), settings)
+
+
+def _settings(tol, angle_tol, angle_weight, max_iter, restarts, damping, max_step,
+              rest_gain) -> dict:
+    """The options of :func:`solve`, checked (``ValueError`` on a bad one)."""
     settings = {
         "max_iter": int(check_positive(max_iter, "max_iter")),
         "damping": check_positive(damping, "damping"),
@@ -274,15 +275,20 @@ def solve(
     }
     if int(restarts) != restarts or not 0 <= restarts <= len(_HALTON):
         raise ValueError(f"restarts: expected an integer in [0, {len(_HALTON)}], got {restarts!r}")
+    return {**settings, "tol": tol, "angle_tol": angle_tol, "restarts": int(restarts)}
+
+
+def _restarted(forward, targets, orientations, q_best, rest, limits, settings) -> IKResult:
+    """Descend from ``q_best`` (n, 7), then from the restart configurations for the targets
+    not yet solved, keeping each target's best solution."""
+    lower, upper = limits
     restart = lower + (0.1 + 0.8 * _HALTON) * (upper - lower)  # inner 80 % of the ranges
-    targets, seed, orientations = _check_inputs(targets, q_seed, orientations, lower)
-    n = len(targets)
-    rest = np.clip(seed, lower, upper) if q_rest is None else _check_rest(q_rest, n, len(lower))
-    q_best = np.clip(seed, lower, upper)
+    n, tol, angle_tol = len(targets), settings["tol"], settings["angle_tol"]
     err_best, ang_best = np.full(n, np.inf), np.full(n, np.inf)
     steps = np.zeros(n, np.int64)
     angle_ok = angle_tol if orientations is not None else np.inf
-    for attempt in range(int(restarts) + 1):
+    angle_weight = settings["angle_weight"]
+    for attempt in range(settings["restarts"] + 1):
         todo = np.flatnonzero((err_best > tol) | (ang_best > angle_ok))
         if todo.size == 0:
             break
@@ -292,13 +298,7 @@ def solve(
             else np.repeat(restart[attempt - 1 : attempt], todo.size, 0)
         )
         q, e, a, k = _descend(
-            forward,
-            targets[todo],
-            _take(orientations, todo),
-            start,
-            rest[todo],
-            lower,
-            upper,
+            forward, targets[todo], _take(orientations, todo), start, rest[todo], lower, upper,
             settings,
         )
         better = e + angle_weight * a < err_best[todo] + angle_weight * ang_best[todo]

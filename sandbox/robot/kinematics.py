@@ -28,13 +28,11 @@ from numpy.typing import ArrayLike, NDArray
 
 from sandbox.robot import ik as _ik
 from sandbox.robot.assets import source_urdf_path
+from sandbox.robot.facts import ARM_JOINTS, Q_HOME, TIP_LINK
 from sandbox.robot.urdf import UrdfJoint, chain_to, read_joints
 from sandbox.validation import check_array
 
 FloatArray = NDArray[np.float64]
-
-#: The seven left-arm joints, in the order of ``q`` (and of the recordings).
-ARM_JOINTS = ("left_s0", "left_s1", "left_e0", "left_e1", "left_w0", "left_w1", "left_w2")
 
 
 @dataclass(frozen=True)
@@ -160,7 +158,7 @@ class BaxterKinematics:
         """Position of ``link`` (..., 3) in the base frame (m) for joints ``q`` (..., 7) rad."""
         return self.fk_pose(q, link)[..., :3, 3]
 
-    def fk_pose(self, q: ArrayLike, link: str = "left_gripper") -> FloatArray:
+    def fk_pose(self, q: ArrayLike, link: str = TIP_LINK) -> FloatArray:
         """Pose (..., 4, 4) of ``link`` in the base frame (m) for joints ``q`` (..., 7) rad."""
         q = self._check_q(q)
         return _forward(q, self._chain(link))[0]
@@ -173,7 +171,7 @@ class BaxterKinematics:
         chains = {name: self._chain(name) for name in (self.links if links is None else links)}
         return {name: _forward(q, chain)[0] for name, chain in chains.items()}
 
-    def jacobian(self, q: ArrayLike, link: str = "left_gripper") -> FloatArray:
+    def jacobian(self, q: ArrayLike, link: str = TIP_LINK) -> FloatArray:
         """Geometric Jacobian (..., 6, 7) of ``link``: linear (m/rad) rows, then angular rows."""
         q = self._check_q(q)
         return _forward(q, self._chain(link), jacobian=True)[1]
@@ -184,7 +182,7 @@ class BaxterKinematics:
         self,
         targets: ArrayLike,
         q_seed: ArrayLike | None = None,
-        link: str = "left_gripper",
+        link: str = TIP_LINK,
         tol: float = 0.01,
         **options,
     ) -> _ik.IKResult:
@@ -196,9 +194,10 @@ class BaxterKinematics:
             Target positions in the base frame (m).
         q_seed : array_like, shape (7,) or (n, 7), optional
             Starting configuration(s) (rad), clipped to the limits; default the
-            recorded home configuration ``Q_HOME``. Solutions stay near it.
+            recorded home configuration :data:`~sandbox.robot.Q_HOME`. Solutions stay near it.
         link : str
-            Link to place (default the gripper's fingertip point).
+            Link to place (default :data:`~sandbox.robot.TIP_LINK`, the gripper's fingertip
+            point).
         tol : float
             Success threshold on the position error (m).
         **options
@@ -230,7 +229,7 @@ class BaxterKinematics:
         if not isinstance(link, str) or link not in self._model.chains:
             raise ValueError(
                 f"link: expected one of the links moved by the left arm (e.g. 'left_hand_link', "
-                f"'left_gripper'; see BaxterKinematics().links), got {link!r}"
+                f"{TIP_LINK!r}; see BaxterKinematics().links), got {link!r}"
             )
         return self._model.chains[link]
 
@@ -274,7 +273,5 @@ def _forward(
 
 
 def q_home() -> FloatArray:
-    """Baxter's left-arm home configuration in the recordings (7,) rad (a copy of ``Q_HOME``)."""
-    from sandbox.data.synthetic import Q_HOME  # late: sandbox.data may itself use this package
-
+    """Baxter's left-arm home configuration (7,) rad: a writable copy of :data:`Q_HOME`."""
     return np.array(Q_HOME, dtype=np.float64)

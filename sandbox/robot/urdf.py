@@ -1,7 +1,7 @@
 """A minimal URDF reader: the joint tree, enough for forward kinematics.
 
 Only what kinematics needs is read (joint type, parent and child link, origin,
-axis, limits); inertia, geometry and transmissions are ignored. Pure numpy and
+axis, position and speed limits); inertia, geometry and transmissions are ignored. Pure numpy and
 the standard library.
 """
 
@@ -32,6 +32,8 @@ class UrdfJoint:
         Unit joint axis in the joint frame.
     lower, upper : float
         Position limits (rad or m); ``-inf``/``inf`` when absent.
+    velocity : float
+        Speed limit (rad/s or m/s), ``<limit velocity>``; ``inf`` when absent.
     """
 
     name: str
@@ -42,6 +44,7 @@ class UrdfJoint:
     axis: FloatArray
     lower: float
     upper: float
+    velocity: float = np.inf
 
 
 def rpy_matrix(rpy: FloatArray) -> FloatArray:
@@ -77,6 +80,7 @@ def _joint(element: ET.Element) -> UrdfJoint:
     limit = element.find("limit")
     lower = float(limit.get("lower", "-inf")) if limit is not None else -np.inf
     upper = float(limit.get("upper", "inf")) if limit is not None else np.inf
+    velocity = float(limit.get("velocity", "inf")) if limit is not None else np.inf
     return UrdfJoint(
         name=element.get("name", ""),
         type=element.get("type", ""),
@@ -86,6 +90,7 @@ def _joint(element: ET.Element) -> UrdfJoint:
         axis=axis / np.linalg.norm(axis),
         lower=lower,
         upper=upper,
+        velocity=velocity,
     )
 
 

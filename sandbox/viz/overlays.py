@@ -35,6 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
+from sandbox.robot import TIP_LINK
 from sandbox.validation import check_array
 from sandbox.viz import objects
 from sandbox.viz.geometry import FloatArray, polyline_tube, sample_paths, task_colors, tube
@@ -89,7 +90,7 @@ class PredictionOverlay:
     kinematics : BaxterKinematics, optional
         Forward kinematics for joint-space plans (default: a new one).
     link : str
-        Link whose path is drawn (default the gripper's fingertip point).
+        Link whose path is drawn (default :data:`~sandbox.robot.TIP_LINK`, the fingertip point).
     panel : meshcat.Visualizer, optional
         Node of the bar panel (default ``vis["panel"]``; a :class:`Viewer` hangs
         it on the camera, so it stays in view).
@@ -102,7 +103,7 @@ class PredictionOverlay:
     """
 
     def __init__(self, vis, *, rng: np.random.Generator, tasks, kinematics=None,
-                 link: str = "left_gripper", panel=None, panel_pose: ArrayLike | None = None,
+                 link: str = TIP_LINK, panel=None, panel_pose: ArrayLike | None = None,
                  style: OverlayStyle = OverlayStyle(), title: str = "handover-sandbox") -> None:
         if not isinstance(rng, np.random.Generator):
             raise ValueError(f"rng: expected a numpy.random.Generator, got {type(rng).__name__}")

@@ -24,6 +24,7 @@ import meshcat
 import numpy as np
 from numpy.typing import ArrayLike
 
+from sandbox.robot import FLOOR_Z
 from sandbox.validation import check_array, check_positive
 from sandbox.viz.meshes import DEFAULT_RESOLUTION
 from sandbox.viz.mirror import BodyMirror
@@ -39,8 +40,10 @@ BAXTER_LINK = "left_upper_shoulder"
 #: Pose (with scale) of the overlays' bar panel in the camera frame (x right, y up, looking
 #: along -z): 1.5 m ahead, upper left, facing the camera, so it stays in view as the view turns.
 HUD_POSE = np.array([[0.0, 0.45, 0, -0.55], [0, 0, 0.45, 0.31], [0.45, 0, 0, -1.5], [0, 0, 0, 1]])
-#: Height of the floor grid (m) in Baxter's base frame (the pedestal's feet).
-FLOOR_Z = -0.93
+#: Height of the floor grid (m) in Baxter's base frame: 4 mm under the floor's top
+#: (:data:`sandbox.robot.FLOOR_Z`), so that the simulated floor slab, when drawn, hides it
+#: instead of flickering through it (-0.93 m, where the grid has always been).
+GRID_Z = round(FLOOR_Z - 0.004, 3)
 
 
 class Viewer:
@@ -65,7 +68,7 @@ class Viewer:
     fov : float
         Vertical field of view of the camera (degrees).
     floor_z : float or None
-        Height of the floor grid (m); ``None`` hides the grid.
+        Height of the floor grid (m), default :data:`GRID_Z`; ``None`` hides the grid.
     realtime : bool
         Make :meth:`update` wait so that time ``t`` is shown ``t`` seconds
         after the first update (for live viewing of a fast simulation; slower
@@ -97,7 +100,7 @@ class Viewer:
     def __init__(self, *, live: bool = False, fps: float = 30.0, record: bool = True,
                  resolution: float | None = DEFAULT_RESOLUTION,
                  camera: ArrayLike = DEFAULT_CAMERA, target: ArrayLike = DEFAULT_TARGET,
-                 fov: float = 45.0, floor_z: float | None = FLOOR_Z,
+                 fov: float = 45.0, floor_z: float | None = GRID_Z,
                  realtime: bool = False, open_browser: bool = False,
                  host: str = DEFAULT_HOST) -> None:
         camera = check_array(camera, "camera", 1, shape=(3,))

@@ -12,13 +12,13 @@ from sandbox.data.synthetic import (
     DATASETS,
     HAND_START,
     HUMAN_NAMES,
-    Q_HOME,
     ROBOT_NAMES,
     make_dataset,
     minimum_jerk,
     two_task_demos,
 )
 from sandbox.data.synthetic.base import sample_times, skewed_minimum_jerk
+from sandbox.robot import Q_HOME
 
 TASKS = {
     "two_task": ["left", "right"],

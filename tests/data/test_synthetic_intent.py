@@ -6,8 +6,7 @@ import numpy as np
 import pytest
 
 from sandbox.data.synthetic import IntentSwitch, TrackerModel, intent_switch_demo
-from sandbox.data.synthetic.robot import IK_LINK
-from sandbox.robot import BaxterKinematics
+from sandbox.robot import TIP_LINK, BaxterKinematics
 
 
 def _demo(a, b, phase=0.6, seed=3, **kwargs):
@@ -43,7 +42,7 @@ def test_robot_ends_at_task_b_handover_point():
     kin = BaxterKinematics()
     for family, a, b in (("diverging", "up", "down"), ("objects", "box", "glasses_case")):
         demo, _ = _demo(a, b, 0.4, family=family)
-        error = np.linalg.norm(kin.fk(demo.robot[-1], link=IK_LINK)
+        error = np.linalg.norm(kin.fk(demo.robot[-1], link=TIP_LINK)
                                - demo.meta["handover_target"])
         assert error <= 0.01
 

@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 
 import sandbox.data.synthetic.generator as generator
-from sandbox.data.synthetic import Q_HOME, diverging_demos, objects_demos
+from sandbox.data.synthetic import diverging_demos, objects_demos
 from sandbox.data.synthetic.generator import generate
-from sandbox.data.synthetic.robot import GRASP_OFFSET, IK_LINK, bump, joint_trajectory
+from sandbox.data.synthetic.robot import bump, joint_trajectory
 from sandbox.data.synthetic.tasks import TaskSpec, Variability
-from sandbox.robot import BaxterKinematics
+from sandbox.robot import GRASP_OFFSET, Q_HOME, TIP_LINK, BaxterKinematics
 
 
 @pytest.fixture(scope="module")
@@ -27,7 +27,7 @@ def demos():
 def test_final_configuration_puts_the_gripper_at_the_handover_target(kin, demos):
     q_end = np.array([d.robot[-1] for d in demos])
     targets = np.array([d.meta["handover_target"] for d in demos])
-    errors = np.linalg.norm(kin.fk(q_end, link=IK_LINK) - targets, axis=1)
+    errors = np.linalg.norm(kin.fk(q_end, link=TIP_LINK) - targets, axis=1)
     assert errors.max() <= 0.01 + 1e-9
     # the target is where the gripper meets the hand: the measured offset, +/- a few cm
     ends = np.array([d.meta["hand_end"] for d in demos])
@@ -102,6 +102,6 @@ def test_failed_ik_redraws_the_end_point(monkeypatch, kin):
     assert calls == [3, 1]
     assert not np.allclose(demos[0].meta["hand_end"], again[0].meta["hand_end"])
     assert np.allclose(demos[1].meta["hand_end"], again[1].meta["hand_end"])
-    error = np.linalg.norm(kin.fk(demos[0].robot[-1], link=IK_LINK)
+    error = np.linalg.norm(kin.fk(demos[0].robot[-1], link=TIP_LINK)
                            - demos[0].meta["handover_target"])
     assert error <= 0.01

@@ -16,8 +16,8 @@ import sys
 import numpy as np
 import pytest
 
-from sandbox.data.synthetic.base import Q_HOME
 from sandbox.envs.play_keys import CLOSE, OPEN, handover_poses, keys_to_action
+from sandbox.robot import Q_HOME
 
 #: Step after which "2" is pressed, then space with it, then the window is closed.
 PRESS_2, PRESS_SPACE, QUIT = 3, 120, 160

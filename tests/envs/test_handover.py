@@ -8,8 +8,8 @@ import pytest
 from gymnasium.utils.env_checker import check_env, data_equivalence
 
 import sandbox.envs
-from sandbox.data.synthetic.base import Q_HOME
 from sandbox.envs import ENV_IDS, LEGACY_IDS, MAX_EPISODE_STEPS, BaxterHandoverEnv
+from sandbox.robot import Q_HOME
 
 TERMS = ("reward_distance", "reward_success", "reward_action_rate")
 

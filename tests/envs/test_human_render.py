@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
-from sandbox.data.synthetic.base import Q_HOME
 from sandbox.envs import BaxterHandoverEnv
+from sandbox.robot import Q_HOME
 from tests.viz.test_server import _alive, _servers_watching, _wait_gone
 
 pytestmark = pytest.mark.skipif(not Path("/proc").is_dir(), reason="needs /proc (Linux)")

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sandbox.data.synthetic.base import Q_HOME
 from sandbox.envs.robot import Q_RIGHT, RIGHT_JOINTS
-from sandbox.policies import MAX_VELOCITY
-from sandbox.robot import BaxterKinematics
+from sandbox.robot import Q_HOME, BaxterKinematics, joint_speed_limits
+
+MAX_VELOCITY = joint_speed_limits()  # the policies' default
 
 
 def test_limits_come_from_the_urdf(diverging_env):
@@ -16,7 +16,7 @@ def test_limits_come_from_the_urdf(diverging_env):
     kin = BaxterKinematics()
     np.testing.assert_allclose(robot.lower, kin.lower)
     np.testing.assert_allclose(robot.upper, kin.upper)
-    np.testing.assert_allclose(robot.max_velocity, MAX_VELOCITY)  # the policy's copy
+    np.testing.assert_allclose(robot.max_velocity, MAX_VELOCITY)  # the policy's default
     np.testing.assert_allclose(robot.max_force, [50, 50, 50, 50, 15, 15, 15])
 
 

@@ -5,10 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sandbox.data.synthetic.base import Q_HOME
 from sandbox.data.synthetic.robot import Q_HANDOVER
 from sandbox.envs.task import HOLD_OFFSET, TASK_OBJECTS, RewardWeights, object_for
-from sandbox.robot import BaxterKinematics
+from sandbox.robot import Q_HOME, BaxterKinematics
 
 
 def hold_until(env, q, t_end, close=False):

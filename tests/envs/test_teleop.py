@@ -5,11 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sandbox.data.synthetic.base import HAND_START, Q_HOME
+from sandbox.data.synthetic.base import HAND_START
 from sandbox.envs.human import HumanMotion
 from sandbox.envs.options import parse_options
 from sandbox.envs.sources import minimum_jerk, waypoint_motion
 from sandbox.envs.teleop import MAX_SPEED, WORKSPACE, TeleopMotion
+from sandbox.robot import Q_HOME
 
 
 def test_hand_moves_at_the_commanded_velocity_from_now_on():

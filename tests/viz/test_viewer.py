@@ -185,3 +185,12 @@ def test_tracked_arm_is_redrawn_by_update_and_removable():
     assert viewer.update(0.2) == 0 and not any(arm.visible.values())
     viewer.remove_body("tracked_arm")
     assert "tracked_arm" not in viewer.bodies
+
+
+def test_the_floor_grid_stays_4_mm_under_the_simulated_floor():
+    """Regression (issue 16 item 2): the floor has one height, sandbox.robot.FLOOR_Z; the
+    grid keeps its place (-0.93 m), under the floor slab's top so the slab hides it."""
+    from sandbox.robot import FLOOR_Z
+    from sandbox.viz.viewer import GRID_Z
+
+    assert GRID_Z == -0.93 and FLOOR_Z - GRID_Z == pytest.approx(0.004)

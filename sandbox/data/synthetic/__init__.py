@@ -9,7 +9,8 @@ artefacts), ``observe`` (which modalities a demonstration carries), ``tasks``
 (task geometry and random draws), ``robot`` (the paired Baxter arm motion),
 ``generator`` (assembly), ``families`` (objects and diverging tasks),
 ``intent`` (a change of task mid-motion, with its ground truth), ``realism``
-(synthetic vs recorded statistics).
+(synthetic vs recorded statistics). Baxter's own facts (home pose, tip link,
+grasp offset) come from :mod:`sandbox.robot`.
 
 Examples
 --------
@@ -31,7 +32,6 @@ from sandbox.data.synthetic.arm import ArmModel, arm_positions
 from sandbox.data.synthetic.base import (
     HAND_START,
     HUMAN_NAMES,
-    Q_HOME,
     ROBOT_NAMES,
     minimum_jerk,
 )
@@ -55,7 +55,6 @@ __all__ = [
     "HUMAN_NAMES",
     "IntentSwitch",
     "OBJECTS",
-    "Q_HOME",
     "ROBOT_NAMES",
     "TaskSpec",
     "TrackerModel",

@@ -8,13 +8,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from sandbox.robot import ARM_JOINTS
 from sandbox.validation import FloatArray
 
 HUMAN_NAMES = ("human_left_hand_x", "human_left_hand_y", "human_left_hand_z")
-ROBOT_NAMES = ("left_s0", "left_s1", "left_e0", "left_e1", "left_w0", "left_w1", "left_w2")
-
-#: Baxter's left-arm home configuration in the recordings (rad).
-Q_HOME = np.array([0.07, -0.89, -0.95, 1.45, 0.52, 1.29, -0.12])
+#: The robot's columns: the recordings name them after the URDF's left-arm joints.
+ROBOT_NAMES = ARM_JOINTS
 #: Mean start of the human left hand in Baxter's base frame in the recordings (m).
 HAND_START = np.array([1.10, -0.12, 0.25])
 

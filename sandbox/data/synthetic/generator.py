@@ -22,7 +22,6 @@ from sandbox.data.synthetic.base import (
 from sandbox.data.synthetic.human import reach_positions
 from sandbox.data.synthetic.observe import check_observe, observe_human
 from sandbox.data.synthetic.robot import (
-    GRASP_OFFSET,
     joint_trajectory,
     kinematics,
     solve_handover,
@@ -36,6 +35,7 @@ from sandbox.data.synthetic.tasks import (
     redraw_end,
 )
 from sandbox.data.synthetic.tracker import TrackerModel
+from sandbox.robot import GRASP_OFFSET
 from sandbox.validation import FloatArray, check_integer, check_positive, check_rng
 
 
@@ -195,20 +195,12 @@ def generate(
     -------
     list of Demonstration
     """
-    n = check_integer(n_per_task, "n_per_task", 1)
-    check_rng(rng)
-    rate_hz = check_positive(rate_hz, "rate_hz")
-    ik_tol = check_positive(ik_tol, "ik_tol")
-    max_redraws = check_integer(max_redraws, "max_redraws", 0)
-    tracker = TrackerModel() if tracker is None else tracker
-    observe = check_observe(observe)
-    if not isinstance(tracker, TrackerModel) or not isinstance(variability, Variability):
-        raise ValueError("tracker, variability: expected a TrackerModel and a Variability")
+    n, rate_hz, ik_tol, max_redraws = _check_sizes(n_per_task, rng, rate_hz, ik_tol, max_redraws)
+    tracker, observe = _check_models(tracker, observe, variability)
     task_of = [spec for spec in specs for _ in range(n)]
     draws = [draw_demo(spec, variability, rng) for spec in task_of]
-    draws, q_goal, _ = pair_with_robot(
-        task_of, draws, variability, rng, ik_tol=ik_tol, max_redraws=max_redraws
-    )
+    draws, q_goal, _ = pair_with_robot(task_of, draws, variability, rng, ik_tol=ik_tol,
+                                       max_redraws=max_redraws)
     return [
         build_demo(
             spec, draw, q, var=variability, tracker=tracker, rate_hz=rate_hz,
@@ -217,3 +209,25 @@ def generate(
         )
         for i, (spec, draw, q) in enumerate(zip(task_of, draws, q_goal, strict=True))
     ]
+
+
+def _check_sizes(n_per_task, rng, rate_hz, ik_tol, max_redraws) -> tuple[int, float, float, int]:
+    """:func:`generate`'s counts and rates, checked: ``(n_per_task, rate_hz, ik_tol,
+    max_redraws)``; ``ValueError`` on a bad one, or on ``rng`` not a Generator."""
+    n = check_integer(n_per_task, "n_per_task", 1)
+    check_rng(rng)
+    rate_hz = check_positive(rate_hz, "rate_hz")
+    ik_tol = check_positive(ik_tol, "ik_tol")
+    return n, rate_hz, ik_tol, check_integer(max_redraws, "max_redraws", 0)
+
+
+def _check_models(
+    tracker: TrackerModel | None, observe: Sequence[str] | str, variability: Variability
+) -> tuple[TrackerModel, tuple[str, ...]]:
+    """:func:`generate`'s tracker (default ``TrackerModel()``) and observed modalities,
+    checked with its variability; ``ValueError`` on a bad one."""
+    tracker = TrackerModel() if tracker is None else tracker
+    observe = check_observe(observe)
+    if not isinstance(tracker, TrackerModel) or not isinstance(variability, Variability):
+        raise ValueError("tracker, variability: expected a TrackerModel and a Variability")
+    return tracker, observe

@@ -151,31 +151,48 @@ def intent_switch_demo(
         Which task the human pursues at which time.
     """
     check_rng(rng)
-    specs, default_var = _family_specs(family, branch_m)
-    for name in (task_a, task_b):
-        if name not in specs:
-            raise ValueError(f"task: expected one of {list(specs)} ({family}), got {name!r}")
+    pair, default_var = _task_pair(family, branch_m, task_a, task_b)
     switch_phase = check_fraction(switch_phase, "switch_phase")
     blend_s = check_positive(blend_s, "blend_s")
     var = variability or default_var
     tracker = TrackerModel() if tracker is None else tracker
     observe = check_observe(observe)
-    pair = (specs[task_a], specs[task_b])
     draw = draw_demo(pair[1], var, rng)
     draw, q_goal = _solve_pair(pair, draw, var, rng, check_positive(ik_tol, "ik_tol"), max_redraws)
     times = sample_times(draw.duration, check_positive(rate_hz, "rate_hz"))
-    t_switch = switch_phase * draw.duration
+    truth = IntentSwitch((task_a, task_b), switch_phase * draw.duration, switch_phase, blend_s,
+                         times)
+    return _switch_demo(pair, draw, var, q_goal, truth, tracker, observe, arm_model), truth
+
+
+def _task_pair(
+    family: str, branch_m: float, task_a: str, task_b: str
+) -> tuple[tuple[TaskSpec, TaskSpec], Variability]:
+    """The specs of ``task_a`` and ``task_b`` in ``family``, and the family's variability."""
+    specs, default_var = _family_specs(family, branch_m)
+    for name in (task_a, task_b):
+        if name not in specs:
+            raise ValueError(f"task: expected one of {list(specs)} ({family}), got {name!r}")
+    return (specs[task_a], specs[task_b]), default_var
+
+
+def _switch_demo(
+    pair: tuple[TaskSpec, TaskSpec], draw: DemoDraw, var: Variability, q_goal: FloatArray,
+    truth: IntentSwitch, tracker: TrackerModel, observe: tuple[str, ...],
+    arm_model: ArmModel | None,
+) -> Demonstration:
+    """The demonstration of ``truth``: both tasks' motions under ``draw``, switched."""
+    times, t_switch, blend_s = truth.times, truth.switch_time, truth.blend_s
     paths = [reach_positions(make_reach(s, draw, var), times) for s in pair]
     clean = switch_paths(paths[0], paths[1], times, t_switch, blend_s)
     human, modalities, extra = observe_human(observe, times, clean, tracker, draw.tracker_seed,
                                              arm_model)
-    truth = IntentSwitch((task_a, task_b), t_switch, switch_phase, blend_s, times)
-    demo = Demonstration(
+    task_a, task_b = truth.tasks
+    return Demonstration(
         times=times, human=human, robot=_switched_robot(times, q_goal, draw, t_switch, blend_s),
         task=task_b, robot_names=ROBOT_NAMES, modalities=modalities,
-        source=f"synthetic:intent[{task_a}->{task_b}@{switch_phase:g}]",
+        source=f"synthetic:intent[{task_a}->{task_b}@{truth.switch_phase:g}]",
         meta={"intent": truth, "clean_human": clean, "handover_target":
               handover_target(pair[1], draw), "hand_end": make_reach(pair[1], draw, var).end,
               **extra},
     )
-    return demo, truth

@@ -1,12 +1,13 @@
 """The robot side of a synthetic demonstration: Baxter's left arm meeting the hand.
 
-Like a kinesthetic demonstration, the arm moves from :data:`Q_HOME` to a
+Like a kinesthetic demonstration, the arm moves from :data:`~sandbox.robot.Q_HOME` to a
 configuration that puts the gripper at the handover point, along a joint-space
 minimum-jerk trajectory timed with the human (it may lead or lag a little).
 
 Measured on the recordings (174 trials, forward kinematics of the final
 recorded joints vs the hand's resting point): the gripper tip
-(``left_gripper``, pointing down) ends at the hand, :data:`GRASP_OFFSET` away
+(:data:`~sandbox.robot.TIP_LINK`, pointing down) ends at the hand,
+:data:`~sandbox.robot.GRASP_OFFSET` away
 (median; per-trial spread ~6 cm in x and z, 2.5 cm in y, mostly tracker error).
 The inverse kinematics (:class:`sandbox.robot.BaxterKinematics`, position only,
 batched) starts from :data:`Q_HANDOVER`, the median final configuration of the
@@ -18,21 +19,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from sandbox.data.synthetic.base import Q_HOME, skewed_minimum_jerk
+from sandbox.data.synthetic.base import skewed_minimum_jerk
+from sandbox.robot import GRASP_OFFSET, Q_HOME, TIP_LINK, BaxterKinematics
 from sandbox.validation import FloatArray
 
-#: Median position (m) of the gripper tip relative to the hand's resting point.
-GRASP_OFFSET = np.array([0.005, -0.010, -0.020])
 #: Median final left-arm configuration of the recordings (rad): the IK seed.
 Q_HANDOVER = np.array([-0.431, -0.781, -0.777, 1.142, 0.492, 1.296, -0.142])
-#: The link placed at the handover point.
-IK_LINK = "left_gripper"
 
 
 def kinematics():
     """Baxter's kinematics (:class:`sandbox.robot.BaxterKinematics`, cached per process)."""
-    from sandbox.robot import BaxterKinematics  # late: the robot package reads URDF files
-
     return BaxterKinematics()
 
 
@@ -51,7 +47,7 @@ def solve_handover(targets: FloatArray, tol: float):
     sandbox.robot.IKResult
         ``q`` (n, 7) rad, ``error`` (n,) m, ``success`` (n,) bool.
     """
-    return kinematics().ik(targets, q_seed=Q_HANDOVER, link=IK_LINK, tol=tol)
+    return kinematics().ik(targets, q_seed=Q_HANDOVER, link=TIP_LINK, tol=tol)
 
 
 def bump(s: FloatArray) -> FloatArray:

@@ -8,6 +8,7 @@ end point (no inverse kinematics), so it is fast and dependency-free.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -17,13 +18,33 @@ from sandbox.data.demonstration import Demonstration
 from sandbox.data.synthetic.arm import ArmModel, arm_positions
 from sandbox.data.synthetic.base import (
     HAND_START,
-    Q_HOME,
     ROBOT_NAMES,
     child_rng,
     minimum_jerk,
 )
 from sandbox.data.synthetic.observe import SYNTHETIC_MODALITIES, check_observe
+from sandbox.robot import Q_HOME
 from sandbox.validation import FloatArray
+
+#: A fixed, smooth map from the hand's end point (m) to the joint change (rad), (7, 3).
+_JOINT_MAP = np.array(
+    [[-0.9, 1.2, 0.1], [0.5, 0.2, -1.1], [0.3, 0.6, 0.4], [0.8, -0.3, -0.9],
+     [-0.2, 0.1, 0.3], [0.6, -0.4, 1.0], [0.0, 0.2, 0.1]]
+)
+#: The end point (m) the joint change is measured from, and the joint change (rad) there.
+_END_REF = np.array([0.80, 0.10, 0.20])
+_DQ_REF = np.array([-0.45, 0.1, 0.15, -0.3, 0.0, 0.0, 0.0])
+
+
+@dataclass(frozen=True)
+class _Draw:
+    """The distributions of :func:`two_task_demos` (its arguments of the same names)."""
+
+    rate_hz: float
+    duration_mean: float
+    duration_std: float
+    noise_m: float
+    separation_m: float
 
 
 def _observed(
@@ -56,7 +77,7 @@ def two_task_demos(
 
     The hand reaches from near :data:`HAND_START` to an end point whose y differs
     by ``separation_m`` between the tasks, with a minimum-jerk (bell-shaped
-    speed) profile; the robot's joints move from :data:`Q_HOME` toward a
+    speed) profile; the robot's joints move from :data:`~sandbox.robot.Q_HOME` toward a
     configuration that is a fixed smooth function of the hand's end point, so the
     human -> robot relation is learnable.
 
@@ -93,33 +114,42 @@ def two_task_demos(
         raise ValueError(f"rng: expected a numpy.random.Generator, got {type(rng).__name__}")
     observe = check_observe(observe)
     arm_rng = child_rng(rng) if "arm" in observe else None
-    # A fixed, smooth map from the hand's end point (m) to the joint change (rad).
-    jac = np.array(
-        [[-0.9, 1.2, 0.1], [0.5, 0.2, -1.1], [0.3, 0.6, 0.4], [0.8, -0.3, -0.9],
-         [-0.2, 0.1, 0.3], [0.6, -0.4, 1.0], [0.0, 0.2, 0.1]]
-    )
-    demos = []
-    for task, side in (("left", 1.0), ("right", -1.0)):
-        for i in range(int(n_per_task)):
-            dur = float(np.clip(rng.normal(duration_mean, duration_std), 1.7, 4.0))
-            t = np.arange(0.0, dur + 0.5 / rate_hz, 1.0 / rate_hz)
-            t[-1] = min(t[-1], dur)
-            start = HAND_START + rng.normal(0.0, 0.02, 3)
-            end = np.array([0.80, 0.10 + side * separation_m / 2, 0.20]) + rng.normal(0, 0.03, 3)
-            via = 0.5 * (start + end) + np.array([0.0, 0.0, 0.08]) + rng.normal(0, 0.01, 3)
-            s = minimum_jerk(t / dur)[:, None]
-            # Quadratic Bezier through the via-point keeps the path smooth and curved.
-            clean = (1 - s) ** 2 * start + 2 * (1 - s) * s * via + s**2 * end
-            hand = clean + rng.normal(0.0, noise_m, clean.shape)
-            dq = jac @ (end - np.array([0.80, 0.10, 0.20])) + np.array([-0.45, 0.1, 0.15, -0.3,
-                                                                         0.0, 0.0, 0.0])
-            robot = Q_HOME + s * (dq + 0.1 * np.sin(dq))
-            human, mods, meta = _observed(observe, t, clean, hand, noise_m, arm_rng, arm_model)
-            demos.append(
-                Demonstration(
-                    times=t, human=human, robot=robot, task=task, robot_names=ROBOT_NAMES,
-                    modalities=mods, source=f"synthetic:two_task[{task}#{i}]", meta=meta,
-                )
-            )
-    return demos
+    draw = _Draw(rate_hz, duration_mean, duration_std, noise_m, separation_m)
+    return [_demo(task, i, side, rng, draw, observe, arm_rng, arm_model)
+            for task, side in (("left", 1.0), ("right", -1.0)) for i in range(int(n_per_task))]
 
+
+def _demo(
+    task: str, i: int, side: float, rng: np.random.Generator, draw: _Draw,
+    observe: tuple[str, ...], arm_rng: np.random.Generator | None, arm_model: ArmModel | None,
+) -> Demonstration:
+    """Demonstration ``i`` of ``task`` (``side`` +1 left, -1 right)."""
+    t, clean, hand, robot = _demo_motion(rng, side, draw)
+    human, mods, meta = _observed(observe, t, clean, hand, draw.noise_m, arm_rng, arm_model)
+    return Demonstration(
+        times=t, human=human, robot=robot, task=task, robot_names=ROBOT_NAMES,
+        modalities=mods, source=f"synthetic:two_task[{task}#{i}]", meta=meta,
+    )
+
+
+def _demo_motion(
+    rng: np.random.Generator, side: float, draw: _Draw
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """One demonstration's times (T,) s, clean and noisy hand (T, 3) m and robot (T, 7) rad.
+
+    Draws from ``rng``, in this order: the duration, the start, end and via
+    points, the hand's noise.
+    """
+    dur = float(np.clip(rng.normal(draw.duration_mean, draw.duration_std), 1.7, 4.0))
+    t = np.arange(0.0, dur + 0.5 / draw.rate_hz, 1.0 / draw.rate_hz)
+    t[-1] = min(t[-1], dur)
+    start = HAND_START + rng.normal(0.0, 0.02, 3)
+    end = np.array([0.80, 0.10 + side * draw.separation_m / 2, 0.20]) + rng.normal(0, 0.03, 3)
+    via = 0.5 * (start + end) + np.array([0.0, 0.0, 0.08]) + rng.normal(0, 0.01, 3)
+    s = minimum_jerk(t / dur)[:, None]
+    # Quadratic Bezier through the via-point keeps the path smooth and curved.
+    clean = (1 - s) ** 2 * start + 2 * (1 - s) * s * via + s**2 * end
+    hand = clean + rng.normal(0.0, draw.noise_m, clean.shape)
+    dq = _JOINT_MAP @ (end - _END_REF) + _DQ_REF
+    robot = Q_HOME + s * (dq + 0.1 * np.sin(dq))
+    return t, clean, hand, robot
