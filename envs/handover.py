@@ -58,7 +58,7 @@ class BaxterHandoverEnv(gym.Env):
     the skeleton tracker (30 Hz frames, jumps). When the gripper closes within
     ``grasp_radius`` of the object's grasp point, the object is fixed to the
     gripper and the hand lets go: the handover succeeds. The policy (e.g.
-    :class:`sandbox.policies.IProMPPolicy`) lives outside the environment.
+    :class:`sandbox.episodes.policies.IProMPPolicy`) lives outside the environment.
 
     Action space
     ------------
@@ -98,7 +98,7 @@ class BaxterHandoverEnv(gym.Env):
 
     A missing body measurement is a 0 value with its ``*_valid`` flag 0, not
     NaN: Gymnasium's checker rejects NaN (a NaN is outside any ``Box`` and
-    breaks its determinism checks). :func:`sandbox.policies.modality_values`
+    breaks its determinism checks). :func:`sandbox.episodes.policies.modality_values`
     turns the pair back into NaN for a predictor, which marginalises it.
     Recorded replays carry the arm and EMG preprocessed as the evaluation's
     test streams (``preprocess="causal"``: only accepted tracker frames);

@@ -7,7 +7,7 @@ import pytest
 
 from sandbox.data.synthetic.base import Q_HOME
 from sandbox.envs.robot import Q_RIGHT, RIGHT_JOINTS
-from sandbox.policies import MAX_VELOCITY
+from sandbox.episodes.policies import MAX_VELOCITY
 from sandbox.robot import BaxterKinematics
 
 

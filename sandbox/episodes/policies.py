@@ -33,11 +33,13 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from sandbox.core import DynamicPredictor, IProMP, StaticPredictor
+from sandbox.episodes.policy import Beliefs
 from sandbox.validation import check_array, check_positive
 
 FloatArray = NDArray[np.float64]
@@ -132,13 +134,17 @@ def _fit_family_model(family: str, n_per_task: int, seed: int, n_basis: int | No
                       observe: tuple[str, ...]) -> IProMP:
     from sandbox.data.synthetic import make_dataset
 
-    demos = make_dataset(family, n_per_task, np.random.default_rng(seed), observe=observe)
+    # Any: a Demonstration is frozen, the core's DemonstrationLike declares plain attributes
+    demos: list[Any] = make_dataset(family, n_per_task, np.random.default_rng(seed),
+                                    observe=observe)
     model = IProMP() if n_basis is None else IProMP(n_basis=n_basis)
     return model.fit(demos)
 
 
 class _Steering:
     """From a goal pose to an action: the speed-limited target and the gripper rule."""
+
+    _target: FloatArray | None
 
     def _setup_steering(self, control_hz: float, close_radius: float, max_velocity) -> None:
         from sandbox.robot import BaxterKinematics
@@ -189,6 +195,9 @@ class IProMPPolicy(_Steering):
     Attributes
     ----------
     predictor : DynamicPredictor
+        Internal: runners read :attr:`beliefs`.
+    beliefs : Beliefs
+        What the predictor believes now (read-only).
     history : list of (float, str)
         The recognised task after each observation: ``(time, task)``.
 
@@ -211,8 +220,9 @@ class IProMPPolicy(_Steering):
                  close_radius: float = 0.045, max_velocity=None, observe=None,
                  **options) -> None:
         self._setup(model, observe, control_hz, close_radius, max_velocity)
-        self.predictor = DynamicPredictor(model, dow_t=dow_t, subsample=self.subsample,
-                                          observe=self.observe, **{**CLOSED_LOOP, **options})
+        self.predictor: DynamicPredictor | StaticPredictor = DynamicPredictor(
+            model, dow_t=dow_t, subsample=self.subsample, observe=self.observe,
+            **{**CLOSED_LOOP, **options})
         self.reset()
 
     def _setup(self, model, observe, control_hz: float, close_radius: float,
@@ -224,7 +234,7 @@ class IProMPPolicy(_Steering):
     def reset(self) -> None:
         """Forget the episode (called automatically when the observed time goes back)."""
         self.predictor.reset()
-        self._target: FloatArray | None = None
+        self._target = None
         self._last_time = -np.inf
         self.history: list[tuple[float, str]] = []
 
@@ -239,6 +249,11 @@ class IProMPPolicy(_Steering):
         self.history.append((t, self.predictor.task))
         mean, _ = self.predictor.command(t + self.dt)
         return self._act(q, mean, obs)
+
+    @property
+    def beliefs(self) -> Beliefs:
+        """What the predictor believes now (:class:`~sandbox.episodes.policy.Beliefs`)."""
+        return Beliefs.of_predictor(self.predictor)
 
     @property
     def task(self) -> str:
@@ -340,12 +355,17 @@ class RecordedRobotPolicy(_Steering):
 
     def reset(self) -> None:
         """Start the trial again."""
-        self._target: FloatArray | None = None
+        self._target = None
 
     @property
     def task_posterior(self) -> dict[str, float]:
         """Certain of the recorded task."""
         return {self.task: 1.0}
+
+    @property
+    def beliefs(self) -> Beliefs:
+        """Certain of the recorded task; no predictor (no plan, no updates)."""
+        return Beliefs(task=self.task, tasks=(self.task,), task_posterior={self.task: 1.0})
 
     def __call__(self, obs: Mapping[str, FloatArray]) -> FloatArray:
         """The action (8,): the recorded pose at ``t + dt`` (speed-limited), gripper command."""

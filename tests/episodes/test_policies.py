@@ -7,10 +7,10 @@ import doctest
 import numpy as np
 import pytest
 
-import sandbox.policies
+import sandbox.episodes.policies
 from sandbox.data.synthetic.base import Q_HOME
 from sandbox.envs.sources import synthetic_motion
-from sandbox.policies import (
+from sandbox.episodes.policies import (
     MAX_VELOCITY,
     IProMPPolicy,
     RecordedRobotPolicy,
@@ -143,7 +143,7 @@ def test_unfitted_model_is_refused():
 
 
 def test_docstring_example_runs():
-    result = doctest.testmod(sandbox.policies, optionflags=doctest.ELLIPSIS)
+    result = doctest.testmod(sandbox.episodes.policies, optionflags=doctest.ELLIPSIS)
     assert result.attempted > 0 and result.failed == 0
 
 
