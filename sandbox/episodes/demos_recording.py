@@ -82,10 +82,8 @@ def teleop_trial(times: ArrayLike, hand: ArrayLike, seen: ArrayLike, *, lead_s: 
         The true hand and the tracker's measurement of it (m), Baxter's base frame.
     lead_s, tail_s : float
         Time kept before the hand starts moving and after it stops (s).
-    min_reach_m : float
-        Shortest distance (m) from the start to where the hand stops.
-    min_robot_s : float
-        Shortest robot motion (s).
+    min_reach_m, min_robot_s : float
+        Shortest distance (m) from the start to where the hand stops; shortest robot motion (s).
     ik_tol : float
         Required gripper position error (m) at the meeting point.
 

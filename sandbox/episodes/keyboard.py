@@ -268,10 +268,9 @@ def run_teleop(env: Any, policy: Policy, keyboard: Keyboard, *, seed: int = 0,
     recorder : DemoRecorder, optional
         Saves each episode as a demonstration when it ends (and says where).
 
-    Each episode is one :func:`~sandbox.episodes.rollout.rollout`: before each
-    step the keys are read (and waited for while the clock is stopped); ``n``
-    and ``q`` end it. The loop ends on ``q``, or when the input is closed and
-    the episode is over.
+    One :func:`~sandbox.episodes.rollout.rollout` per episode: the keys are read before
+    each step (waited for while the clock is stopped); ``n`` and ``q`` end it. The loop
+    ends on ``q``, or when the input is closed and the episode is over.
     """
     loop = _Loop(env, policy, TeleopState(running=running), keyboard, seed, out, recorder)
     while True:
@@ -292,12 +291,10 @@ class _Loop:
 
         self.env, self.policy, self.state, self.seed, self.out = env, policy, state, seed, out
         self.keyboard, self.recorder = keyboard, recorder
-        self.kinematics = BaxterKinematics()
-        self.episodes = 0
+        self.kinematics, self.episodes = BaxterKinematics(), 0
         self.overlay: Any = None
         self._pending: list[str] = []
 
-    # -- the rollout's hooks ---------------------------------------------------------------
     def started(self, step: Step) -> None:
         """A new episode (the rollout's reset): the hand at the start, the viewer's overlay."""
         self.obs = step.obs
@@ -352,7 +349,6 @@ class _Loop:
                      f"from the object, task {beliefs.task}; n: new episode, q: quit")
             self.save()
 
-    # -- keys ------------------------------------------------------------------------------
     def after_episode(self) -> str:
         """Keys after the episode ended, until ``n`` (``"reset"``) or ``q`` / closed input."""
         while True:

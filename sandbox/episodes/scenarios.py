@@ -148,11 +148,7 @@ def run_scenario(scenario: str = "diverging", policy: str | Callable = "dynamic"
                          observe)
     own_env = env is None
     if own_env:
-        import gymnasium as gym
-
-        import sandbox.envs  # noqa: F401  (registers the environments)
-
-        env = gym.make(SCENARIOS[scenario][0])
+        env = _make_env(scenario)
     try:
         return [run_episode(env, make_policy(m, demo), s, opts)
                 for s, m, opts, demo in episodes]
@@ -204,6 +200,14 @@ def summarize(results: list[EpisodeResult]) -> dict[str, float]:
 
 
 # ------------------------------------------------------------------ internals
+def _make_env(scenario: str) -> Any:
+    import gymnasium as gym
+
+    import sandbox.envs  # noqa: F401  (registers the environments)
+
+    return gym.make(SCENARIOS[scenario][0])
+
+
 def _check_run(scenario, policy, n_episodes, data, observe) -> tuple[str, ...] | None:
     """Check :func:`run_scenario`'s arguments; return ``observe`` checked."""
     check_choice(scenario, "scenario", tuple(SCENARIOS))
