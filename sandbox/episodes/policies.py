@@ -23,7 +23,11 @@ From the plan to an action, at control period ``dt``:
 
 The predictor expects about 20 observations per second (the paper keeps one
 of every 5 samples at ~100 Hz): the policy keeps one of every
-``round(control_hz / 20)`` observations (2 at 50 Hz: 25 per second).
+``round(control_hz / 20)`` observations with a new tracker frame (2 at 50 Hz:
+15 per second of the tracker's 30 Hz frames). Each observation is fed as the
+tracker gave it (:func:`tracker_row`): stamped with the frame's own time
+(``hand_time``), NaN at a step without a new frame (``hand_valid`` 0), which the
+predictor skips.
 
 :func:`fit_family_model` fits the model on seeded synthetic demonstrations of
 an environment's family, cached in-process.
@@ -98,6 +102,26 @@ def modality_values(obs: Mapping[str, FloatArray], names, *,
             values = np.full(values.shape, np.nan)
         out[name] = values
     return out
+
+
+def tracker_row(obs: Mapping[str, FloatArray], names, *,
+                required: bool = True) -> tuple[float, dict[str, FloatArray]]:
+    """What a tracker stream gives for an observation: the sample's time (s) and values.
+
+    The time is ``obs["hand_time"]``, the tracker frame's own time (the step's
+    ``time`` for an observation without it, the v0 ids). Where ``hand_valid`` is 0
+    the tracker has sent no new frame since the last step: every modality is NaN
+    (the arm and the replayed EMG come with the hand's frames), so the predictor
+    skips the row instead of taking a stale sample as new. Otherwise the values are
+    :func:`modality_values` (``names``, ``required``).
+    """
+    stamp = obs.get("hand_time", obs["time"])
+    t = float(np.asarray(stamp, dtype=float).reshape(-1)[0])
+    values = modality_values(obs, names, required=required)
+    flag = obs.get("hand_valid")
+    if flag is not None and not np.asarray(flag).all():
+        values = {name: np.full(v.shape, np.nan) for name, v in values.items()}
+    return t, values
 
 
 def fit_family_model(family: str = "diverging", n_per_task: int = 20, seed: int = 0,
@@ -245,7 +269,7 @@ class IProMPPolicy(_Steering):
             self.reset()
         self._last_time = t
         q = check_array(obs["q"], "obs['q']", 1, shape=(7,))
-        self.predictor.observe(t, modality_values(obs, self.observe, required=self._required))
+        self.predictor.observe(*tracker_row(obs, self.observe, required=self._required))
         self.history.append((t, self.predictor.task))
         mean, _ = self.predictor.command(t + self.dt)
         return self._act(q, mean, obs)
