@@ -18,21 +18,19 @@ from sandbox.envs.arguments import (  # noqa: F401 - VIEWER_KEYS re-exported
     check_substeps,
     check_viewer_options,
 )
-from sandbox.envs.human import BODY_DIMS, HumanHand, HumanMotion
+from sandbox.envs.human import HumanHand, HumanMotion
+from sandbox.envs.observations import Observer, observation_space
 from sandbox.envs.options import EpisodeOptions, parse_options
 from sandbox.envs.pybullet import Simulation
 from sandbox.envs.robot import BaxterArm
-from sandbox.envs.sources import FAMILIES, family_tasks, recorded_motion, synthetic_motion
+from sandbox.envs.sources import FAMILIES, episode_motion
 from sandbox.envs.task import HandoverTask, RewardWeights, object_for
-from sandbox.envs.teleop import TeleopMotion
 from sandbox.robot import Q_HOME
 from sandbox.validation import check_array, check_positive
 
 FloatArray = NDArray[np.float64]
 #: Physics steps run before the initial state is saved (lets the parked objects settle).
 SETTLE_STEPS = 100
-#: Upper bound of the observed EMG envelope (raw Myo units: hundreds in the recordings).
-EMG_MAX = 1e4
 
 
 class ClosedEnvironmentError(gym.error.ClosedEnvironmentError, RuntimeError):
@@ -58,7 +56,7 @@ class BaxterHandoverEnv(gym.Env):
     the skeleton tracker (30 Hz frames, jumps). When the gripper closes within
     ``grasp_radius`` of the object's grasp point, the object is fixed to the
     gripper and the hand lets go: the handover succeeds. The policy (e.g.
-    :class:`sandbox.policies.IProMPPolicy`) lives outside the environment.
+    :class:`sandbox.episodes.policies.IProMPPolicy`) lives outside the environment.
 
     Action space
     ------------
@@ -76,6 +74,12 @@ class BaxterHandoverEnv(gym.Env):
     key            shape  meaning
     =============  =====  =======================================================
     ``hand``       (3,)   latest tracker measurement of the human hand (m)
+    ``hand_valid`` (1,)   1 if ``hand`` is a tracker frame not observed
+                          before, 0 if the tracker has sent no new frame since
+                          the last step (its frames are slower than the
+                          steps: 30 Hz); ``hand`` then holds the last frame (v1)
+    ``hand_time``  (1,)   time (s, episode clock) of the frame in ``hand``:
+                          the tracker sample's own time, not the step's (v1)
     ``arm``        (6,)   latest tracker measurement of the same-side elbow,
                           then shoulder, x/y/z each (m); 0 where ``arm_valid``
                           is 0 (v1)
@@ -85,8 +89,9 @@ class BaxterHandoverEnv(gym.Env):
                           an ``arm`` modality (v1)
     ``emg``        (8,)   latest EMG envelope of a recorded replay (8 Myo
                           channels, rectified and low-pass filtered, raw
-                          units, 0 .. ``EMG_MAX``); 0 where ``emg_valid`` is
-                          0 (v1)
+                          units, 0 .. ``EMG_MAX`` of
+                          :mod:`~sandbox.envs.observations`); 0 where
+                          ``emg_valid`` is 0 (v1)
     ``emg_valid``  (1,)   1 if ``emg`` holds a measurement: recorded trials
                           with EMG only, it is not simulated (v1)
     ``object``     (3,)   the object's grasp point (m)
@@ -96,10 +101,12 @@ class BaxterHandoverEnv(gym.Env):
     ``time``       (1,)   time since the episode started (s)
     =============  =====  =======================================================
 
-    A missing body measurement is a 0 value with its ``*_valid`` flag 0, not
+    A missing measurement is a held or 0 value with its ``*_valid`` flag 0, not
     NaN: Gymnasium's checker rejects NaN (a NaN is outside any ``Box`` and
-    breaks its determinism checks). :func:`sandbox.policies.modality_values`
-    turns the pair back into NaN for a predictor, which marginalises it.
+    breaks its determinism checks). :func:`sandbox.episodes.policies.modality_values`
+    turns the pair back into NaN for a predictor, which skips a row without a
+    new hand frame and marginalises a missing arm or EMG; the policy stamps the
+    row with ``hand_time``.
     Recorded replays carry the arm and EMG preprocessed as the evaluation's
     test streams (``preprocess="causal"``: only accepted tracker frames);
     the value is held from the latest accepted frame, as for ``hand``.
@@ -174,7 +181,9 @@ class BaxterHandoverEnv(gym.Env):
     ---------------
     * v1: the observation gains ``arm``, ``arm_valid``, ``emg`` and
       ``emg_valid``; recorded replays carry the arm and EMG, synthetic
-      motions the arm when generated with it.
+      motions the arm when generated with it. Later (issue 16), without a new
+      id: ``hand_valid`` and ``hand_time``, the tracker frame's own time and
+      whether it is new.
     * v0: initial version; ``render_mode="human"``, the ``teleop`` source and
       the ``motion`` option added without changing any other behaviour. Kept
       registered (``observe_body=False``) for one release.
@@ -226,7 +235,8 @@ class BaxterHandoverEnv(gym.Env):
                                  weights=weights)
         self._settle_and_save()
         self.action_space = self._action_space()
-        self.observation_space = self._observation_space()
+        self.observation_space = observation_space(self.robot, observe_body)
+        self._observer = Observer(self.observation_space, observe_body)
         self.motion: HumanMotion | None = None
         self.episode: EpisodeOptions | None = None
 
@@ -235,25 +245,6 @@ class BaxterHandoverEnv(gym.Env):
         low = np.append(self.robot.lower, -1.0)
         high = np.append(self.robot.upper, 1.0)
         return spaces.Box(low, high, dtype=np.float64)
-
-    def _observation_space(self) -> spaces.Dict:
-        speed = 4.0 * self.robot.max_velocity
-        return spaces.Dict({
-            "hand": spaces.Box(-3.0, 3.0, (3,), np.float64),
-            "object": spaces.Box(-3.0, 3.0, (3,), np.float64),
-            "q": spaces.Box(self.robot.lower, self.robot.upper, dtype=np.float64),
-            "dq": spaces.Box(-speed, speed, dtype=np.float64),
-            "gripper": spaces.Box(0.0, 1.0, (1,), np.float64),
-            "time": spaces.Box(0.0, 1e4, (1,), np.float64),
-            **(self._body_space() if self.observe_body else {}),
-        })
-
-    @staticmethod
-    def _body_space() -> dict[str, spaces.Space]:
-        return {"arm": spaces.Box(-3.0, 3.0, (BODY_DIMS["arm"],), np.float64),
-                "arm_valid": spaces.MultiBinary(1),
-                "emg": spaces.Box(0.0, EMG_MAX, (BODY_DIMS["emg"],), np.float64),
-                "emg_valid": spaces.MultiBinary(1)}
 
     def _settle_and_save(self) -> None:
         self.robot.reset(Q_HOME)
@@ -270,13 +261,14 @@ class BaxterHandoverEnv(gym.Env):
             raise ValueError(f"seed: expected None or an integer >= 0, got {seed!r}")
         super().reset(seed=None if seed is None else int(seed))
         episode = parse_options(options, self.family)
-        motion = self._motion(episode)
+        motion = episode_motion(episode, self.family, self.np_random)
         object_name = episode.object or object_for(motion.task, self.default_object)
         self.task.release()
         self.sim.restore()
         self.robot.reset(Q_HOME)
         self.task.reset(object_name, motion.position(0.0))
         self.motion, self.episode = motion, episode
+        self._observer.reset()
         self._steps, self._t, self._prev_target = 0, 0.0, Q_HOME.copy()
         self._handover_time: float | None = None
         info = {"task": motion.task, "object": object_name, "source": motion.source,
@@ -356,49 +348,11 @@ class BaxterHandoverEnv(gym.Env):
         self.viewer.update(self._t, force=new_episode)
 
     # ------------------------------------------------------------- internals
-    def _motion(self, episode: EpisodeOptions) -> HumanMotion | TeleopMotion:
-        if episode.motion is not None:
-            motion = episode.motion
-        elif episode.source == "teleop":
-            motion = TeleopMotion(self.np_random, task=episode.task or "teleop")
-        elif episode.source == "synthetic":
-            task = episode.task or self._random_task()
-            motion = synthetic_motion(self.family, task, self.np_random,
-                                      switch_to=episode.switch_to,
-                                      switch_phase=episode.switch_phase)
-        else:
-            motion = recorded_motion(episode.source, episode.task, episode.trial,
-                                     self.np_random)
-        return motion if episode.speed == 1.0 else motion.scaled(episode.speed)
-
-    def _random_task(self) -> str:
-        tasks = family_tasks(self.family)
-        return tasks[int(self.np_random.integers(len(tasks)))]
-
     def _observation(self) -> dict[str, FloatArray]:
         q, dq = self.robot.joint_state()
-        obs = {
-            "hand": self.motion.measurement(self._t),
-            "object": self.task.grasp_point(),
-            "q": q,
-            "dq": dq,
-            "gripper": np.array([self.robot.gripper_opening()]),
-            "time": np.array([self._t]),
-        }
-        obs = {k: np.clip(v, self.observation_space[k].low, self.observation_space[k].high)
-               for k, v in obs.items()}
-        return {**obs, **self._body_observation()} if self.observe_body else obs
-
-    def _body_observation(self) -> dict[str, np.ndarray]:
-        """``arm``/``emg`` (0 where unmeasured) and their ``*_valid`` flags (int8 (1,))."""
-        out: dict[str, np.ndarray] = {}
-        for name in BODY_DIMS:
-            value = self.motion.body_measurement(name, self._t)
-            valid = bool(np.isfinite(value).all())
-            space = self.observation_space[name]
-            out[name] = np.clip(value, space.low, space.high) if valid else np.zeros_like(value)
-            out[f"{name}_valid"] = np.array([valid], dtype=np.int8)
-        return out
+        state = {"object": self.task.grasp_point(), "q": q, "dq": dq,
+                 "gripper": np.array([self.robot.gripper_opening()])}
+        return self._observer(self.motion, self._t, state)
 
     def human_intent(self, t: float | None = None) -> str | None:
         """The task the human pursues at time ``t`` (s; default now), when the source knows it.

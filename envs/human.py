@@ -83,7 +83,7 @@ class HumanMotion:
         last = _last_valid(valid)
         last[last < 0] = int(np.argmax(valid))  # before the first valid sample: that one
         for name, value in (("times", times), ("true", true), ("measured", measured),
-                            ("_last_valid", last)):
+                            ("_last_valid", last), ("_frame_row", _frame_rows(measured, last))):
             value.setflags(write=False)
             object.__setattr__(self, name, value)
         object.__setattr__(self, "meta", dict(self.meta))
@@ -108,6 +108,12 @@ class HumanMotion:
         i = max(int(np.searchsorted(self.times, t, side="right")) - 1, 0)
         return self.measured[self._last_valid[i]].copy()
 
+    def frame_time(self, t: float) -> float:
+        """Time (s) of the tracker frame :meth:`measurement` gives at ``t`` (s): the first
+        row that carried it (the tracker repeats a frame on the rows until the next one)."""
+        i = max(int(np.searchsorted(self.times, t, side="right")) - 1, 0)
+        return float(self.times[self._frame_row[i]])
+
     def body_measurement(self, name: str, t: float) -> FloatArray:
         """Latest valid sample (dims,) of body modality ``name`` at or before ``t`` (s).
 
@@ -131,6 +137,17 @@ class HumanMotion:
 def _last_valid(valid: NDArray[np.bool_]) -> NDArray[np.int64]:
     """Index of the latest ``valid`` sample at or before each sample (-1 before the first)."""
     return np.maximum.accumulate(np.where(valid, np.arange(valid.size), -1))
+
+
+def _frame_rows(measured: FloatArray, last: NDArray[np.int64]) -> NDArray[np.int64]:
+    """Row where the frame held at each row first appeared (a valid row differing from the
+    previous valid one starts a frame; ``last``: the latest valid row at each row)."""
+    rows = np.flatnonzero(np.isfinite(measured).all(axis=1))
+    values = measured[rows]
+    new = np.r_[True, np.any(values[1:] != values[:-1], axis=1)]
+    start = np.full(measured.shape[0], -1)
+    start[rows] = rows[np.maximum.accumulate(np.where(new, np.arange(rows.size), 0))]
+    return start[last]
 
 
 def _check_body(body: Mapping[str, Any], n: int) -> dict[str, FloatArray]:

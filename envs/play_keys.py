@@ -19,7 +19,7 @@ Key ``1`` .. ``K`` moves the arm to the handover pose of the family's k-th
 task (:func:`sandbox.envs.sources.family_tasks` order), gripper open; the same key
 with space closes the gripper there; no key: the home pose, gripper open.
 Driving the *human* hand is not an action, so ``play`` cannot do it: that is
-what ``python -m sandbox play`` (:mod:`sandbox.teleop`) is for.
+what ``python -m sandbox play`` (:mod:`sandbox.episodes.keyboard`) is for.
 """
 
 from __future__ import annotations

@@ -94,6 +94,29 @@ def synthetic_motion(family: str, task: str, rng: np.random.Generator, *,
     )
 
 
+def episode_motion(episode, family: str, rng: np.random.Generator):
+    """The hand motion of an episode's options (:class:`~sandbox.envs.options.EpisodeOptions`).
+
+    The scripted ``motion``, a teleoperated hand (``source="teleop"``), a synthetic
+    reach of ``family`` (a random task of it unless given) or a recorded trial;
+    played ``episode.speed`` times faster. ``rng``: the environment's ``np_random``.
+    """
+    from sandbox.envs.teleop import TeleopMotion
+
+    if episode.motion is not None:
+        motion = episode.motion
+    elif episode.source == "teleop":
+        motion = TeleopMotion(rng, task=episode.task or "teleop")
+    elif episode.source == "synthetic":
+        tasks = family_tasks(family)
+        task = episode.task or tasks[int(rng.integers(len(tasks)))]
+        motion = synthetic_motion(family, task, rng, switch_to=episode.switch_to,
+                                  switch_phase=episode.switch_phase)
+    else:
+        motion = recorded_motion(episode.source, episode.task, episode.trial, rng)
+    return motion if episode.speed == 1.0 else motion.scaled(episode.speed)
+
+
 def demo_body(demo) -> dict[str, np.ndarray]:
     """The body modalities (:data:`~sandbox.envs.human.BODY_DIMS`) a demonstration carries.
 

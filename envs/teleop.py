@@ -116,6 +116,10 @@ class TeleopMotion:
                             + noise}
         return self._frames[frame].copy()
 
+    def frame_time(self, t: float) -> float:
+        """Time (s) of the tracker frame :meth:`measurement` gives at ``t`` (s)."""
+        return math.floor(float(t) * self.frame_hz + 1e-9) / self.frame_hz
+
     def body_measurement(self, name: str, t: float) -> FloatArray:
         """All NaN (dims,): the teleoperated hand has no tracked arm and no EMG."""
         if name not in BODY_DIMS:

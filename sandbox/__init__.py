@@ -7,6 +7,10 @@ The package is split so that heavy dependencies stay where they are used:
 - :mod:`sandbox.robot`: the Baxter model (PyBullet, example-robot-data).
 - :mod:`sandbox.envs`: Gymnasium environments.
 - :mod:`sandbox.viz`: the meshcat viewer.
+- :mod:`sandbox.episodes`: policies meet environments: the one rollout loop,
+  scenarios and scenario files, recorded episodes, the keyboard teleop.
+- :mod:`sandbox.eval`, :mod:`sandbox.bench`, :mod:`sandbox.commands`: evaluation,
+  benchmarks and the command line on top.
 
 Importing :mod:`sandbox` itself imports nothing heavy.
 """

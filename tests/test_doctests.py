@@ -15,8 +15,9 @@ from tests.conftest import REPO
 from tests.test_layering import modules
 
 #: Modules whose examples a test of their own runs (they drive an env: ~10 s each).
-RUN_ELSEWHERE = {"sandbox.policies": "tests/test_policies.py",
-                 "sandbox.scenarios": "tests/test_scenarios.py"}
+RUN_ELSEWHERE = {"sandbox.episodes.policies": "tests/episodes/test_policies.py",
+                 "sandbox.episodes.rollout": "tests/episodes/test_rollout.py",
+                 "sandbox.episodes.scenarios": "tests/episodes/test_scenarios.py"}
 WITH_EXAMPLES = sorted(name for name, path in modules().items()
                        if ">>>" in path.read_text(encoding="utf-8") and name not in RUN_ELSEWHERE)
 

@@ -8,8 +8,8 @@ nothing of the project; data may use the core and the robot (the synthetic
 generator solves Baxter's IK); the viewer draws the robot; the environments are
 sim + robot + human (data) and may render with the viewer, and reach the core
 only through a policy; the evaluation runs the core on data; the policies-and-
-episodes layer (``policies``, ``scenarios``, ``scenario_files``, ``recording``,
-``teleop``; it becomes ``sandbox/episodes/``) joins policies and environments;
+episodes layer (``sandbox/episodes/``: policies, the rollout loop, scenarios,
+scenario files, recording, the keyboard teleop) joins policies and environments;
 benchmarks may use all of that; the commands everything.
 
 Every import counts, also one inside a function (a late import still ties the
@@ -29,8 +29,7 @@ from pathlib import Path
 
 from tests.conftest import REPO
 
-EPISODES = {"policies", "scenarios", "scenario_files", "recording", "teleop",
-            "demos_recording"}
+EPISODES = {"episodes"}
 COMMANDS = {"commands", "cli", "__main__"}
 #: Parts each part may import (besides itself and the neutral root package).
 ALLOWED = {
@@ -50,12 +49,6 @@ for _part, _allowed in ALLOWED.items():
         _allowed.add("validation")
 #: Known breaks: (importing part, imported module or package) -> the change that removes it.
 KNOWN = {
-    # Issue 16 item 1: viz/benchmark.py drives an env with a policy; benchmarks move to bench/.
-    ("viz", "sandbox.envs"): "issue 16 item 1 (benchmarks under sandbox/bench)",
-    ("viz", "sandbox.policies"): "issue 16 item 1 (benchmarks under sandbox/bench)",
-    # data/minari_io.py: fit --data minari:ID reads datasets (data), but exporting one names
-    # a registered env id (envs). The export half moves to sandbox/episodes/ with item 1.
-    ("data", "sandbox.envs"): "issue 16 item 1 (Minari export in the episodes layer)",
 }
 #: Known cycles (sets of modules) -> the change that removes them (none left).
 KNOWN_CYCLES: dict[frozenset[str], str] = {}

@@ -18,8 +18,8 @@ import umsgpack
 
 from sandbox.cli import main
 from sandbox.data.synthetic.base import HAND_START
-from sandbox.scenario_files import load_scenario
-from sandbox.teleop import Keyboard, TeleopState, split_keys, status_line
+from sandbox.episodes.keyboard import Keyboard, TeleopState, split_keys, status_line
+from sandbox.episodes.scenario_files import load_scenario
 from tests.viz.test_server import _servers_watching, _wait_gone
 
 _XYZ = r"\(([-+\d.]+),([-+\d.]+),([-+\d.]+)\)"
@@ -54,7 +54,7 @@ def test_speed_clock_and_commands():
 
 
 def test_slow_motion_key_and_reset_stops_the_clock():
-    from sandbox.teleop import SLOW_RATE
+    from sandbox.episodes.keyboard import SLOW_RATE
 
     state = TeleopState(running=True)
     assert state.rate == 1.0
@@ -104,8 +104,8 @@ def _predictor(fitted, familiar):
 
 
 def test_status_line_aims_distance_meeting_point_and_unsure(fitted):
+    from sandbox.episodes.keyboard import UNSURE, meeting_point
     from sandbox.robot import BaxterKinematics
-    from sandbox.teleop import UNSURE, meeting_point
 
     kin, demo = BaxterKinematics(), fitted[1]
     for familiar in (None, True, False):
@@ -297,7 +297,7 @@ def test_yaml_scenario_with_the_static_policy(tmp_path, capsys):
 
 
 def test_observe_key_and_option_choose_the_modalities(tmp_path, capsys):
-    from sandbox.scenario_files import build_model, make_policy
+    from sandbox.episodes.scenario_runner import build_model, make_policy
 
     path = tmp_path / "arm.yaml"
     path.write_text(YAML + "observe: hand,arm\n")

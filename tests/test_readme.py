@@ -62,7 +62,7 @@ def test_the_scenario_format_documents_both_examples_and_every_key():
 
     import yaml
 
-    from sandbox import scenario_files as sf
+    from sandbox.episodes import scenario_files as sf
 
     section = _section("Scenario files")
     shown = [yaml.safe_load(b) for b in re.findall(r"```yaml\n(.*?)```", section, flags=re.S)]

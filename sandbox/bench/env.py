@@ -11,7 +11,7 @@
   (``sandbox/BaxterHandoverDiverging-v0``), and ``env_v1_v0_ratio`` the cost of
   observing the arm and EMG (target >= 0.9).
 * ``policy_steps_per_s``: steps per second with the dynamic policy
-  (:class:`sandbox.policies.IProMPPolicy`, ``dow_t = 0.1`` s) choosing the actions.
+  (:class:`sandbox.episodes.policies.IProMPPolicy`, ``dow_t = 0.1`` s) choosing the actions.
 
 :func:`run_vector_benchmarks` (the bench command runs it too):
 
@@ -106,7 +106,7 @@ def env_vs_raw(n_steps: int = 200, blocks: int = 5, seed: int = 0) -> dict[str, 
 
 def policy_steps_per_s(n_episodes: int = 3, dow_t: float = 0.1, seed: int = 0) -> float:
     """Environment steps per second with the dynamic policy in the loop (whole episodes)."""
-    from sandbox.policies import IProMPPolicy, fit_family_model
+    from sandbox.episodes.policies import IProMPPolicy, fit_family_model
 
     env = _make_env()
     policy = IProMPPolicy(fit_family_model("diverging"), dow_t=dow_t)

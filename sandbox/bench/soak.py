@@ -1,7 +1,7 @@
 """Soak: many steps and resets of an environment with the dynamic policy, watching resources.
 
 ``python -m sandbox.bench.soak [--steps 10000] [--reset-every 45]`` steps
-``sandbox/BaxterHandoverDiverging-v1`` with :class:`~sandbox.policies.IProMPPolicy`
+``sandbox/BaxterHandoverDiverging-v1`` with :class:`~sandbox.episodes.policies.IProMPPolicy`
 choosing the actions, resets at the end of every episode and at least every
 ``reset_every`` steps (so 10,000 steps make 200+ resets), and prints JSON: the
 resident memory (MiB) and the open file descriptors at the start and after
@@ -37,7 +37,7 @@ def soak(steps: int = 10_000, reset_every: int = 45, seed: int = 0) -> dict:
     import numpy as np
 
     import sandbox.envs  # noqa: F401  (registers the environments)
-    from sandbox.policies import IProMPPolicy, fit_family_model
+    from sandbox.episodes.policies import IProMPPolicy, fit_family_model
 
     if steps < 10 or reset_every < 1:
         raise ValueError(f"steps, reset_every: expected >= 10 and >= 1, got {steps}, "

@@ -18,8 +18,8 @@ observed position modalities).
 is (:mod:`sandbox.data.cache`); ``--clear`` empties it.
 
 ``export`` writes a folder's or a synthetic set's demonstrations as a Minari
-dataset (``--minari-id sandbox/NAME-v0``; layout in :mod:`sandbox.data.minari_io`),
-which ``fit --data minari:ID`` fits from.
+dataset (``--minari-id sandbox/NAME-v0``; layout in :mod:`sandbox.data.minari_io`,
+written by :mod:`sandbox.episodes.minari_export`), which ``fit --data minari:ID`` fits from.
 """
 
 from __future__ import annotations
@@ -149,8 +149,9 @@ def _export(args: argparse.Namespace) -> int:
 
     import sandbox.envs
     from sandbox.data.datasets import load_dataset
-    from sandbox.data.minari_io import default_env_id, export_demonstrations, require_minari
+    from sandbox.data.minari_io import require_minari
     from sandbox.data.recorded import SkippedTrialWarning
+    from sandbox.episodes.minari_export import default_env_id, export_demonstrations
 
     minari = require_minari()
     env_id = args.env_id or default_env_id(args.data)

@@ -113,11 +113,11 @@ def _settled(record, task: str) -> float | None:
 def _model_of(args):
     """The saved model of ``--model`` (checked against the episode), or one fitted here."""
     if args.model is None:
-        from sandbox.policies import fit_family_model
+        from sandbox.episodes.policies import fit_family_model
 
         model = fit_family_model("diverging", n_per_task=args.demos, seed=args.seed)
     else:
-        from sandbox.scenario_files import SYNTHETIC_MODALITIES
+        from sandbox.episodes.scenario_files import SYNTHETIC_MODALITIES
 
         model = _model.load(args.model)
         _model.within(model, SYNTHETIC_MODALITIES, "the synthetic human")
@@ -135,8 +135,8 @@ def run(args) -> int:
     import numpy as np
 
     import sandbox.envs  # noqa: F401  (registers the environments)
-    from sandbox.policies import IProMPPolicy, StaticPolicy
-    from sandbox.recording import record_episode
+    from sandbox.episodes.policies import IProMPPolicy, StaticPolicy
+    from sandbox.episodes.recording import record_episode
 
     start = time.perf_counter()
     model = _model_of(args)

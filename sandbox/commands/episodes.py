@@ -1,7 +1,7 @@
 """``python -m sandbox episodes``: handover success of policies side by side, in seeded episodes.
 
 Every policy runs the same episodes (the same seeds and, in the ``recorded``
-scenario, the same held-out trials) through :func:`sandbox.scenarios.run_scenario`.
+scenario, the same held-out trials) through :func:`sandbox.episodes.scenarios.run_scenario`.
 The table gives, per policy, the handover success rate with its 95 % bootstrap
 interval over episodes, the fraction of episodes whose final recognised task
 is the true one, the mean handover time and the median final distance.
@@ -21,7 +21,7 @@ HELP = "handover success of policies side by side in seeded scenario episodes"
 
 def add_arguments(parser) -> None:
     from sandbox.commands import _types
-    from sandbox.scenarios import POLICIES, SCENARIOS
+    from sandbox.episodes.scenarios import POLICIES, SCENARIOS
 
     parser.add_argument("--scenario", default="diverging", choices=sorted(SCENARIOS),
                         help="what the human does (default diverging)")
@@ -50,7 +50,7 @@ def run(args) -> int:
     import json
 
     from sandbox.commands._observation import split
-    from sandbox.scenarios import POLICIES
+    from sandbox.episodes.scenarios import POLICIES
 
     policies = split(args.policies) or []
     unknown = [p for p in policies if p not in POLICIES]
@@ -70,8 +70,8 @@ def run(args) -> int:
 def _run_policy(name: str, args) -> dict:
     import numpy as np
 
+    from sandbox.episodes.scenarios import run_scenario, summarize
     from sandbox.eval.metrics import bootstrap_ci
-    from sandbox.scenarios import run_scenario, summarize
 
     observe = None if name == "recorded_robot" else args.observe
     results = run_scenario(args.scenario, name, n_episodes=args.episodes, seed=args.seed,

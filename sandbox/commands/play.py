@@ -1,11 +1,11 @@
 """``python -m sandbox play``: drive the human hand from the keyboard, or run a scenario file.
 
-Without ``--scenario``: keyboard teleop (:mod:`sandbox.teleop`). The robot,
+Without ``--scenario``: keyboard teleop (:mod:`sandbox.episodes.keyboard`). The robot,
 driven by the dynamic IProMP policy, anticipates live in the browser (the URL
 is printed; meshcat on localhost), and the terminal shows the hand position
 and the task posterior at every update.
 
-With ``--scenario FILE`` (JSON or YAML, see :mod:`sandbox.scenario_files`, or
+With ``--scenario FILE`` (JSON or YAML, see :mod:`sandbox.episodes.scenario_files`, or
 the name of a shipped example: ``intent_switch``, ``waypoints``): the scripted
 episode runs to completion, then its replay (HTML) and a JSON summary are
 written (success, handover time, final gripper-to-object distance, recognised
@@ -21,7 +21,7 @@ replaced only with ``--force``. Ctrl-C ends either mode with status 130.
 
 ``--record-demos DIR --task NAME`` (teleop only) saves every episode as a
 demonstration of task NAME in the recorded CSV layout, ``DIR/NAME/NNN.csv``
-(:mod:`sandbox.demos_recording`), for ``fit --data DIR``; the robot holds
+(:mod:`sandbox.episodes.demos_recording`), for ``fit --data DIR``; the robot holds
 still at home unless ``--model`` is given.
 """
 
@@ -101,7 +101,7 @@ def _demo_recorder(args):
         raise ValueError("--record-demos: expected the keyboard teleop, got --scenario too")
     if args.task is None:
         raise ValueError("--record-demos: expected --task NAME, the task the demos show")
-    from sandbox.demos_recording import DemoRecorder
+    from sandbox.episodes.demos_recording import DemoRecorder
 
     return DemoRecorder(args.record_demos, args.task)
 
@@ -119,7 +119,7 @@ def _recorder(args):
     ``--record-minari``. The id is checked before anything is played."""
     if args.record_minari is None:
         return (lambda env: env), (lambda env, name: None)
-    from sandbox.data.minari_io import check_new_dataset_id, collect, save_collected
+    from sandbox.episodes.minari_export import check_new_dataset_id, collect, save_collected
 
     dataset_id = check_new_dataset_id(args.record_minari)
 
@@ -156,12 +156,12 @@ def _teleop(args, recorder=None) -> int:
     import gymnasium as gym
 
     from sandbox.envs import ENV_IDS
-    from sandbox.teleop import Keyboard, run_teleop
+    from sandbox.episodes.keyboard import Keyboard, run_teleop
 
     env_id = ENV_IDS[0] if args.family == "objects" else ENV_IDS[1]
     model, policy, known = _teleop_policy(args)
     if recorder is not None and args.model is None:
-        from sandbox.demos_recording import HeldRobot
+        from sandbox.episodes.demos_recording import HeldRobot
 
         policy, known = HeldRobot(policy), known + "; the robot holds still while you record"
     print(f"the robot knows {len(model.tasks)} tasks {list(model.tasks)} ({known}); it "
@@ -190,7 +190,7 @@ def _teleop(args, recorder=None) -> int:
 
 def _teleop_policy(args):
     """The teleop's model, policy and what the robot knows, all checked before the env opens."""
-    from sandbox.policies import IProMPPolicy
+    from sandbox.episodes.policies import IProMPPolicy
 
     settings = _settings.load(args.config)
     observe = _settings.observe(args.observe, settings)
@@ -199,7 +199,7 @@ def _teleop_policy(args):
         _model.baxter(model)
         known = f"from {args.model}"
     else:
-        from sandbox.scenario_files import fit_family
+        from sandbox.episodes.scenario_runner import fit_family
 
         observe = observe or "hand"
         model = fit_family(args.family, args.demos, args.seed, observe,
@@ -217,7 +217,8 @@ def _scenario(args) -> int:
     import json
     from pathlib import Path
 
-    from sandbox.scenario_files import load_scenario, run_scenario_file
+    from sandbox.episodes.scenario_files import load_scenario
+    from sandbox.episodes.scenario_runner import run_scenario_file
 
     settings = _settings.load(args.config)
     scenario = load_scenario(args.scenario, observe=_settings.observe(args.observe, settings),

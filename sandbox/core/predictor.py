@@ -101,7 +101,7 @@ class DynamicPredictor(PredictorBase):
         hand. ``False`` re-chooses the task through the whole stream (on the
         recorded handovers recognition then falls after the handover). A
         closed-loop policy whose episode ends at the handover has no such
-        motion to ignore, and :class:`~sandbox.policies.IProMPPolicy` turns it off.
+        motion to ignore, and :class:`~sandbox.episodes.policies.IProMPPolicy` turns it off.
     end_prob : float
         Probability of the motion being over that ends it (``until_end``).
     incremental : bool

@@ -7,7 +7,7 @@ import json
 import pytest
 
 from sandbox.cli import main
-from sandbox.scenarios import run_scenario, summarize
+from sandbox.episodes.scenarios import run_scenario, summarize
 
 
 def test_policies_run_the_same_episodes_and_match_run_scenario(tmp_path, capsys):

@@ -17,8 +17,9 @@ import numpy as np
 import pytest
 
 from sandbox.cli import main
-from sandbox.data.minari_io import export_demonstrations, load_demonstrations
+from sandbox.data.minari_io import load_demonstrations
 from sandbox.envs import ENV_IDS
+from sandbox.episodes.minari_export import export_demonstrations
 
 
 def test_without_minari_the_export_says_what_to_install(monkeypatch, capsys):

@@ -82,7 +82,7 @@ def test_legacy_ids_keep_the_v0_observation(diverging_env):
         old, new = rollout(legacy, seed=4, n_steps=30), rollout(diverging_env, seed=4, n_steps=30)
     finally:
         legacy.close()
-    body = ("arm", "arm_valid", "emg", "emg_valid")
+    body = ("hand_valid", "hand_time", "arm", "arm_valid", "emg", "emg_valid")  # v1 only
     for a, b in zip([old[0], *old[2::5]], [new[0], *new[2::5]]):
         assert data_equivalence(a, {k: v for k, v in b.items() if k not in body}, exact=True)
 
@@ -152,8 +152,8 @@ def test_spaces_and_first_observation(objects_env):
     assert env.action_space.shape == (8,)
     np.testing.assert_array_equal(env.action_space.low[:7], env.robot.lower)
     obs, info = objects_env.reset(seed=0)
-    assert set(obs) == {"hand", "arm", "arm_valid", "emg", "emg_valid", "object", "q", "dq",
-                        "gripper", "time"}
+    assert set(obs) == {"hand", "hand_valid", "hand_time", "arm", "arm_valid", "emg",
+                        "emg_valid", "object", "q", "dq", "gripper", "time"}
     assert obs["arm_valid"].dtype == np.int8 and obs["emg"].shape == (8,)
     np.testing.assert_allclose(obs["q"], Q_HOME, atol=1e-6)
     assert obs["gripper"][0] == pytest.approx(1.0) and obs["time"][0] == 0.0
@@ -294,3 +294,39 @@ def test_human_intent_is_unknown_for_teleop_and_scripted_hands(diverging_env):
 def test_human_intent_of_a_recorded_trial_is_its_task(objects_env, recorded_dir):
     objects_env.reset(seed=0, options={"source": str(recorded_dir), "task": "pencil_box"})
     assert objects_env.unwrapped.human_intent(0.5) == "pencil_box"
+
+
+# -- tracker frames: time stamps and repeated samples (issue 16 item 6) ---------------------
+def test_a_sample_the_tracker_repeats_arrives_invalid_with_its_own_time(diverging_env):
+    """The tracker (30 Hz frames) is slower than the env (50 Hz): a step without a new
+    frame has ``hand_valid`` 0 and the held frame's time; a new frame is stamped with
+    the time it was taken, not with the step's."""
+    obs, _ = diverging_env.reset(seed=0, options={"task": "up"})
+    motion = diverging_env.unwrapped.motion
+    assert obs["hand_valid"][0] == 1 and obs["hand_time"][0] == motion.frame_time(0.0) <= 0.0
+    rows, previous = [], obs
+    for _ in range(50):
+        obs, *_ = diverging_env.step(np.append(Q_HOME, -1.0))
+        rows.append((obs["time"][0], obs["hand_time"][0], obs["hand_valid"][0]))
+        if obs["hand_valid"][0]:
+            assert obs["hand_time"][0] > previous["hand_time"][0]
+        else:
+            assert obs["hand_time"][0] == previous["hand_time"][0]
+            np.testing.assert_array_equal(obs["hand"], previous["hand"])  # held, not NaN
+        assert obs["hand_time"][0] <= obs["time"][0]
+        np.testing.assert_array_equal(obs["hand"], motion.measurement(obs["time"][0]))
+        previous = obs
+    new = sum(valid for _, _, valid in rows)
+    assert 0 < new < len(rows)  # fewer new frames than steps
+    assert new == pytest.approx(30 * 1.0, abs=6)  # ~30 frames in 1 s of steps
+    assert diverging_env.observation_space.contains(obs)
+
+
+def test_the_teleoperated_hand_is_stamped_with_its_frames(diverging_env):
+    obs, _ = diverging_env.reset(seed=0, options={"source": "teleop"})
+    stamps = [obs["hand_time"][0]]
+    for _ in range(10):
+        obs, *_ = diverging_env.step(np.append(Q_HOME, -1.0))
+        stamps.append(obs["hand_time"][0])
+    frames = sorted(set(stamps))
+    np.testing.assert_allclose(np.diff(frames), 1 / 30, atol=1e-9)

@@ -105,7 +105,8 @@ def test_replay_animation_moves_the_arm(chromium, replays, tmp_path):
 
 
 class _ScriptedKeys:
-    """Keys for :func:`~sandbox.teleop.run_teleop`: ``script[k]`` at its k-th read, then ``q``."""
+    """Keys for :func:`~sandbox.episodes.keyboard.run_teleop`: ``script[k]`` at its k-th read,
+    then ``q``."""
 
     def __init__(self, script: list[str]) -> None:
         self.script, self.closed = list(script), False
@@ -120,8 +121,8 @@ def live_teleop():
     import gymnasium as gym
 
     import sandbox.envs  # noqa: F401
-    from sandbox.policies import IProMPPolicy, fit_family_model
-    from sandbox.teleop import run_teleop
+    from sandbox.episodes.keyboard import run_teleop
+    from sandbox.episodes.policies import IProMPPolicy, fit_family_model
 
     model = fit_family_model("diverging", n_per_task=4, seed=0)
     policy = IProMPPolicy(model, dow_t=0.2)

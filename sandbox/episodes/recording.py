@@ -1,7 +1,8 @@
 """One environment episode with a predictor policy, recorded: beliefs, updates, outcome, replay.
 
-:func:`record_episode` runs an episode of a handover environment with an
-:class:`~sandbox.policies.IProMPPolicy` (or :class:`~sandbox.policies.StaticPolicy`),
+:func:`record_episode` runs an episode (:func:`~sandbox.episodes.rollout.rollout`)
+of a handover environment with an :class:`~sandbox.episodes.policies.IProMPPolicy`
+(or :class:`~sandbox.episodes.policies.StaticPolicy`),
 optionally drawing it in a :class:`sandbox.viz.Viewer` (bodies and prediction
 overlays), and returns an :class:`EpisodeRecord`: what the robot believed after
 each update, the outcome, and a JSON-ready :meth:`EpisodeRecord.summary`. The
@@ -14,11 +15,14 @@ environment are passed in.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+
+from sandbox.episodes.policy import Policy, beliefs_of
+from sandbox.episodes.rollout import Step, rollout
 
 
 @dataclass(frozen=True)
@@ -138,18 +142,19 @@ def _truth(motion) -> Any:
     return meta.get("intent")
 
 
-def record_episode(env, policy, *, seed: int | None = None,
-                   options: Mapping[str, Any] | None = None, viewer=None,
-                   overlay=None, policy_name: str = "", max_steps: int | None = None,
-                   on_update=None) -> EpisodeRecord:
+def record_episode(env: Any, policy: Policy, *, seed: int | None = None,
+                   options: Mapping[str, Any] | None = None, viewer: Any = None,
+                   overlay: Any = None, policy_name: str = "", max_steps: int | None = None,
+                   on_update: Callable[[Belief], None] | None = None) -> EpisodeRecord:
     """Run one episode of ``policy`` in ``env`` and record it.
 
     Parameters
     ----------
     env : gymnasium.Env
         A handover environment (``sandbox/...``), reset here.
-    policy : IProMPPolicy or StaticPolicy
-        Has ``predictor`` (its ``updates`` are read), ``task`` and ``reset()``.
+    policy : Policy
+        E.g. an :class:`~sandbox.episodes.policies.IProMPPolicy`; its ``beliefs``
+        (task, updates) are read after every step.
     seed : int, optional
         ``reset`` seed.
     options : mapping, optional
@@ -157,7 +162,7 @@ def record_episode(env, policy, *, seed: int | None = None,
     viewer : sandbox.viz.Viewer, optional
         Records the bodies (it must mirror ``env.unwrapped.sim``) at its frame rate.
     overlay : PredictionOverlay, optional
-        Draws the predictor's state with the viewer's frames.
+        Draws the policy's beliefs with the viewer's frames.
     policy_name : str
         Stored in the record.
     max_steps : int, optional
@@ -169,38 +174,55 @@ def record_episode(env, policy, *, seed: int | None = None,
     -------
     EpisodeRecord
     """
-    obs, info = env.reset(seed=seed, options=dict(options or {}))
-    policy.reset()
-    truth = _truth(env.unwrapped.motion)
-    intent = getattr(env.unwrapped, "human_intent", lambda t: None)  # for the viewer's panel
-    record = EpisodeRecord(task=info["task"], object=info["object"], source=info["source"],
-                           policy=policy_name)
-    if viewer is not None:
-        viewer.restart_recording()
-        viewer.update(0.0, force=True)
-    distances, done = [], False
-    while not done and (max_steps is None or record.steps < max_steps):
-        obs, _, terminated, truncated, step = env.step(policy(obs))
-        done, record.steps = terminated or truncated, record.steps + 1
-        t = float(obs["time"][0])
-        record.recognised.append((t, policy.task))
-        if truth is not None:
-            record.truth.append((t, str(truth.task_at(t))))
-        distances.append(step["distance"])
-        for update in policy.predictor.updates[len(record.updates):]:
-            belief = _belief(update, policy.predictor.model.tasks)
+    recorder = _Recorder(env, policy, viewer, overlay, policy_name, on_update)
+    rollout(env, policy, seed=seed, options=options, on_reset=recorder.start,
+            on_step=recorder.step, max_steps=max_steps)
+    return recorder.finish()
+
+
+class _Recorder:
+    """What :func:`record_episode` does at the reset and after each step."""
+
+    def __init__(self, env, policy, viewer, overlay, policy_name: str, on_update) -> None:
+        self.env, self.policy, self.viewer, self.overlay = env, policy, viewer, overlay
+        self.policy_name, self.on_update = policy_name, on_update
+        self.distances: list[float] = []
+
+    def start(self, step: Step) -> None:
+        info = step.reset_info
+        self.truth = _truth(self.env.unwrapped.motion)
+        self.intent = getattr(self.env.unwrapped, "human_intent", lambda t: None)  # the panel
+        self.record = EpisodeRecord(task=info["task"], object=info["object"],
+                                    source=info["source"], policy=self.policy_name)
+        if self.viewer is not None:
+            self.viewer.restart_recording()
+            self.viewer.update(0.0, force=True)
+
+    def step(self, step: Step) -> None:
+        record, beliefs, t = self.record, beliefs_of(self.policy), step.time
+        record.steps = step.n
+        record.recognised.append((t, beliefs.task))
+        if self.truth is not None:
+            record.truth.append((t, str(self.truth.task_at(t))))
+        self.distances.append(step.info["distance"])
+        for update in beliefs.updates[len(record.updates):]:
+            belief = _belief(update, beliefs.tasks)
             record.updates.append(belief)
-            if on_update is not None:
-                on_update(belief)
-        if viewer is not None and viewer.begin(t):
-            for body in viewer.bodies.values():
+            if self.on_update is not None:
+                self.on_update(belief)
+        if self.viewer is not None and self.viewer.begin(t):
+            for body in self.viewer.bodies.values():
                 body.update()
-            if overlay is not None:
-                overlay.show(policy.predictor, t, executed_q=obs["q"], truth=intent(t))
-        record.success, record.handover_time = bool(step["is_success"]), step["handover_time"]
-        record.final_distance, record.end_time = float(step["distance"]), t
-    record.min_distance = float(np.min(distances)) if distances else float("nan")
-    return record
+            if self.overlay is not None:
+                self.overlay.show(beliefs, t, executed_q=step.obs["q"], truth=self.intent(t))
+        record.success = bool(step.info["is_success"])
+        record.handover_time = step.info["handover_time"]
+        record.final_distance, record.end_time = float(step.info["distance"]), t
+
+    def finish(self) -> EpisodeRecord:
+        distances = self.distances
+        self.record.min_distance = float(np.min(distances)) if distances else float("nan")
+        return self.record
 
 
 def _belief(update, tasks) -> Belief:

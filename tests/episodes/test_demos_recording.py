@@ -17,7 +17,7 @@ from sandbox.data.spec import BUILT_IN, ROBOT_COLUMNS
 from sandbox.data.synthetic.base import HAND_START
 from sandbox.data.synthetic.robot import kinematics, robot_meeting
 from sandbox.data.writer import RECORDED_COLUMNS, next_trial_path, write_trial
-from sandbox.demos_recording import (
+from sandbox.episodes.demos_recording import (
     DemoRecorder,
     HeldRobot,
     check_task_name,
@@ -239,8 +239,8 @@ def test_the_held_robot_feeds_the_predictor_and_stays_home():
 
 
 def test_the_right_arm_is_the_environments():
-    from sandbox.demos_recording import Q_RIGHT
     from sandbox.envs.robot import Q_RIGHT as ENV_Q_RIGHT
+    from sandbox.episodes.demos_recording import Q_RIGHT
 
     np.testing.assert_array_equal(Q_RIGHT, ENV_Q_RIGHT)
 

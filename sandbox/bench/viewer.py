@@ -1,4 +1,4 @@
-"""Viewer benchmark: build time, per-frame cost, replay size (``python -m sandbox.viz.benchmark``).
+"""Viewer benchmark: build time, per-frame cost, replay size (``python -m sandbox.bench.viewer``).
 
 Two recordings of 3 s at 30 fps, no server (offline scene):
 
@@ -73,7 +73,7 @@ def bench_episode(resolution: float | None, folder: Path) -> None:
     import gymnasium as gym
 
     import sandbox.envs  # noqa: F401  (registers the environments)
-    from sandbox.policies import IProMPPolicy, fit_family_model
+    from sandbox.episodes.policies import IProMPPolicy, fit_family_model
     from sandbox.viz import Viewer
 
     env = gym.make("sandbox/BaxterHandoverDiverging-v1")
@@ -95,11 +95,11 @@ def bench_episode(resolution: float | None, folder: Path) -> None:
                 body.update()
             mirror_s.append(time.perf_counter() - start)
             start = time.perf_counter()
-            overlay.show(policy.predictor, t, executed_q=obs["q"])
+            overlay.show(policy.beliefs, t, executed_q=obs["q"])
             overlay_s.append(time.perf_counter() - start)
     print(f"  episode : build {build:.2f} s (warm) for {len(viewer.bodies)} bodies; "
           f"{t:.2f} s, {len(mirror_s)} frames: mirror {_ms(mirror_s)}, overlays "
-          f"{_ms(overlay_s)}; {len(policy.predictor.updates)} updates; "
+          f"{_ms(overlay_s)}; {policy.beliefs.n_updates} updates; "
           f"replay {_save(viewer, 'episode', folder)}")
     env.close()
 

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 import sandbox.envs  # noqa: F401  (registers the environments)
-import sandbox.scenarios
+import sandbox.episodes.scenarios
+from sandbox.episodes.scenarios import EpisodeResult, run_scenario, summarize
 from sandbox.robot import Q_HOME
-from sandbox.scenarios import EpisodeResult, run_scenario, summarize
 
 
 @pytest.fixture(scope="module")
@@ -135,7 +135,7 @@ def test_bad_arguments_are_refused(kwargs, match):
 
 
 def test_docstring_example_runs():
-    result = doctest.testmod(sandbox.scenarios)
+    result = doctest.testmod(sandbox.episodes.scenarios)
     assert result.attempted > 0 and result.failed == 0
 
 
@@ -151,7 +151,7 @@ def test_observe_chooses_the_modalities_and_the_synthetic_model(diverging_env):
 
 
 def test_recorded_model_is_fitted_on_the_observed_modalities(recorded_dir):
-    from sandbox.scenarios import _recorded_episodes
+    from sandbox.episodes.scenarios import _recorded_episodes
 
     ((_, model, opts, demo),) = _recorded_episodes(recorded_dir, 1, 0, {},
                                                    ("hand", "arm", "emg"))

@@ -7,9 +7,9 @@ import doctest
 import numpy as np
 import pytest
 
-import sandbox.policies
+import sandbox.episodes.policies
 from sandbox.envs.sources import synthetic_motion
-from sandbox.policies import (
+from sandbox.episodes.policies import (
     IProMPPolicy,
     RecordedRobotPolicy,
     StaticPolicy,
@@ -143,7 +143,7 @@ def test_unfitted_model_is_refused():
 
 
 def test_docstring_example_runs():
-    result = doctest.testmod(sandbox.policies, optionflags=doctest.ELLIPSIS)
+    result = doctest.testmod(sandbox.episodes.policies, optionflags=doctest.ELLIPSIS)
     assert result.attempted > 0 and result.failed == 0
 
 
@@ -227,3 +227,34 @@ def test_recorded_robot_policy_refuses_bad_arguments(kwargs, match):
     args = {"times": [0.0, 1.0], "robot": np.zeros((2, 7)), "task": "t", **kwargs}
     with pytest.raises(ValueError, match=match):
         RecordedRobotPolicy(args.pop("times"), args.pop("robot"), args.pop("task"), **args)
+
+
+def test_a_slower_tracker_feeds_the_predictor_its_frames_stamped_with_their_time(model):
+    """Issue 16 item 6: rows without a new frame (``hand_valid`` 0) are skipped, the others
+    are observed at the frame's own time (``hand_time``), not at the step's."""
+    motion = synthetic_motion("diverging", "up", np.random.default_rng(0))
+    policy, given, stale = IProMPPolicy(model), None, 0
+    for t in np.arange(0.0, 1.5, 0.02):
+        frame = motion.frame_time(t)
+        stale += frame == given
+        obs = {"hand": motion.measurement(t), "hand_valid": np.array([frame != given], np.int8),
+               "hand_time": np.array([frame]), "object": np.zeros(3), "q": Q_HOME.copy(),
+               "time": np.array([t])}
+        given = frame
+        policy(obs)
+    times, _ = policy.predictor.observations()
+    assert stale > 0 and policy.predictor.n_skipped == stale
+    frames = {motion.frame_time(t) for t in np.arange(0.0, 1.5, 0.02)}
+    assert set(times) <= frames and len(times) == (len(frames) + 1) // 2  # subsample 2
+    assert policy.beliefs.n_updates >= 5 and policy.beliefs.updates[-1].time in frames
+
+
+def test_without_frame_entries_the_step_time_stamps_the_row(model):
+    from sandbox.episodes.policies import tracker_row
+
+    obs = next(observations())
+    t, values = tracker_row({**obs, "time": np.array([0.5])}, ["hand"])
+    assert t == 0.5 and np.array_equal(values["hand"], obs["hand"])
+    t, values = tracker_row({**obs, "hand_time": np.array([0.4]), "hand_valid": np.zeros(1)},
+                            ["hand"])
+    assert t == 0.4 and np.isnan(values["hand"]).all()

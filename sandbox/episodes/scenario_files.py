@@ -38,7 +38,8 @@ A scenario file is one mapping (YAML needs PyYAML; paths are relative to the fil
 With a recorded human and no model file, the model is fitted on all the
 other trials of the recorded set (leave-one-out). :func:`load_scenario`
 validates a file and raises ``ValueError`` naming the file, the key, what was
-expected and what came; :func:`run_scenario_file` runs it.
+expected and what came; :func:`~sandbox.episodes.scenario_runner.run_scenario_file`
+runs it.
 """
 
 from __future__ import annotations
@@ -165,26 +166,26 @@ def load_scenario(path: str | Path, *, observe: list[str] | str | None = None,
     family = check.choice(data.get("family", "diverging"), "family", FAMILIES)
     obj = data.get("object")
     if obj is not None:
-        from sandbox import urdf
+        import sandbox.urdf as urdf
 
         obj = check.choice(obj, "object", urdf.OBJECTS)
     seed = check.integer(data.get("seed", 0), "seed")
     kind, human = _human(check, data["human"], family, path.parent, seed)
-    model = _model(check, data.get("model"), path.parent)
-    observe = _observe(check, data.get("observe", _default_observe(model)))
-    if "file" in model:
-        _check_file_observes(check, model["file"], observe)
-    if kind != "recorded" and "file" not in model and not set(observe) <= set(SYNTHETIC_MODALITIES):
+    spec = _model(check, data.get("model"), path.parent)
+    names = _observe(check, data.get("observe", _default_observe(spec)))
+    if "file" in spec:
+        _check_file_observes(check, spec["file"], names)
+    if kind != "recorded" and "file" not in spec and not set(names) <= set(SYNTHETIC_MODALITIES):
         check.fail("observe", f"modalities of the synthetic model {list(SYNTHETIC_MODALITIES)} "
                               "(EMG is not simulated: use a recorded human or a model file)",
-                   list(observe))
+                   list(names))
     return Scenario(
         path=path, name=str(data.get("name", path.stem)), family=family,
         seed=seed, human_kind=kind, human=human,
-        policy=_policy(check, data["policy"]), model=model,
+        policy=_policy(check, data["policy"]), model=spec,
         object=obj, speed=check.number(data.get("speed", 1.0), "speed", 0.25, 4.0),
         time_limit=check.number(data.get("time_limit", 6.0), "time_limit", 0.1, 600.0),
-        observe=observe)
+        observe=names)
 
 
 def _fill_in(check: _Checker, data: dict, model, options, model_options) -> dict:
@@ -294,7 +295,8 @@ def _pick_recorded(check: _Checker, root: Path, task, trial, seed: int) -> dict:
 def _waypoints(check: _Checker, data: Any) -> tuple[list[float], list[list[float]]]:
     if not isinstance(data, list) or len(data) < 2:
         check.fail("human.waypoints", "a list of at least 2 waypoints {t, position}", data)
-    times, points = [], []
+    times: list[float] = []
+    points: list[list[float]] = []
     for i, item in enumerate(data):
         key = f"human.waypoints[{i}]"
         item = check.keys(item, key, ("t", "position"))
@@ -366,137 +368,3 @@ def _model(check: _Checker, data: Any, folder: Path) -> dict:
     except (TypeError, ValueError) as error:
         raise ValueError(f"scenario {check.path}: model.options: {error}") from None
     return model
-
-
-def build_model(scenario: Scenario):
-    """The scenario's IProMP: a saved file, the recorded set minus the trial, or synthetic."""
-    from sandbox.core import IProMP
-
-    if "file" in scenario.model:
-        return IProMP.load(scenario.model["file"])
-    options = scenario.model.get("options", {})
-    if scenario.human_kind == "recorded":
-        from sandbox.data.recorded import load_recorded
-
-        held_out = Path(scenario.human["file"]).resolve()
-        demos, _ = load_recorded(scenario.human["recorded"], observe=scenario.observe)
-        return IProMP(**options).fit([d for d in demos
-                                      if Path(d.source).resolve() != held_out])
-    return fit_family(scenario.family, scenario.model["demos"], scenario.model["seed"],
-                      scenario.observe, options)
-
-
-def fit_family(family: str, demos: int, seed: int, observe, options: Mapping | None = None):
-    """An IProMP fitted on ``demos`` synthetic demonstrations per task of ``family``.
-
-    ``observe``: modalities (names or ``"a,b"``); ``options``: IProMP options
-    (with none but ``n_basis`` the model is the cached
-    :func:`~sandbox.policies.fit_family_model`).
-    """
-    from sandbox.policies import fit_family_model
-
-    options = dict(options or {})
-    names = [n.strip() for n in observe.split(",")] if isinstance(observe, str) else observe
-    if set(options) <= {"n_basis"}:
-        return fit_family_model(family, n_per_task=demos, seed=seed, observe=names,
-                                n_basis=options.get("n_basis"))
-    import numpy as np
-
-    from sandbox.core import IProMP
-    from sandbox.data.synthetic import make_dataset
-
-    return IProMP(**options).fit(make_dataset(family, demos, np.random.default_rng(seed),
-                                              observe=list(names)))
-
-
-def make_policy(scenario: Scenario, model):
-    """The scenario's policy for ``model``; bad ``options`` become ``ValueError``."""
-    from sandbox.policies import IProMPPolicy, StaticPolicy
-
-    spec = scenario.policy
-    try:
-        options = {"observe": list(scenario.observe), **spec["options"]}
-        if spec["type"] == "dynamic":
-            return IProMPPolicy(model, dow_t=spec["dow_t"], **options)
-        return StaticPolicy(model, ratio=spec["ratio"], **options)
-    except TypeError as error:
-        raise ValueError(f"scenario {scenario.path}: policy.options: {error}") from error
-
-
-def reset_options(scenario: Scenario) -> dict[str, Any]:
-    """``env.reset`` options of the scenario (the scripted motion built here)."""
-    opts: dict[str, Any] = {"speed": scenario.speed}
-    if scenario.object is not None:
-        opts["object"] = scenario.object
-    human = scenario.human
-    if scenario.human_kind == "synthetic":
-        opts.update({k: human[k] for k in HUMAN_KEYS["synthetic"] if human.get(k) is not None})
-    elif scenario.human_kind == "recorded":
-        opts.update(source=human["recorded"], task=human.get("task"), trial=human.get("trial"))
-    else:
-        import numpy as np
-
-        from sandbox.envs.sources import waypoint_motion
-
-        opts["motion"] = waypoint_motion(human["times"], human["points"],
-                                         np.random.default_rng(scenario.seed),
-                                         task=human["task"], tracker=human["tracker"])
-    return opts
-
-
-def run_scenario_file(scenario: Scenario, *, html: str | Path | None = None,
-                      on_update=None, wrap_env=None, on_close=None) -> dict[str, Any]:
-    """Run a scenario to the end; write the replay to ``html`` (if given); return the summary.
-
-    ``wrap_env(env)`` returns the env to run (e.g. a ``minari.DataCollector``);
-    ``on_close(env)`` is called with it before it is closed.
-
-    Returns
-    -------
-    dict
-        JSON-ready: the scenario (name, file, seed, policy), the outcome
-        (:meth:`~sandbox.recording.EpisodeRecord.summary`: success, handover
-        time, final gripper-to-object distance, recognised task over time,
-        updates), the intent switch when there is one, the replay's path.
-    """
-    import gymnasium as gym
-    import numpy as np
-
-    import sandbox.envs  # noqa: F401  (registers the environments)
-    from sandbox.recording import record_episode
-
-    if html is not None and Path(html).suffix.lower() not in (".html", ".htm"):
-        raise ValueError(f"html: expected a file name ending in .html, got {str(html)!r}")
-    model = build_model(scenario)
-    policy = make_policy(scenario, model)
-    options = reset_options(scenario)
-    env = gym.make(scenario.env_id, max_episode_steps=max(1, round(scenario.time_limit * 50)))
-    env = env if wrap_env is None else wrap_env(env)
-    viewer = overlay = None
-    try:
-        if html is not None:
-            from sandbox.viz import Viewer
-
-            viewer = Viewer(fps=30.0)
-            viewer.add_simulation(env.unwrapped.sim)
-            viewer.add_tracked_arm(env.unwrapped.tracked_arm)
-            overlay = viewer.add_overlay(model.tasks, rng=np.random.default_rng(scenario.seed),
-                                         title=f"{scenario.name} ({scenario.policy['type']})")
-        record = record_episode(env, policy, seed=scenario.seed, options=options, viewer=viewer,
-                                overlay=overlay, policy_name=scenario.policy["type"],
-                                on_update=on_update)
-        intent = env.unwrapped.motion.meta.get("intent")
-        if on_close is not None:
-            on_close(env)
-    finally:
-        env.close()
-    summary = {"scenario": scenario.name, "file": str(scenario.path), "seed": scenario.seed,
-               "human": scenario.human_kind, "policy_spec": scenario.policy,
-               "observe": list(scenario.observe),
-               "model_tasks": list(model.tasks), **record.summary()}
-    if intent is not None:
-        summary["intent_switch"] = {"from": intent.tasks[0], "to": intent.tasks[1],
-                                    "time_s": round(float(intent.switch_time), 4)}
-    if viewer is not None:
-        summary["replay"] = str(viewer.save_html(html))
-    return summary

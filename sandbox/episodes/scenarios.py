@@ -10,13 +10,13 @@ scenario           what the human does
                    set's other trials (leave-one-out)
 =================  =========================================================================
 
-Policies: ``"dynamic"`` (:class:`~sandbox.policies.IProMPPolicy`, window
-``dow_t``), ``"static"`` (:class:`~sandbox.policies.StaticPolicy`, ``ratio``),
+Policies: ``"dynamic"`` (:class:`~sandbox.episodes.policies.IProMPPolicy`, window
+``dow_t``), ``"static"`` (:class:`~sandbox.episodes.policies.StaticPolicy`, ``ratio``),
 ``"recorded_robot"`` (``recorded`` scenario only: the trial's own recorded robot
-motion, :class:`~sandbox.policies.RecordedRobotPolicy`, the reference a
+motion, :class:`~sandbox.episodes.policies.RecordedRobotPolicy`, the reference a
 predictor of it can reach) or any callable ``model -> policy``. Synthetic
 scenarios use a model fitted on seeded synthetic demonstrations of the family
-(:func:`sandbox.policies.fit_family_model`).
+(:func:`sandbox.episodes.policies.fit_family_model`).
 ``observe`` chooses the modalities the policy feeds (``hand``, ``arm``,
 ``emg``); in the ``recorded`` scenario the model is fitted on them too.
 
@@ -39,6 +39,8 @@ from typing import Any
 
 import numpy as np
 
+from sandbox.episodes.policy import Policy, beliefs_of
+from sandbox.episodes.rollout import Step, rollout
 from sandbox.validation import check_choice
 
 #: Scenario name -> (environment id, synthetic family).
@@ -106,9 +108,11 @@ def run_scenario(scenario: str = "diverging", policy: str | Callable = "dynamic"
     ----------
     scenario : str
         One of :data:`SCENARIOS`.
-    policy : {"dynamic", "static"} or callable
-        The controller, or a factory ``model -> policy`` (a policy maps an
-        observation to an action and has ``reset()`` and ``task``).
+    policy : {"dynamic", "static", "recorded_robot"} or callable
+        The controller, or a factory ``model -> policy`` (a
+        :class:`~sandbox.episodes.policy.Policy`: it maps an observation to an
+        action, has ``reset()`` and ``beliefs``; one with a ``task`` attribute
+        instead of ``beliefs`` is accepted too).
     n_episodes : int
         Episodes (>= 1).
     seed : int
@@ -138,6 +142,74 @@ def run_scenario(scenario: str = "diverging", policy: str | Callable = "dynamic"
     -------
     list of EpisodeResult
     """
+    observe = _check_run(scenario, policy, n_episodes, data, observe)
+    make_policy = _policy_factory(policy, dow_t, ratio, observe)
+    episodes = _episodes(scenario, int(n_episodes), int(seed), data, model, options or {},
+                         observe)
+    own_env = env is None
+    if own_env:
+        env = _make_env(scenario)
+    try:
+        return [run_episode(env, make_policy(m, demo), s, opts)
+                for s, m, opts, demo in episodes]
+    finally:
+        if own_env:
+            env.close()
+
+
+def run_episode(env: Any, policy: Policy, seed: int,
+                options: Mapping[str, Any]) -> EpisodeResult:
+    """One episode of ``policy`` in ``env`` until termination or truncation.
+
+    The recognised task after each step is read from ``policy.beliefs``
+    (a policy without beliefs: its ``task`` attribute) and stamped with the
+    time of the observation the policy acted on.
+    """
+    recognised: list[tuple[float, str]] = []
+    distances: list[float] = []
+
+    def on_step(step: Step) -> None:
+        assert step.previous is not None
+        recognised.append((float(step.previous["time"][0]), beliefs_of(policy).task))
+        distances.append(step.info["distance"])
+
+    last = rollout(env, policy, seed=seed, options=options, on_step=on_step)
+    info = last.reset_info
+    step_info: dict[str, Any] = last.info if last.n else {
+        "is_success": False, "handover_time": None, "distance": np.nan}
+    return EpisodeResult(
+        seed=seed, task=info["task"], object=info["object"],
+        success=bool(step_info["is_success"]), handover_time=step_info["handover_time"],
+        final_distance=float(step_info["distance"]), min_distance=float(np.min(distances)),
+        recognised=tuple(recognised), steps=last.n, options=dict(options))
+
+
+def summarize(results: list[EpisodeResult]) -> dict[str, float]:
+    """Success rate, mean handover time (s, successes only), median final distance (m),
+    and the fraction of episodes whose final recognised task is the true one."""
+    if not results:
+        raise ValueError("results: expected at least one episode, got none")
+    times: list[Any] = [r.handover_time for r in results if r.success]
+    return {
+        "n_episodes": float(len(results)),
+        "success_rate": float(np.mean([r.success for r in results])),
+        "handover_time_s": float(np.mean(times)) if times else float("nan"),
+        "final_distance_m": float(np.median([r.final_distance for r in results])),
+        "recognition_rate": float(np.mean([r.final_task == r.task for r in results])),
+    }
+
+
+# ------------------------------------------------------------------ internals
+def _make_env(scenario: str) -> Any:
+    import gymnasium as gym
+
+    import sandbox.envs  # noqa: F401  (registers the environments)
+
+    return gym.make(SCENARIOS[scenario][0])
+
+
+def _check_run(scenario, policy, n_episodes, data, observe) -> tuple[str, ...] | None:
+    """Check :func:`run_scenario`'s arguments; return ``observe`` checked."""
     check_choice(scenario, "scenario", tuple(SCENARIOS))
     if not callable(policy):
         check_choice(policy, "policy", POLICIES)
@@ -150,66 +222,16 @@ def run_scenario(scenario: str = "diverging", policy: str | Callable = "dynamic"
         raise ValueError("data: expected the recorded set's folder for the 'recorded' "
                          f"scenario and nothing otherwise, got scenario={scenario!r}, "
                          f"data={data!r}")
-    observe = _check_observe(observe)
-    if observe is not None and callable(policy):
+    checked = _check_observe(observe)
+    if checked is not None and callable(policy):
         raise ValueError("observe: expected None with a policy factory (it chooses its own "
-                         f"modalities), got {observe!r}")
-    make_policy = _policy_factory(policy, dow_t, ratio, observe)
-    episodes = _episodes(scenario, int(n_episodes), int(seed), data, model, options or {},
-                         observe)
-    own_env = env is None
-    if own_env:
-        import gymnasium as gym
-
-        import sandbox.envs  # noqa: F401  (registers the environments)
-
-        env = gym.make(SCENARIOS[scenario][0])
-    try:
-        return [run_episode(env, make_policy(m, demo), s, opts)
-                for s, m, opts, demo in episodes]
-    finally:
-        if own_env:
-            env.close()
+                         f"modalities), got {checked!r}")
+    return checked
 
 
-def run_episode(env, policy, seed: int, options: Mapping[str, Any]) -> EpisodeResult:
-    """One episode of ``policy`` in ``env`` until termination or truncation."""
-    obs, info = env.reset(seed=seed, options=dict(options))
-    policy.reset()
-    recognised, distances, done, steps = [], [], False, 0
-    step_info: dict = {"is_success": False, "handover_time": None, "distance": np.nan}
-    while not done:
-        t = float(obs["time"][0])
-        obs, _, terminated, truncated, step_info = env.step(policy(obs))
-        recognised.append((t, policy.task))
-        distances.append(step_info["distance"])
-        done, steps = terminated or truncated, steps + 1
-    return EpisodeResult(
-        seed=seed, task=info["task"], object=info["object"],
-        success=bool(step_info["is_success"]), handover_time=step_info["handover_time"],
-        final_distance=float(step_info["distance"]), min_distance=float(np.min(distances)),
-        recognised=tuple(recognised), steps=steps, options=dict(options))
-
-
-def summarize(results: list[EpisodeResult]) -> dict[str, float]:
-    """Success rate, mean handover time (s, successes only), median final distance (m),
-    and the fraction of episodes whose final recognised task is the true one."""
-    if not results:
-        raise ValueError("results: expected at least one episode, got none")
-    times = [r.handover_time for r in results if r.success]
-    return {
-        "n_episodes": float(len(results)),
-        "success_rate": float(np.mean([r.success for r in results])),
-        "handover_time_s": float(np.mean(times)) if times else float("nan"),
-        "final_distance_m": float(np.median([r.final_distance for r in results])),
-        "recognition_rate": float(np.mean([r.final_task == r.task for r in results])),
-    }
-
-
-# ------------------------------------------------------------------ internals
 def _check_observe(observe) -> tuple[str, ...] | None:
     """``observe`` as a tuple of names among the environments' modalities (None stays None)."""
-    from sandbox.policies import ENV_MODALITIES
+    from sandbox.episodes.policies import ENV_MODALITIES
 
     if observe is None:
         return None
@@ -225,7 +247,7 @@ def _policy_factory(policy, dow_t: float, ratio: float, observe) -> Callable:
     """``(model, held-out demo or None) -> policy``."""
     if callable(policy):
         return lambda model, demo: policy(model)
-    from sandbox.policies import IProMPPolicy, RecordedRobotPolicy, StaticPolicy
+    from sandbox.episodes.policies import IProMPPolicy, RecordedRobotPolicy, StaticPolicy
 
     if policy == "dynamic":
         return lambda model, demo: IProMPPolicy(model, dow_t=dow_t, observe=observe)
@@ -238,10 +260,12 @@ def _episodes(scenario, n, seed, data, model, options, observe):
     """(seed, model, reset options, held-out demo or None) of every episode."""
     if scenario == "recorded":
         return _recorded_episodes(Path(data), n, seed, options, observe)
-    from sandbox.policies import fit_family_model
+    from sandbox.episodes.policies import fit_family_model
 
     if model is None:
-        model = fit_family_model(SCENARIOS[scenario][1], observe=observe or ("hand",))
+        family = SCENARIOS[scenario][1]
+        assert family is not None  # only the recorded scenario has no family
+        model = fit_family_model(family, observe=observe or ("hand",))
     out = []
     for i in range(n):
         opts = dict(options)
@@ -268,7 +292,9 @@ def _recorded_episodes(root: Path, n, seed, options, observe):
     out = []
     for i, k in enumerate(picks):
         held_out = demos[int(k)]
-        model = IProMP().fit([d for j, d in enumerate(demos) if j != int(k)])
+        # Any: a Demonstration is frozen, the core's DemonstrationLike declares plain attributes
+        others: list[Any] = [d for j, d in enumerate(demos) if j != int(k)]
+        model = IProMP().fit(others)
         opts = {**options, "source": str(root), "task": held_out.task,
                 "trial": Path(held_out.source).name}
         out.append((seed + i, model, opts, held_out))

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 import sandbox.envs  # noqa: F401  (registers the environments)
-from sandbox.policies import IProMPPolicy, StaticPolicy, fit_family_model
-from sandbox.recording import Belief, EpisodeRecord, record_episode
+from sandbox.episodes.policies import IProMPPolicy, StaticPolicy, fit_family_model
+from sandbox.episodes.recording import Belief, EpisodeRecord, record_episode
 
 SWITCH = {"task": "up", "switch_to": "right", "switch_phase": 0.55}
 

@@ -1,6 +1,6 @@
 """Demonstrations recorded with the keyboard teleop: ``play --record-demos DIR --task NAME``.
 
-A person drives the hand (:mod:`sandbox.teleop`) to a handover place of
+A person drives the hand (:mod:`sandbox.episodes.keyboard`) to a handover place of
 their choosing; each episode becomes one demonstration in the recorded CSV
 layout, ``DIR/NAME/NNN.csv`` (:mod:`sandbox.data.writer`), so that ``fit
 --data DIR`` learns the new tasks like the recorded ones.
@@ -41,6 +41,7 @@ from numpy.typing import ArrayLike
 from sandbox.data.spec import ROBOT_COLUMNS
 from sandbox.data.synthetic.robot import kinematics, robot_meeting
 from sandbox.data.writer import RIGHT_ARM_COLUMNS, next_trial_path, write_trial
+from sandbox.episodes.policy import Beliefs
 from sandbox.validation import FloatArray, check_array, check_positive, check_times
 
 #: Right-arm posture of the recordings and of the environment (rad), ``right_s0 ... right_w2``.
@@ -81,10 +82,8 @@ def teleop_trial(times: ArrayLike, hand: ArrayLike, seen: ArrayLike, *, lead_s: 
         The true hand and the tracker's measurement of it (m), Baxter's base frame.
     lead_s, tail_s : float
         Time kept before the hand starts moving and after it stops (s).
-    min_reach_m : float
-        Shortest distance (m) from the start to where the hand stops.
-    min_robot_s : float
-        Shortest robot motion (s).
+    min_reach_m, min_robot_s : float
+        Shortest distance (m) from the start to where the hand stops; shortest robot motion (s).
     ik_tol : float
         Required gripper position error (m) at the meeting point.
 
@@ -153,7 +152,8 @@ class DemoRecorder:
         self.folder = Path(root) / check_task_name(task)
         if self.folder.exists() and not self.folder.is_dir():
             raise ValueError(f"--record-demos: expected a folder for {self.folder}, got a file")
-        self.task, self.options, self.saved = task, options, []
+        self.task, self.options = task, options
+        self.saved: list[Path] = []
         self._rows: list[tuple[float, FloatArray, FloatArray]] = []
 
     def start(self) -> None:
@@ -211,6 +211,15 @@ class HeldRobot:
 
     def __getattr__(self, name: str):
         return getattr(self.policy, name)
+
+    def reset(self) -> None:
+        """Reset the wrapped policy."""
+        self.policy.reset()
+
+    @property
+    def beliefs(self) -> Beliefs:
+        """The wrapped policy's beliefs (its predictor runs on)."""
+        return self.policy.beliefs
 
     def __call__(self, obs) -> FloatArray:
         """The held action (8,): joint targets (rad), gripper open (-1)."""

@@ -1,6 +1,6 @@
 """Measure the robot model: load time, FK against the recordings, IK accuracy and speed.
 
-Run ``python -m sandbox.robot.benchmark [--data DIR] [--targets N]``; with
+Run ``python -m sandbox.bench.robot [--data DIR] [--targets N]``; with
 ``OPENBLAS_NUM_THREADS=1`` for stable timings. Prints one line per figure.
 """
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from sandbox.bench.robot import bench_ik, front_targets, recorded_fk_offsets
 from sandbox.robot import ARM_JOINTS, BaxterKinematics
-from sandbox.robot.benchmark import bench_ik, front_targets, recorded_fk_offsets
 
 
 def test_front_targets_are_reachable_and_in_front():

@@ -23,7 +23,11 @@ From the plan to an action, at control period ``dt``:
 
 The predictor expects about 20 observations per second (the paper keeps one
 of every 5 samples at ~100 Hz): the policy keeps one of every
-``round(control_hz / 20)`` observations (2 at 50 Hz: 25 per second).
+``round(control_hz / 20)`` observations with a new tracker frame (2 at 50 Hz:
+15 per second of the tracker's 30 Hz frames). Each observation is fed as the
+tracker gave it (:func:`tracker_row`): stamped with the frame's own time
+(``hand_time``), NaN at a step without a new frame (``hand_valid`` 0), which the
+predictor skips.
 
 :func:`fit_family_model` fits the model on seeded synthetic demonstrations of
 an environment's family, cached in-process.
@@ -33,11 +37,13 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from sandbox.core import DynamicPredictor, IProMP, StaticPredictor
+from sandbox.episodes.policy import Beliefs
 from sandbox.robot import TIP_LINK, joint_speed_limits
 from sandbox.validation import check_array, check_positive
 
@@ -97,6 +103,26 @@ def modality_values(obs: Mapping[str, FloatArray], names, *,
     return out
 
 
+def tracker_row(obs: Mapping[str, FloatArray], names, *,
+                required: bool = True) -> tuple[float, dict[str, FloatArray]]:
+    """What a tracker stream gives for an observation: the sample's time (s) and values.
+
+    The time is ``obs["hand_time"]``, the tracker frame's own time (the step's
+    ``time`` for an observation without it, the v0 ids). Where ``hand_valid`` is 0
+    the tracker has sent no new frame since the last step: every modality is NaN
+    (the arm and the replayed EMG come with the hand's frames), so the predictor
+    skips the row instead of taking a stale sample as new. Otherwise the values are
+    :func:`modality_values` (``names``, ``required``).
+    """
+    stamp = obs.get("hand_time", obs["time"])
+    t = float(np.asarray(stamp, dtype=float).reshape(-1)[0])
+    values = modality_values(obs, names, required=required)
+    flag = obs.get("hand_valid")
+    if flag is not None and not np.asarray(flag).all():
+        values = {name: np.full(v.shape, np.nan) for name, v in values.items()}
+    return t, values
+
+
 def fit_family_model(family: str = "diverging", n_per_task: int = 20, seed: int = 0,
                      n_basis: int | None = None, observe=("hand",)) -> IProMP:
     """An IProMP fitted on synthetic demonstrations of ``family`` (cached per arguments).
@@ -131,13 +157,17 @@ def _fit_family_model(family: str, n_per_task: int, seed: int, n_basis: int | No
                       observe: tuple[str, ...]) -> IProMP:
     from sandbox.data.synthetic import make_dataset
 
-    demos = make_dataset(family, n_per_task, np.random.default_rng(seed), observe=observe)
+    # Any: a Demonstration is frozen, the core's DemonstrationLike declares plain attributes
+    demos: list[Any] = make_dataset(family, n_per_task, np.random.default_rng(seed),
+                                    observe=observe)
     model = IProMP() if n_basis is None else IProMP(n_basis=n_basis)
     return model.fit(demos)
 
 
 class _Steering:
     """From a goal pose to an action: the speed-limited target and the gripper rule."""
+
+    _target: FloatArray | None
 
     def _setup_steering(self, control_hz: float, close_radius: float, max_velocity) -> None:
         from sandbox.robot import BaxterKinematics
@@ -189,6 +219,9 @@ class IProMPPolicy(_Steering):
     Attributes
     ----------
     predictor : DynamicPredictor
+        Internal: runners read :attr:`beliefs`.
+    beliefs : Beliefs
+        What the predictor believes now (read-only).
     history : list of (float, str)
         The recognised task after each observation: ``(time, task)``.
 
@@ -211,8 +244,9 @@ class IProMPPolicy(_Steering):
                  close_radius: float = 0.045, max_velocity=None, observe=None,
                  **options) -> None:
         self._setup(model, observe, control_hz, close_radius, max_velocity)
-        self.predictor = DynamicPredictor(model, dow_t=dow_t, subsample=self.subsample,
-                                          observe=self.observe, **{**CLOSED_LOOP, **options})
+        self.predictor: DynamicPredictor | StaticPredictor = DynamicPredictor(
+            model, dow_t=dow_t, subsample=self.subsample, observe=self.observe,
+            **{**CLOSED_LOOP, **options})
         self.reset()
 
     def _setup(self, model, observe, control_hz: float, close_radius: float,
@@ -224,7 +258,7 @@ class IProMPPolicy(_Steering):
     def reset(self) -> None:
         """Forget the episode (called automatically when the observed time goes back)."""
         self.predictor.reset()
-        self._target: FloatArray | None = None
+        self._target = None
         self._last_time = -np.inf
         self.history: list[tuple[float, str]] = []
 
@@ -235,10 +269,15 @@ class IProMPPolicy(_Steering):
             self.reset()
         self._last_time = t
         q = check_array(obs["q"], "obs['q']", 1, shape=(7,))
-        self.predictor.observe(t, modality_values(obs, self.observe, required=self._required))
+        self.predictor.observe(*tracker_row(obs, self.observe, required=self._required))
         self.history.append((t, self.predictor.task))
         mean, _ = self.predictor.command(t + self.dt)
         return self._act(q, mean, obs)
+
+    @property
+    def beliefs(self) -> Beliefs:
+        """What the predictor believes now (:class:`~sandbox.episodes.policy.Beliefs`)."""
+        return Beliefs.of_predictor(self.predictor)
 
     @property
     def task(self) -> str:
@@ -340,12 +379,17 @@ class RecordedRobotPolicy(_Steering):
 
     def reset(self) -> None:
         """Start the trial again."""
-        self._target: FloatArray | None = None
+        self._target = None
 
     @property
     def task_posterior(self) -> dict[str, float]:
         """Certain of the recorded task."""
         return {self.task: 1.0}
+
+    @property
+    def beliefs(self) -> Beliefs:
+        """Certain of the recorded task; no predictor (no plan, no updates)."""
+        return Beliefs(task=self.task, tasks=(self.task,), task_posterior={self.task: 1.0})
 
     def __call__(self, obs: Mapping[str, FloatArray]) -> FloatArray:
         """The action (8,): the recorded pose at ``t + dt`` (speed-limited), gripper command."""

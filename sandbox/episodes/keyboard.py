@@ -20,7 +20,8 @@ h       this help
 q       quit (also Ctrl-C)
 ======  ============================================================================
 
-:func:`run_teleop` runs the loop: read the keys, step the environment (its
+:func:`run_teleop` runs the loop (one :func:`~sandbox.episodes.rollout.rollout`
+per episode): read the keys, step the environment (its
 ``"human"`` render mode shows it live, paced to real time), draw the
 predictor's overlays and panel, and print a status line at every predictor
 update (:func:`status_line`): the time, the hand (true and as the tracker saw
@@ -29,7 +30,7 @@ robot's predicted meeting point (where its plan ends), so that the hand can
 be aimed without looking at the browser; "unsure / unknown motion" when the
 predictor says the motion is unlike its training demos.
 
-With a recorder (:class:`sandbox.demos_recording.DemoRecorder`, ``play
+With a recorder (:class:`sandbox.episodes.demos_recording.DemoRecorder`, ``play
 --record-demos DIR --task NAME``) every episode is also saved as a
 demonstration when it ends: ``n``, ``q``, the handover or the time limit.
 """
@@ -42,9 +43,12 @@ import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
+from sandbox.episodes.policy import Policy, beliefs_of
+from sandbox.episodes.rollout import Step, rollout
 from sandbox.robot import TIP_LINK
 
 #: Key -> (axis, direction) of the hand motion.
@@ -154,7 +158,7 @@ class Keyboard:
     def __init__(self, fd: int | None = None) -> None:
         self.fd = sys.stdin.fileno() if fd is None else fd
         self.closed = False
-        self._saved = None
+        self._saved: list[Any] | None = None
 
     def __enter__(self) -> Keyboard:
         if os.isatty(self.fd):
@@ -186,7 +190,7 @@ class Keyboard:
         return split_keys(data.decode("utf-8", "replace"))
 
 
-def status_line(t: float, hand, seen, predictor, *, gripper=None, meeting=None) -> str:
+def status_line(t: float, hand, seen, beliefs, *, gripper=None, meeting=None) -> str:
     """``t=... hand=(x,y,z) seen=(x,y,z) m task=... p[...] T=...s gripper-hand=...m
     meet=(x,y,z)`` for the terminal.
 
@@ -196,24 +200,25 @@ def status_line(t: float, hand, seen, predictor, *, gripper=None, meeting=None) 
         Time (s).
     hand, seen : array_like, shape (3,)
         The true hand position and the tracker's measurement the policy received (m).
-    predictor : DynamicPredictor
-        Its task, posterior and duration estimate are shown, and "unsure /
+    beliefs : Beliefs
+        A policy's :class:`~sandbox.episodes.policy.Beliefs` (or a predictor):
+        its task, posterior and duration estimate are shown, and "unsure /
         unknown motion" when its ``familiar`` (if it has one) is False.
     gripper : array_like, shape (3,), optional
         The gripper's fingertip (m): adds its distance to the hand (m).
     meeting : array_like, shape (3,), optional
         The robot's predicted meeting point (m), e.g. :func:`meeting_point`.
     """
-    post = predictor.task_posterior
+    post = beliefs.task_posterior
     probs = " ".join(f"{k}={v:.2f}" for k, v in post.items())
     hand = np.asarray(hand, dtype=float)
-    line = (f"t={t:5.2f}s hand={_xyz(hand)} seen={_xyz(seen)} m task={predictor.task} "
-            f"p[{probs}] T={predictor.duration:.2f}s")
+    line = (f"t={t:5.2f}s hand={_xyz(hand)} seen={_xyz(seen)} m task={beliefs.task} "
+            f"p[{probs}] T={beliefs.duration:.2f}s")
     if gripper is not None:
         line += f" gripper-hand={np.linalg.norm(np.asarray(gripper, dtype=float) - hand):.3f}m"
     if meeting is not None:
         line += f" meet={_xyz(meeting)}"
-    if getattr(predictor, "familiar", None) is False:
+    if getattr(beliefs, "familiar", None) is False:
         line += f" {UNSURE}"
     return line
 
@@ -223,12 +228,14 @@ def _xyz(p) -> str:
     return f"({x:+.3f},{y:+.3f},{z:+.3f})"
 
 
-def meeting_point(predictor, kinematics, link: str = TIP_LINK) -> np.ndarray:
+def meeting_point(beliefs, kinematics, link: str = TIP_LINK) -> np.ndarray:
     """Where the robot's current plan ends (3,) m: the fingertip at its last mean joints.
 
-    ``kinematics`` is a :class:`~sandbox.robot.BaxterKinematics` (``fk(q, link=...)``).
+    ``beliefs`` is a policy's :class:`~sandbox.episodes.policy.Beliefs` (or a
+    predictor: anything with ``plan()``); ``kinematics`` is a
+    :class:`~sandbox.robot.BaxterKinematics` (``fk(q, link=...)``).
     """
-    _, means, _ = predictor.plan()
+    _, means, _ = beliefs.plan()
     return kinematics.fk(means[-1], link=link)
 
 
@@ -238,16 +245,18 @@ def _outcome(info: dict, t: float) -> str:
     return f"no handover by {t:.2f} s (time limit)"
 
 
-def run_teleop(env, policy, keyboard: Keyboard, *, seed: int = 0, running: bool = False,
-               out: Callable[[str], None] = print, recorder=None) -> int:
+def run_teleop(env: Any, policy: Policy, keyboard: Keyboard, *, seed: int = 0,
+               running: bool = False, out: Callable[[str], None] = print,
+               recorder: Any = None) -> int:
     """The teleop loop; returns the number of episodes played.
 
     Parameters
     ----------
     env : gymnasium.Env
         A handover environment made with ``render_mode="human"`` (its viewer is used).
-    policy : IProMPPolicy
-        Drives the robot; its predictor's overlays are drawn in the viewer.
+    policy : Policy
+        Drives the robot; its beliefs are drawn in the viewer (overlays, panel)
+        and printed on the status line.
     keyboard : Keyboard
         Where keys come from.
     seed : int
@@ -260,52 +269,105 @@ def run_teleop(env, policy, keyboard: Keyboard, *, seed: int = 0, running: bool 
     recorder : DemoRecorder, optional
         Saves each episode as a demonstration when it ends (and says where).
 
-    The loop ends on ``q``, or when the input is closed and the episode is over.
+    One :func:`~sandbox.episodes.rollout.rollout` per episode: the keys are read before
+    each step (waited for while the clock is stopped); ``n`` and ``q`` end it. The loop
+    ends on ``q``, or when the input is closed and the episode is over.
     """
-    state = TeleopState(running=running)
-    loop = _Loop(env, policy, state, seed, out, recorder)
+    loop = _Loop(env, policy, TeleopState(running=running), keyboard, seed, out, recorder)
     while True:
-        for key in keyboard.read(0.0 if state.running and not loop.over else 0.05):
-            if loop.key(key) == "quit":
-                loop.save()
-                return loop.episodes
-        if keyboard.closed and not state.running and not loop.over:
-            state.running = True  # no more keys: play the episode out
-            loop.viewer.restart_pacing()
-        if loop.over and keyboard.closed:
+        last = rollout(env, policy, seed=seed + loop.episodes, options={"source": "teleop"},
+                       on_reset=loop.started, on_step=loop.stepped, until=loop.wait)
+        ending = loop.ending if not last.done else loop.after_episode()
+        loop.save()
+        if ending != "reset":
             return loop.episodes
-        if state.running and not loop.over:
-            loop.step()
 
 
 class _Loop:
     """The state of :func:`run_teleop` between keys and steps."""
 
-    def __init__(self, env, policy, state: TeleopState, seed: int, out, recorder=None) -> None:
+    def __init__(self, env, policy, state: TeleopState, keyboard: Keyboard, seed: int, out,
+                 recorder=None) -> None:
         from sandbox.robot import BaxterKinematics
 
         self.env, self.policy, self.state, self.seed, self.out = env, policy, state, seed, out
-        self.recorder = recorder
-        self.kinematics = BaxterKinematics()
-        self.episodes = 0
-        self.new_episode()
-        self.viewer = env.unwrapped.viewer
-        self.overlay = self.viewer.add_overlay(
-            policy.predictor.model.tasks, rng=np.random.default_rng(seed),
-            title="teleop: keys in the terminal (h: help)")
-        out("keys:\n" + HELP_TEXT)
+        self.keyboard, self.recorder = keyboard, recorder
+        self.kinematics, self.episodes = BaxterKinematics(), 0
+        self.overlay: Any = None
+        self._pending: list[str] = []
 
-    def new_episode(self) -> None:
-        self.obs, _ = self.env.reset(seed=self.seed + self.episodes, options={"source": "teleop"})
-        self.policy.reset()
+    def started(self, step: Step) -> None:
+        """A new episode (the rollout's reset): the hand at the start, the viewer's overlay."""
+        self.obs = step.obs
         self.state.direction[:] = 0.0
         self.episodes += 1
-        self.over, self.n_updates, self.frame = False, 0, -1
+        self.n_updates, self.frame, self.ending = 0, -1, ""
         if self.recorder is not None:
             self.recorder.start()
             self._record(0.0)
         self.out(f"episode {self.episodes}: the hand is at the start; "
                  + ("the clock runs" if self.state.running else "press space to start the clock"))
+        if self.overlay is None:
+            self.viewer = self.env.unwrapped.viewer
+            self.overlay = self.viewer.add_overlay(
+                beliefs_of(self.policy).tasks, rng=np.random.default_rng(self.seed),
+                title="teleop: keys in the terminal (h: help)")
+            self.out("keys:\n" + HELP_TEXT)
+
+    def wait(self, step: Step) -> bool:
+        """Before a step: apply the keys, wait while the clock is stopped; True on ``n``/``q``."""
+        while True:
+            keys = self._read(0.0 if self.state.running else 0.05)
+            for i, key in enumerate(keys):
+                action = self.key(key)
+                if action in ("quit", "reset"):
+                    self.ending, self._pending = action, keys[i + 1:]
+                    return True
+            if self.keyboard.closed and not self.state.running:
+                self.state.running = True  # no more keys: play the episode out
+                self.viewer.restart_pacing()
+            if self.state.running:
+                self.env.unwrapped.motion.set_velocity(self.state.velocity)
+                return False
+
+    def stepped(self, step: Step) -> None:
+        """After a step: record the hand, draw, report."""
+        env, beliefs = self.env.unwrapped, beliefs_of(self.policy)
+        self.obs, t = step.obs, step.time
+        self._record(t)
+        if int(round(t * self.viewer.scene.timeline.fps)) != self.frame:
+            self.frame = int(round(t * self.viewer.scene.timeline.fps))
+            self.overlay.show(beliefs, t, executed_q=self.obs["q"], truth=env.human_intent(t))
+        if beliefs.n_updates > self.n_updates:
+            self.n_updates = beliefs.n_updates
+            gripper = self.kinematics.fk(self.obs["q"], link=TIP_LINK)
+            meeting = meeting_point(beliefs, self.kinematics)
+            self.out(status_line(t, env.motion.position(t), self.obs["hand"], beliefs,
+                                 gripper=gripper, meeting=meeting))
+        if step.done:
+            info = step.info
+            self.out(f"episode over: {_outcome(info, t)}, gripper {100 * info['distance']:.1f} cm "
+                     f"from the object, task {beliefs.task}; n: new episode, q: quit")
+            self.save()
+
+    def after_episode(self) -> str:
+        """Keys after the episode ended, until ``n`` (``"reset"``) or ``q`` / closed input."""
+        while True:
+            keys = self._read(0.05)
+            for i, key in enumerate(keys):
+                action = self.key(key)
+                if action in ("quit", "reset"):
+                    self._pending = keys[i + 1:]
+                    return action
+            if self.keyboard.closed:
+                return "quit"
+
+    def _read(self, timeout: float) -> list[str]:
+        """Keys left from the last chunk (after an ``n``), else the keyboard's."""
+        if self._pending:
+            keys, self._pending = self._pending, []
+            return keys
+        return self.keyboard.read(timeout)
 
     def key(self, key: str) -> str | None:
         """Apply a key; return its action."""
@@ -314,7 +376,6 @@ class _Loop:
             self.out("keys:\n" + HELP_TEXT)
         elif action == "reset":
             self.save()
-            self.new_episode()
         elif action == "move":
             v = self.state.velocity
             self.out(f"> {key}: hand velocity ({v[0]:+.2f}, {v[1]:+.2f}, {v[2]:+.2f}) m/s")
@@ -326,28 +387,6 @@ class _Loop:
             self.out(f"> slow motion {'on' if self.state.slow else 'off'}: the clock runs at "
                      f"x{self.state.rate:g} real time")
         return action
-
-    def step(self) -> None:
-        """One control step: move the hand, act, draw, report."""
-        env, predictor = self.env.unwrapped, self.policy.predictor
-        env.motion.set_velocity(self.state.velocity)
-        self.obs, _, terminated, truncated, info = self.env.step(self.policy(self.obs))
-        t = float(self.obs["time"][0])
-        self._record(t)
-        if int(round(t * self.viewer.scene.timeline.fps)) != self.frame:
-            self.frame = int(round(t * self.viewer.scene.timeline.fps))
-            self.overlay.show(predictor, t, executed_q=self.obs["q"], truth=env.human_intent(t))
-        if len(predictor.updates) > self.n_updates:
-            self.n_updates = len(predictor.updates)
-            gripper = self.kinematics.fk(self.obs["q"], link=TIP_LINK)
-            meeting = meeting_point(predictor, self.kinematics)
-            self.out(status_line(t, env.motion.position(t), self.obs["hand"], predictor,
-                                 gripper=gripper, meeting=meeting))
-        if terminated or truncated:
-            self.over = True
-            self.out(f"episode over: {_outcome(info, t)}, gripper {100 * info['distance']:.1f} cm "
-                     f"from the object, task {self.policy.task}; n: new episode, q: quit")
-            self.save()
 
     def _record(self, t: float) -> None:
         """Give the recorder the hand at time ``t`` (s): true and as the tracker saw it."""

@@ -1,0 +1,102 @@
+"""What the handover environment observes: its observation space and each observation.
+
+The tracker delivers skeleton frames more slowly than the environment steps
+(30 Hz frames, 50 Hz control): :class:`Observer` gives the hand of a frame
+once, stamped with the frame's own time (``hand_time``); at a step where the
+tracker has no new frame, ``hand`` holds the last frame and ``hand_valid`` is 0,
+so a policy sees what a real tracker stream gives (a missing row) instead of a
+stale sample stamped with the step time. See
+:class:`~sandbox.envs.handover.BaxterHandoverEnv` for every entry.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+from numpy.typing import NDArray
+
+from sandbox.envs.human import BODY_DIMS
+
+FloatArray = NDArray[np.float64]
+#: Upper bound of the observed EMG envelope (raw Myo units: hundreds in the recordings).
+EMG_MAX = 1e4
+#: Upper bound of the time entries (s).
+TIME_MAX = 1e4
+
+
+def observation_space(robot: Any, observe_body: bool) -> spaces.Dict:
+    """The ``Dict`` space of :class:`~sandbox.envs.handover.BaxterHandoverEnv` (see there).
+
+    ``robot`` gives the joint limits (``lower``, ``upper``, rad) and speed limits
+    (``max_velocity``, rad/s); ``observe_body`` adds the v1 entries.
+    """
+    speed = 4.0 * robot.max_velocity
+    return spaces.Dict({
+        "hand": spaces.Box(-3.0, 3.0, (3,), np.float64),
+        "object": spaces.Box(-3.0, 3.0, (3,), np.float64),
+        "q": spaces.Box(robot.lower, robot.upper, dtype=np.float64),
+        "dq": spaces.Box(-speed, speed, dtype=np.float64),
+        "gripper": spaces.Box(0.0, 1.0, (1,), np.float64),
+        "time": spaces.Box(0.0, TIME_MAX, (1,), np.float64),
+        **(_v1_space() if observe_body else {}),
+    })
+
+
+def _v1_space() -> dict[str, spaces.Space]:
+    return {"hand_valid": spaces.MultiBinary(1),
+            "hand_time": spaces.Box(0.0, TIME_MAX, (1,), np.float64),
+            "arm": spaces.Box(-3.0, 3.0, (BODY_DIMS["arm"],), np.float64),
+            "arm_valid": spaces.MultiBinary(1),
+            "emg": spaces.Box(0.0, EMG_MAX, (BODY_DIMS["emg"],), np.float64),
+            "emg_valid": spaces.MultiBinary(1)}
+
+
+class Observer:
+    """Builds the observations of one environment; remembers the hand frame last given.
+
+    Parameters
+    ----------
+    space : gymnasium.spaces.Dict
+        The environment's observation space (values are clipped to it).
+    observe_body : bool
+        Add the v1 entries (``hand_valid``, ``hand_time``, ``arm``, ``emg`` and flags).
+    """
+
+    def __init__(self, space: spaces.Dict, observe_body: bool) -> None:
+        self.space, self.observe_body = space, observe_body
+        self.reset()
+
+    def reset(self) -> None:
+        """A new episode: its first observation's hand frame is new."""
+        self._given: float | None = None
+
+    def __call__(self, motion: Any, t: float, state: dict[str, FloatArray]) -> dict:
+        """The observation at episode time ``t`` (s) of ``motion`` and the robot ``state``
+        (``object``, ``q``, ``dq``, ``gripper``)."""
+        obs = {"hand": motion.measurement(t), **state, "time": np.array([t])}
+        obs = {k: np.clip(v, self.space[k].low, self.space[k].high) for k, v in obs.items()}
+        if not self.observe_body:
+            return obs
+        return {**obs, **self._hand_frame(motion, t), **self._body(motion, t)}
+
+    def _hand_frame(self, motion: Any, t: float) -> dict[str, np.ndarray]:
+        """``hand_valid`` (1 for a frame not given before) and ``hand_time`` (the frame's
+        time, s; a frame shown before its time, the motion's first valid one, at ``t``)."""
+        frame = float(motion.frame_time(t))
+        new = frame != self._given
+        self._given = frame
+        return {"hand_valid": np.array([new], dtype=np.int8),
+                "hand_time": np.clip(np.array([min(frame, float(t))]), 0.0, TIME_MAX)}
+
+    def _body(self, motion: Any, t: float) -> dict[str, np.ndarray]:
+        """``arm``/``emg`` (0 where unmeasured) and their ``*_valid`` flags (int8 (1,))."""
+        out: dict[str, np.ndarray] = {}
+        for name in BODY_DIMS:
+            value = motion.body_measurement(name, t)
+            valid = bool(np.isfinite(value).all())
+            space = self.space[name]
+            out[name] = np.clip(value, space.low, space.high) if valid else np.zeros_like(value)
+            out[f"{name}_valid"] = np.array([valid], dtype=np.int8)
+        return out
