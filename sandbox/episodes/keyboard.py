@@ -20,15 +20,14 @@ h       this help
 q       quit (also Ctrl-C)
 ======  ============================================================================
 
-:func:`run_teleop` runs the loop (one :func:`~sandbox.episodes.rollout.rollout`
-per episode): read the keys, step the environment (its
-``"human"`` render mode shows it live, paced to real time), draw the
+:func:`run_teleop` runs the loop (one :func:`~sandbox.episodes.rollout.rollout` per
+episode): read the keys, step the environment (its ``"human"`` render mode
+shows it live, paced to real time), draw the
 predictor's overlays and panel, and print a status line at every predictor
-update (:func:`status_line`): the time, the hand (true and as the tracker saw
-it), the recognised task and posterior, the gripper-to-hand distance and the
-robot's predicted meeting point (where its plan ends), so that the hand can
-be aimed without looking at the browser; "unsure / unknown motion" when the
-predictor says the motion is unlike its training demos.
+update (:func:`status_line`): the time, the hand (true and as the tracker saw it),
+the recognised task and posterior, the gripper-to-hand distance and the robot's
+predicted meeting point (where its plan ends), to aim the hand without looking at
+the browser; "unsure / unknown motion" when the motion is unlike the training demos.
 
 With a recorder (:class:`sandbox.episodes.demos_recording.DemoRecorder`, ``play
 --record-demos DIR --task NAME``) every episode is also saved as a
