@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 
-import gymnasium as gym
 import numpy as np
 import pytest
 
@@ -13,13 +12,6 @@ from sandbox.episodes.policies import IProMPPolicy, StaticPolicy, fit_family_mod
 from sandbox.episodes.recording import Belief, EpisodeRecord, record_episode
 
 SWITCH = {"task": "up", "switch_to": "right", "switch_phase": 0.55}
-
-
-@pytest.fixture(scope="module")
-def env():
-    env = gym.make("sandbox/BaxterHandoverDiverging-v1")
-    yield env
-    env.close()
 
 
 @pytest.fixture(scope="module")

@@ -5,7 +5,6 @@ from __future__ import annotations
 import doctest
 import math
 
-import gymnasium as gym
 import numpy as np
 import pytest
 
@@ -16,13 +15,6 @@ from sandbox.episodes.policies import IProMPPolicy, RecordedRobotPolicy, fit_fam
 from sandbox.episodes.policy import Beliefs, Policy, beliefs_of
 from sandbox.episodes.rollout import Step, rollout
 from sandbox.robot import Q_HOME
-
-
-@pytest.fixture(scope="module")
-def env():
-    env = gym.make("sandbox/BaxterHandoverDiverging-v1")
-    yield env
-    env.close()
 
 
 @pytest.fixture(scope="module")
