@@ -31,6 +31,33 @@ import numpy as np
 from sandbox.bench import print_result
 
 
+def read_terminal(master: int, proc: subprocess.Popen, *, poll: float = 0.05,
+                  on_chunk=None, timeout: float | None = None) -> bytes:
+    """Everything written to the pseudo-terminal ``master`` until it closes, or
+    until ``proc`` has exited and nothing more comes within ``poll`` seconds.
+
+    ``on_chunk(bytes)`` sees each chunk as it arrives (e.g. to time the first one).
+    After ``timeout`` seconds (if given) it raises ``TimeoutError``.
+    """
+    out, deadline = b"", None if timeout is None else time.monotonic() + timeout
+    while True:
+        if deadline is not None and time.monotonic() > deadline:
+            raise TimeoutError(f"the terminal was still open after {timeout} s: {out[-300:]!r}")
+        if not select.select([master], [], [], poll)[0]:
+            if proc.poll() is not None:
+                return out
+            continue
+        try:
+            chunk = os.read(master, 65536)
+        except OSError:       # the other end closed (Linux reports EIO)
+            return out
+        if not chunk:
+            return out
+        if on_chunk is not None:
+            on_chunk(chunk)
+        out += chunk
+
+
 def run_once(data: str, cache_dir: str, workers: int, n_per_task: int | None = None) -> dict:
     """One ``evaluate`` of ``data``: wall, first-progress and leave-one-out times (s)."""
     with tempfile.TemporaryDirectory() as out:
@@ -43,28 +70,20 @@ def run_once(data: str, cache_dir: str, workers: int, n_per_task: int | None = N
         start = time.perf_counter()
         proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=slave, env=env)
         os.close(slave)
-        first, err = None, b""
-        while True:
-            if not select.select([master], [], [], 0.05)[0]:
-                if proc.poll() is not None:
-                    break
-                continue
-            try:
-                chunk = os.read(master, 65536)
-            except OSError:
-                break
-            if not chunk:
-                break
-            if first is None and chunk.strip():
-                first = time.perf_counter() - start
-            err += chunk
+        first: list[float] = []
+
+        def seen(chunk: bytes) -> None:
+            if not first and chunk.strip():
+                first.append(time.perf_counter() - start)
+
+        err = read_terminal(master, proc, on_chunk=seen)
         out_text = proc.communicate()[0].decode()
         wall = time.perf_counter() - start
         os.close(master)
     if proc.returncode != 0:
         raise RuntimeError(f"evaluate failed ({proc.returncode}): {err.decode()[-500:]}")
     found = re.search(r"(\d+) trials in ([0-9.]+) s", out_text)
-    return {"wall_s": wall, "first_progress_s": first,
+    return {"wall_s": wall, "first_progress_s": first[0] if first else None,
             "loocv_runtime_s": float(found.group(2)) if found else None,
             "trials": int(found.group(1)) if found else None}
 

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import os
 import pty
-import select
 import subprocess
 import sys
 from pathlib import Path
 
+from sandbox.bench.evaluate import read_terminal
 from sandbox.eval import progress
 
 REPO = Path(__file__).resolve().parents[2]
@@ -29,15 +29,7 @@ def _run(enabled: bool, terminal: bool) -> tuple[str, str]:
     master, slave = pty.openpty()
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=slave, env=env)
     os.close(slave)
-    err = b""
-    while select.select([master], [], [], 5)[0]:
-        try:
-            chunk = os.read(master, 65536)
-        except OSError:
-            break
-        if not chunk:
-            break
-        err += chunk
+    err = read_terminal(master, proc, timeout=120)
     out = proc.communicate(timeout=120)[0]
     os.close(master)
     return out.decode(), err.decode(errors="replace")
