@@ -245,6 +245,8 @@ def test_dask_gives_the_same_results_and_retries_a_dead_worker_once(trials, tmp_
     _sweep(Inline(), trials, POINTS, tmp_path / "inline")
     with DaskExecutor("local", workers=2) as ex:    # one task per configuration, as above
         assert ex.capacity() == ex.slots() == 2     # none waits on a worker that may die
+        trim = ex.client.run(os.environ.get, "MALLOC_TRIM_THRESHOLD_")
+        assert set(trim.values()) == {os.environ.get("MALLOC_TRIM_THRESHOLD_")}  # not Dask's
         summary = _sweep(ex, trials, POINTS + [ALWAYS], tmp_path / "dask", chunk_size=6)
     assert _deaths(always) == 2 and len(summary["ranked"]) == 2
     assert [f["label"] for f in summary["failed"]] == ["n_basis=15, blend_rate=20, dow_t=1"]
