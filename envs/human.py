@@ -105,14 +105,16 @@ class HumanMotion:
 
     def measurement(self, t: float) -> FloatArray:
         """Latest valid tracker sample (3,) m at or before ``t`` (s)."""
-        i = max(int(np.searchsorted(self.times, t, side="right")) - 1, 0)
-        return self.measured[self._last_valid[i]].copy()
+        return self.measured[self._last_valid[self._row(t)]].copy()
 
     def frame_time(self, t: float) -> float:
         """Time (s) of the tracker frame :meth:`measurement` gives at ``t`` (s): the first
         row that carried it (the tracker repeats a frame on the rows until the next one)."""
-        i = max(int(np.searchsorted(self.times, t, side="right")) - 1, 0)
-        return float(self.times[self._frame_row[i]])
+        return float(self.times[self._frame_row[self._row(t)]])
+
+    def _row(self, t: float) -> int:
+        """The last row at or before ``t`` (s) (the first row before the recording)."""
+        return max(int(np.searchsorted(self.times, t, side="right")) - 1, 0)
 
     def body_measurement(self, name: str, t: float) -> FloatArray:
         """Latest valid sample (dims,) of body modality ``name`` at or before ``t`` (s).
@@ -124,7 +126,7 @@ class HumanMotion:
             raise ValueError(f"name: expected one of {list(BODY_DIMS)}, got {name!r}")
         if name not in self.body:
             return np.full(BODY_DIMS[name], np.nan)
-        i = int(self._body_last[name][max(int(np.searchsorted(self.times, t, "right")) - 1, 0)])
+        i = int(self._body_last[name][self._row(t)])
         return self.body[name][i].copy() if i >= 0 else np.full(BODY_DIMS[name], np.nan)
 
     def scaled(self, speed: float) -> HumanMotion:

@@ -109,7 +109,7 @@ class TeleopMotion:
 
     def measurement(self, t: float) -> FloatArray:
         """The tracker's latest frame (3,) m at time ``t`` (s): a noisy sample of the hand."""
-        frame = int(math.floor(float(t) * self.frame_hz + 1e-9))
+        frame = self._frame(t)
         if frame not in self._frames:
             noise = self.rng.normal(0.0, self.noise_m, 3) if self.noise_m else np.zeros(3)
             self._frames = {frame: self.position(max(frame / self.frame_hz, self._anchor_t))
@@ -118,7 +118,11 @@ class TeleopMotion:
 
     def frame_time(self, t: float) -> float:
         """Time (s) of the tracker frame :meth:`measurement` gives at ``t`` (s)."""
-        return math.floor(float(t) * self.frame_hz + 1e-9) / self.frame_hz
+        return self._frame(t) / self.frame_hz
+
+    def _frame(self, t: float) -> int:
+        """Index of the tracker frame current at ``t`` (s)."""
+        return int(math.floor(float(t) * self.frame_hz + 1e-9))
 
     def body_measurement(self, name: str, t: float) -> FloatArray:
         """All NaN (dims,): the teleoperated hand has no tracked arm and no EMG."""
