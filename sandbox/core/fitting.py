@@ -135,35 +135,61 @@ def motion_end(times, robot, settle_tol: float | None, human=None,
     return int(min(max(max(ends), 1), last))
 
 
+def settle_index(robot, tol: float | None, start: int = 0) -> int:
+    """First sample at or after ``start`` from which the robot stays within ``tol`` (rad,
+    Euclidean norm over joints) of its final configuration; ``start`` for ``None``.
+
+    Parameters
+    ----------
+    robot : ndarray, shape (T, Q)
+    tol : float or None
+    start : int
+    """
+    if tol is None:
+        return int(start)
+    robot = np.asarray(robot, dtype=np.float64)
+    away = np.flatnonzero(np.linalg.norm(robot - robot[-1], axis=1) > tol)
+    return int(max(away[-1] + 1 if away.size else 0, start))
+
+
 def fit_one(task: str, times: FloatArray, human: FloatArray, robot: FloatArray,
-            basis: GaussianBasis, ridge: float) -> DemoFit:
-    """:class:`DemoFit` of one demonstration's motion (already cut at :func:`motion_end`).
+            basis: GaussianBasis, ridge: float, robot_end: int | None = None) -> DemoFit:
+    """:class:`DemoFit` of one demonstration's motion (cut at :func:`motion_end`).
 
     Parameters
     ----------
     task : str
     times : ndarray, shape (T,)
-        Seconds, increasing.
+        Seconds, increasing; the motion is ``times[:T]`` with ``T = len(human)``.
     human : ndarray, shape (T, P)
         Raw units, NaN where missing.
-    robot : ndarray, shape (T, Q)
-        Joint angles (rad).
+    robot : ndarray, shape (T_r, Q)
+        Joint angles (rad), ``T_r >= T`` samples from the start.
     basis : GaussianBasis
     ridge : float
         Relative ridge of the weight fit (eq. 2).
+    robot_end : int, optional
+        Last robot sample of the robot's part (default ``T - 1``, the motion's
+        end): the robot's samples up to it are time-normalised over the phase
+        [0, 1] on their own (:class:`~sandbox.core.model.IProMP`, ``robot_tol``),
+        so its end state is where it settled.
     """
+    T = len(human)
     P, n = human.shape[1], basis.n_basis
-    z = (times - times[0]) / (times[-1] - times[0])
-    wd = fit_weights(z, np.hstack([human, robot]), basis, ridge)   # eq. 2, 5
-    err = human - basis.evaluate(z) @ wd[:P].T
+    end_r = T - 1 if robot_end is None else int(robot_end)
+    z = (times[:T] - times[0]) / (times[T - 1] - times[0])
+    z_r = (times[:end_r + 1] - times[0]) / (times[end_r] - times[0])
+    wh = fit_weights(z, human, basis, ridge)                       # eq. 2, 5
+    wr = fit_weights(z_r, robot[:end_r + 1], basis, ridge)
+    err = human - basis.evaluate(z) @ wh.T
     ok = np.isfinite(err)
     clean = np.where(np.isfinite(human), human, 0.0)
     moments = np.stack([np.isfinite(human).sum(axis=0), clean.sum(axis=0),
                         (clean**2).sum(axis=0)]).astype(float)
-    return DemoFit(str(task), wd.ravel(),      # eq. 6: concatenated dim after dim
+    return DemoFit(str(task), np.vstack([wh, wr]).ravel(),   # eq. 6: concatenated dim after dim
                    (np.where(ok, err, 0.0) ** 2).sum(axis=0),
                    np.maximum(ok.sum(axis=0) - n, 1).astype(float),
-                   float(times[-1] - times[0]), moments)
+                   float(times[T - 1] - times[0]), moments)
 
 
 def by_task(fits: Sequence[DemoFit]) -> tuple[dict[str, list], dict[str, FloatArray]]:

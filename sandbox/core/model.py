@@ -77,6 +77,7 @@ from sandbox.core.fitting import (
     fit_one,
     motion_end,
     observation_noise,
+    settle_index,
     signal_scale,
     task_models,
     task_priors,
@@ -142,6 +143,15 @@ class IProMP:
     arrive_tol : float or None
         ... and the hand has come within this distance (m) of its farthest
         reach; None for both: whole recordings.
+    robot_tol : float or None
+        The robot's part of a demonstration ends where the robot settles: once it
+        stays within this distance (rad) of its final configuration, and not
+        before the motion's end (module docstring). None: at the motion's end.
+        A fit-time option, not stored in model files.
+    tail_noise : float
+        Observations past a motion's end are scored against its final state
+        with this many times the observation noise (module docstring); >= 1.
+        A prediction-time option, not stored in model files.
     min_alpha_std : float
         Lower bound of :math:`\\sigma_\\alpha`.
     ridge : float
@@ -184,6 +194,8 @@ class IProMP:
         noise_floors: Mapping[str, float] | None = None,
         settle_tol: float | None = 0.05,
         arrive_tol: float | None = 0.02,
+        robot_tol: float | None = 0.01,
+        tail_noise: float = 3.0,
         min_alpha_std: float = 0.02,
         ridge: float = 1e-8,
         priors: Mapping[str, float] | None = None,
@@ -203,6 +215,9 @@ class IProMP:
                            else check_positive(settle_tol, "settle_tol"))
         self.arrive_tol = (None if arrive_tol is None
                            else check_positive(arrive_tol, "arrive_tol"))
+        self.robot_tol = (None if robot_tol is None
+                          else check_positive(robot_tol, "robot_tol"))
+        self.tail_noise = check_number(tail_noise, "tail_noise", low=1.0, high=MAX_RELATIVE)
         self.min_alpha_std = check_positive(min_alpha_std, "min_alpha_std")
         self.ridge = check_positive(ridge, "ridge", allow_zero=True, high=MAX_RELATIVE)
         self.max_duration = check_positive(max_duration, "max_duration")
@@ -241,9 +256,9 @@ class IProMP:
         demonstration is checked as :meth:`fit` checks it (``ValueError``).
         """
         times, human, robot = check_demo(demo, "demo", self.max_duration)
-        end = self.motion_end(times, robot, human) + 1
-        return fit_one(str(demo.task), times[:end], human[:end], robot[:end], self.basis,
-                       self.ridge)
+        end = self.motion_end(times, robot, human)
+        return fit_one(str(demo.task), times, human[:end + 1], robot, self.basis, self.ridge,
+                       settle_index(robot, self.robot_tol, end))
 
     def motion_end(self, times, robot, human) -> int:
         """:func:`motion_end` with this model's tolerances."""

@@ -54,7 +54,8 @@ class EvalConfig:
     likelihood, window_mode, n_candidates, refine_steps, blend_rate, blend_delay, until_end,
     end_prob :
         predictor options (:class:`~sandbox.core.DynamicPredictor`).
-    n_basis, regularizer, noise_scale, noise_floor, signal_floor, noise_floors, settle_tol :
+    n_basis, regularizer, noise_scale, noise_floor, signal_floor, noise_floors, settle_tol,
+    arrive_tol, robot_tol, tail_noise :
         model options (:class:`~sandbox.core.IProMP`).
     observe : modalities the models observe (None: all the demonstrations carry).
     goal_tol : distance (m) for time-to-correct.
@@ -80,6 +81,8 @@ class EvalConfig:
     noise_floors: tuple[tuple[str, float], ...] = ()
     settle_tol: float | None = 0.05
     arrive_tol: float | None = 0.02
+    robot_tol: float | None = 0.01
+    tail_noise: float = 3.0
     observe: tuple[str, ...] | None = None
     goal_tol: float = 0.05
     curve: tuple[float, ...] = field(default=CURVE)
@@ -89,7 +92,8 @@ class EvalConfig:
         return IProMP(n_basis=self.n_basis, regularizer=self.regularizer,
                       noise_scale=self.noise_scale, noise_floor=self.noise_floor,
                       signal_floor=self.signal_floor, noise_floors=dict(self.noise_floors),
-                      settle_tol=self.settle_tol, arrive_tol=self.arrive_tol)
+                      settle_tol=self.settle_tol, arrive_tol=self.arrive_tol,
+                      robot_tol=self.robot_tol, tail_noise=self.tail_noise)
 
     def predictor_options(self) -> dict:
         return {"subsample": self.subsample, "likelihood": self.likelihood,

@@ -59,3 +59,36 @@ def test_errors():
         IProMP(regularizer=0)
     with pytest.raises(RuntimeError, match="not fitted"):
         _ = IProMP().tasks
+
+
+def _creeping(rng, n_per_task: int = 8, creep: float = 0.04):
+    """Demos whose robot arrives within ``creep`` rad of its final pose at the motion's end
+    and creeps the rest of the way while the hand waits (0.6 s of tail)."""
+    out = []
+    for d in synth.demos(rng, n_per_task=n_per_task):
+        t = np.r_[d.times, d.times[-1] + 0.01 * np.arange(1, 61)]
+        final = d.robot[-1] + creep / np.sqrt(7)
+        s = np.linspace(0, 1, 60)[:, None]
+        robot = np.vstack([d.robot, d.robot[-1] + (final - d.robot[-1]) * (3 * s**2 - 2 * s**3)])
+        human = np.vstack([d.human, np.repeat(d.human[-1:], 60, axis=0)])
+        out.append(synth.Demo(t, human, robot, d.task))
+    return out
+
+
+def test_the_robot_ends_where_it_settles():
+    """Known answer: with ``robot_tol`` the model's robot end state is the settled pose (the
+    demos' final configurations), while the motion's phase still ends when both partners
+    arrived; without it the end state falls short by most of the creep."""
+    demos = _creeping(np.random.default_rng(4))
+    settled = IProMP(n_basis=15, robot_tol=0.005).fit(demos)
+    short = IProMP(n_basis=15, robot_tol=None).fit(demos)
+    assert settled.task_models[0].nominal_duration == pytest.approx(
+        short.task_models[0].nominal_duration)              # the same motion end
+    for k, name in enumerate(settled.tasks):
+        final = np.mean([d.robot[-1] for d in demos if d.task == name], axis=0)
+        ends = []
+        for model in (settled, short):
+            w = model.task_models[k].weights
+            mean = w.mean.reshape(-1, 15) @ model.basis.evaluate(np.ones(1))[0]
+            ends.append(np.linalg.norm(mean[3:] - final))
+        assert ends[0] < 0.006 and ends[1] > 0.03
