@@ -133,7 +133,6 @@ class Scorer:
         self._raw = raw
         kappa = self.reg_h / self.sigma2                          # (K, P)
         self.groups = _make_groups(kappa, self.modality_dims, pad)
-        self.tail_noise = float(getattr(model, "tail_noise", 1.0))
 
     @property
     def kappas(self) -> list[float]:
@@ -152,21 +151,9 @@ class Scorer:
         """
         return self.basis.evaluate(np.minimum(times[None, :] / durations[:, None], 1.0))
 
-    def row_weights(self, times: FloatArray, durations: FloatArray) -> FloatArray:
-        """Whitening weight :math:`1/s_j` of every observation for every candidate, shape (C, s).
-
-        An observation past the candidate's end (t > T) is the motion's tail: its
-        noise is :math:`s = ` ``tail_noise`` times :math:`\\sigma_p` (the model's
-        option; 1 for observations within the motion). Dividing a row of
-        :math:`\\Psi` and of y by s turns it into a row of unit-scale noise; the
-        likelihood then gains :math:`-\\log s` per observed dim.
-        """
-        return np.where(times[None, :] > durations[:, None], 1.0 / self.tail_noise, 1.0)
-
-    def _group_parts(self, psi: FloatArray, values: FloatArray, weights: FloatArray):
-        """Per group: :func:`~sandbox.core.factor.b_part` of the rows observing it (whitened
-        by ``weights``, :meth:`row_weights`), the likelihood's constant per dim and, per
-        candidate, the tail's :math:`\\sum_j \\log s_j^2`."""
+    def _group_parts(self, psi: FloatArray, values: FloatArray):
+        """Per group: :func:`~sandbox.core.factor.b_part` of the rows observing it and the
+        likelihood's constant per dim."""
         present = self.present(values)
         out: list[tuple | None] = []
         for g in self.groups:
@@ -175,13 +162,11 @@ class Scorer:
             if s_g == 0:
                 out.append(None)
                 continue
-            w = weights[:, rows, None]                                     # (C, s_g, 1)
-            ps = psi[:, rows] * w
-            y = values[rows][:, g.dims][None] * w                         # (C, s_g, Pg)
+            ps = psi[:, rows]
+            y = values[rows][:, g.dims]
             ps_t = ps.transpose(0, 2, 1)
-            parts = b_part(ps_t @ ps, ps_t @ y, np.einsum("csp,csp->cp", y, y), g.kappa)
-            out.append((parts, s_g * (LOG_2PI + self.log_sigma2[g.dims]),
-                        -2.0 * np.log(w[..., 0]).sum(axis=1)))
+            parts = b_part(ps_t @ ps, ps_t @ y, np.einsum("sp,sp->p", y, y), g.kappa)
+            out.append((parts, s_g * (LOG_2PI + self.log_sigma2[g.dims])))
         return out
 
     # --------------------------------------------------------------- joint
@@ -201,8 +186,7 @@ class Scorer:
         spans : ndarray of int, shape (K, 2)
             Task k scores candidates ``durations[spans[k,0]:spans[k,1]]``.
         """
-        parts = self._group_parts(self.phases(times, durations), values,
-                                  self.row_weights(times, durations))
+        parts = self._group_parts(self.phases(times, durations), values)
         loglik, factors = [], []
         for k in range(self.K):
             a, b = int(spans[k, 0]), int(spans[k, 1])
@@ -232,8 +216,7 @@ class Scorer:
         factors : ndarray, shape (M, R+1, R+1)
             Augmented Cholesky factors (same layout as :meth:`joint`).
         """
-        parts = self._group_parts(self.phases(times, durations), values,
-                                  self.row_weights(times, durations))
+        parts = self._group_parts(self.phases(times, durations), values)
         Kt, eps, gamma_term, offset = self._stats(parts, np.asarray(tasks), slice(None),
                                                      len(tasks))
         return factor_scores(Kt, eps, gamma_term, offset)
@@ -253,7 +236,7 @@ class Scorer:
         for g, part in zip(self.groups, parts):
             if part is None:
                 continue
-            (ld_a, W, ab, gamma), const, tail = part
+            (ld_a, W, ab, gamma), const = part
             W = W[cand]
             if one:
                 Vf = g.blocks[tasks].reshape(-1, R1)                      # (N*Pg, R1)
@@ -267,7 +250,7 @@ class Scorer:
             x = (ab[cand] / np.sqrt(self.sigma2[g.dims])).reshape(M, -1)
             eps += x @ Vf if one else (x[:, None, :] @ Vf)[:, 0]
             gamma_term += (member * gamma[cand] / self.sigma2[g.dims]).sum(axis=1)
-            offset += member @ const + member.sum(axis=1) * (ld_a[cand] + tail[cand])
+            offset += member @ const + member.sum(axis=1) * ld_a[cand]
         return Kt, eps, gamma_term, offset
 
     # ------------------------------------------------------------ marginal
@@ -279,7 +262,6 @@ class Scorer:
         """
         psi = self.phases(times, durations)                              # (C, s, N)
         sq = (psi**2).sum(axis=2)                                        # (C, s)
-        s2 = self.row_weights(times, durations) ** -2                    # (C, s) tail noise
         present = self.present(values)
         loglik = [np.zeros(int(b - a)) for a, b in spans]
         for pattern in np.unique(present.T, axis=0):
@@ -291,17 +273,17 @@ class Scorer:
             for k in range(self.K):
                 a, b = int(spans[k, 0]), int(spans[k, 1])
                 loglik[k] += self._marginal_rows(k, psi[a:b, rows], sq[a:b, rows],
-                                                 values[rows][:, dims], dims, s2[a:b, rows])
+                                                 values[rows][:, dims], dims)
         return Scores(loglik, None)
 
-    def _marginal_rows(self, k, psi, sq, y, dims, s2):
+    def _marginal_rows(self, k, psi, sq, y, dims):
         ut = self._raw[k][dims]                                          # (Pd, N, r+1)
         r = self.rank[k]
         blk = np.einsum("csn,pnj->cspj", psi, ut)
         low, mean = blk[..., :r], blk[..., r]
         S = low @ low.transpose(0, 1, 3, 2)
         idx = np.arange(dims.size)
-        S[..., idx, idx] += self.sigma2[dims] * s2[..., None] + self.reg_h[k, dims] * sq[..., None]
+        S[..., idx, idx] += self.sigma2[dims] + self.reg_h[k, dims] * sq[..., None]
         L = np.linalg.cholesky(S)
         w = np.linalg.solve(L, (y - mean)[..., None])[..., 0]
         logdet = 2.0 * np.log(np.diagonal(L, axis1=2, axis2=3)).sum(axis=2)

@@ -21,6 +21,8 @@ Choices this project makes (DESIGN.md section 3):
   past a candidate's end that way instead of excluding short candidates.
   ``settle_tol=None, arrive_tol=None`` keeps whole recordings (the paper's
   convention).
+* **The robot's part ends where it settles** (``robot_tol``): its samples up to then span
+  the motion's phase on their own (:func:`~sandbox.core.fitting.fit_one`; z = 1: settled).
 * :math:`T_{nom,k}` is the mean motion duration of task k, so :math:`\\mu_\\alpha = 1`
   and :math:`\\sigma_\\alpha` is the spread of :math:`T_i / T_{nom,k}` (ddof 1,
   floored at ``min_alpha_std``).
@@ -138,20 +140,14 @@ class IProMP:
         above. Every floor is in [:data:`~sandbox.core.limits.MIN_NOISE_STD`,
         :data:`~sandbox.core.limits.MAX_ABS_VALUE`].
     settle_tol : float or None
-        A demonstration's motion ends once the robot stays within this distance
-        (rad) of its final configuration (:func:`motion_end`) ...
+        The motion ends once the robot stays within this distance (rad) of its final
+        configuration (:func:`motion_end`) ...
     arrive_tol : float or None
         ... and the hand has come within this distance (m) of its farthest
         reach; None for both: whole recordings.
     robot_tol : float or None
-        The robot's part of a demonstration ends where the robot settles: once it
-        stays within this distance (rad) of its final configuration, and not
-        before the motion's end (module docstring). None: at the motion's end.
-        A fit-time option, not stored in model files.
-    tail_noise : float
-        Observations past a motion's end are scored against its final state
-        with this many times the observation noise (module docstring); >= 1.
-        A prediction-time option, not stored in model files.
+        The robot's part ends once within this distance (rad) of its final pose for
+        good, not before the motion's end (None: at it); not stored in model files.
     min_alpha_std : float
         Lower bound of :math:`\\sigma_\\alpha`.
     ridge : float
@@ -195,7 +191,6 @@ class IProMP:
         settle_tol: float | None = 0.05,
         arrive_tol: float | None = 0.02,
         robot_tol: float | None = 0.01,
-        tail_noise: float = 3.0,
         min_alpha_std: float = 0.02,
         ridge: float = 1e-8,
         priors: Mapping[str, float] | None = None,
@@ -215,9 +210,7 @@ class IProMP:
                            else check_positive(settle_tol, "settle_tol"))
         self.arrive_tol = (None if arrive_tol is None
                            else check_positive(arrive_tol, "arrive_tol"))
-        self.robot_tol = (None if robot_tol is None
-                          else check_positive(robot_tol, "robot_tol"))
-        self.tail_noise = check_number(tail_noise, "tail_noise", low=1.0, high=MAX_RELATIVE)
+        self.robot_tol = None if robot_tol is None else check_positive(robot_tol, "robot_tol")
         self.min_alpha_std = check_positive(min_alpha_std, "min_alpha_std")
         self.ridge = check_positive(ridge, "ridge", allow_zero=True, high=MAX_RELATIVE)
         self.max_duration = check_positive(max_duration, "max_duration")

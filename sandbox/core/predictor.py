@@ -104,6 +104,13 @@ class DynamicPredictor(PredictorBase):
         motion to ignore, and :class:`~sandbox.episodes.policies.IProMPPolicy` turns it off.
     end_prob : float
         Probability of the motion being over that ends it (``until_end``).
+        Default 0.5: every update between the meeting and the one that ends the
+        motion scores more of the tail (the hand waiting, drifting back,
+        overshooting, a frozen tracker) as if the motion held its final state,
+        and can re-choose the task on it. Measured by leave-one-out on the
+        recorded handovers with emulated tails (hand, dow_t 0.2 s): late decay
+        0.000 instead of 0.006 on the recordings and 0.000 instead of 0.011 with
+        the hand drifting back, recognition at the end 0.78 instead of 0.76.
     incremental : bool
         Grow the likelihood's sufficient statistics with each observation
         (:mod:`sandbox.core.statistics`) so an update only factors small

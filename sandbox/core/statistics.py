@@ -48,7 +48,6 @@ class _GroupStats:
     def __init__(self, C: int, N: int, n_dims: int) -> None:
         self.M = np.broadcast_to(np.eye(N), (C, N, N)).copy()
         self.logdet_a = np.zeros(C)
-        self.log_tail = np.zeros(C)      # sum of log s_j^2 over the rows (Scorer.row_weights)
         self.rho = np.zeros((C, N, n_dims))
         self.gamma = np.zeros((C, n_dims))
         self.count = 0
@@ -91,14 +90,11 @@ class StreamStatistics:
         A modality with a NaN in ``y`` is not observed by this row.
         """
         sc = self.scorer
-        w = sc.row_weights(np.array([t]), self.durations)                  # (C, 1)
-        psi = sc.basis.evaluate(np.minimum(t / self.durations, 1.0)) * w  # (C, N), whitened
-        yw = y[None, :] * w                                               # (C, P)
+        psi = sc.basis.evaluate(np.minimum(t / self.durations, 1.0))      # (C, N)
         present = sc.present(y[None, :])[:, 0]
         for g, st in zip(sc.groups, self.groups):
             if present[g.modality]:
-                self._add_group(g, st, psi, yw[:, g.dims])
-                st.log_tail -= 2.0 * np.log(w[:, 0])
+                self._add_group(g, st, psi, y[g.dims])
         self.count += 1
         if len(self._x) >= self.flush_every:
             self._flush()
@@ -108,7 +104,7 @@ class StreamStatistics:
         kap = g.kappa
         v = (st.M @ psi[:, :, None])[:, :, 0]
         d = 1.0 + kap * np.einsum("cn,cn->c", psi, v)
-        nu = y - kap * np.einsum("cn,cnp->cp", psi, st.rho)
+        nu = y[None, :] - kap * np.einsum("cn,cnp->cp", psi, st.rho)
         vd = v / d[:, None]
         st.M -= kap * vd[:, :, None] * v[:, None, :]
         st.rho += vd[:, :, None] * nu[:, None, :]
@@ -149,8 +145,7 @@ class StreamStatistics:
         for g, st in zip(sc.groups, self.groups):
             per_dim = st.count * (LOG_2PI + sc.log_sigma2[g.dims])                # (Pg,)
             member = g.member                                                     # (K, Pg)
-            const += ((member @ per_dim)[:, None]
-                      + member.sum(axis=1)[:, None] * (st.logdet_a + st.log_tail))
+            const += (member @ per_dim)[:, None] + member.sum(axis=1)[:, None] * st.logdet_a
             gamma_term += member @ (st.gamma / sc.sigma2[g.dims]).T
         pick = [(k, slice(int(a), int(b))) for k, (a, b) in enumerate(spans)]
         ll, L = factor_scores(np.concatenate([self.Kt[c, k] for k, c in pick]),   # one batch

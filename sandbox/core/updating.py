@@ -105,7 +105,7 @@ class PredictorBase:
                  refine_steps: int = 1,
                  dt: float = 0.01, blend_rate: float = 50.0, blend_delay: float = 0.1,
                  blend: bool = True, horizon: float = 0.0, incremental: bool = True,
-                 until_end: bool = True, end_prob: float = 0.9,
+                 until_end: bool = True, end_prob: float = 0.5,
                  max_time: float = MAX_TIME_S) -> None:
         if not getattr(model, "is_fitted", False):
             raise RuntimeError("the model is not fitted: fit it (or load it) before predicting")

@@ -55,7 +55,7 @@ class EvalConfig:
     end_prob :
         predictor options (:class:`~sandbox.core.DynamicPredictor`).
     n_basis, regularizer, noise_scale, noise_floor, signal_floor, noise_floors, settle_tol,
-    arrive_tol, robot_tol, tail_noise :
+    arrive_tol, robot_tol :
         model options (:class:`~sandbox.core.IProMP`).
     observe : modalities the models observe (None: all the demonstrations carry).
     goal_tol : distance (m) for time-to-correct.
@@ -72,7 +72,7 @@ class EvalConfig:
     blend_rate: float = 50.0
     blend_delay: float = 0.1
     until_end: bool = True
-    end_prob: float = 0.9
+    end_prob: float = 0.5
     n_basis: int = 21
     regularizer: float = 1e-3
     noise_scale: float = 1.0
@@ -82,7 +82,6 @@ class EvalConfig:
     settle_tol: float | None = 0.05
     arrive_tol: float | None = 0.02
     robot_tol: float | None = 0.01
-    tail_noise: float = 3.0
     observe: tuple[str, ...] | None = None
     goal_tol: float = 0.05
     curve: tuple[float, ...] = field(default=CURVE)
@@ -93,7 +92,7 @@ class EvalConfig:
                       noise_scale=self.noise_scale, noise_floor=self.noise_floor,
                       signal_floor=self.signal_floor, noise_floors=dict(self.noise_floors),
                       settle_tol=self.settle_tol, arrive_tol=self.arrive_tol,
-                      robot_tol=self.robot_tol, tail_noise=self.tail_noise)
+                      robot_tol=self.robot_tol)
 
     def predictor_options(self) -> dict:
         return {"subsample": self.subsample, "likelihood": self.likelihood,

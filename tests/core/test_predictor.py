@@ -243,3 +243,35 @@ def test_an_update_after_the_predicted_end_takes_over_the_plan(model):
     mean, _ = pred.command(last.time + 0.5)
     new, _ = pred.prediction(np.array([last.time + 0.5]))
     np.testing.assert_allclose(mean, new[0], atol=1e-3)
+
+
+def _drift_back(task: int, duration: float = 2.0, back: float = 0.6):
+    """Task ``task`` replayed; after the meeting the hand waits 0.2 s, then drifts ``back``
+    of the way to its start over 0.6 s and stays there (a tail every task explains badly)."""
+    demo = synth.replay(task, duration, noise=0.003, rng=np.random.default_rng(5))
+    start, end = demo.human[0], demo.human[-1]
+    x = np.clip((np.arange(1, 131) * 0.01 - 0.2) / 0.6, 0, 1)[:, None]
+    tail = end + back * (start - end) * x**3 * (10 - 15 * x + 6 * x**2)
+    times = np.r_[demo.times, demo.times[-1] + 0.01 * np.arange(1, 131)]
+    return times, np.vstack([demo.human, tail])
+
+
+@pytest.mark.parametrize("task", [0, 1, 2])
+def test_a_drift_back_after_the_meeting_does_not_move_the_task_posterior(model, task):
+    """Known answer: the motion ends at 2 s; the right task, recognised by then, is the one
+    held, with the posterior of an update made at most 0.4 s after the meeting, before the
+    drift is under way (``end_prob`` 0.5: a duration posterior that puts half its mass before
+    the update's time already means that the motion is over)."""
+    times, human = _drift_back(task)
+    pred = DynamicPredictor(model, dow_t=0.2)
+    late = DynamicPredictor(model, dow_t=0.2, end_prob=0.9)
+    for t, y in zip(times, human):
+        pred.observe(t, y)
+        late.observe(t, y)
+    at_meeting = [u for u in pred.updates if u.time <= 2.0 + 1e-9][-1]
+    assert at_meeting.task == f"task{task}"
+    assert pred.ended and pred.task == f"task{task}"
+    assert pred.task_posterior[f"task{task}"] >= 0.9
+    decided = next(i for i, u in enumerate(pred.updates) if u.after_end) - 1
+    assert pred.updates[decided].time <= 2.0 + 0.4 + 1e-9
+    assert decided <= next(i for i, u in enumerate(late.updates) if u.after_end) - 1
