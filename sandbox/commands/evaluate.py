@@ -212,7 +212,7 @@ def _cross(args, config, load: dict) -> tuple[list[dict], dict, float]:
         return trials, cs.describe_sessions(config, fit), runtime
     trials, runtime = cs.run_cross_session(fit, test[0], config, workers=args.workers,
                                            progress=load["progress"])
-    return trials, cs.describe_cross(config, fit, test[0]), runtime
+    return trials, cs.describe_cross(config, fit, test[0], str(args.data)), runtime
 
 
 def _write(args, report: dict, text: str, markdown: str) -> None:

@@ -176,13 +176,20 @@ def run_leave_one_session_out(sessions: Sequence[TrialSet], config: EvalConfig, 
     return trials, runtime
 
 
-def describe_cross(config: EvalConfig, fit: Sequence[TrialSet], test: TrialSet) -> dict:
-    """The report's ``config`` of ``--data A --test B``: the options, ``mode``, ``train``,
-    ``test`` and the trials of each (``n_train``, ``n_test``; per task in ``*_tasks``)."""
+def describe_cross(config: EvalConfig, fit: Sequence[TrialSet], test: TrialSet,
+                   train: str | None = None) -> dict:
+    """The report's ``config`` of ``--data A --test B``: the options, ``mode``, ``train``
+    (``train``, default the names of ``fit``), ``test`` and the trials of each
+    (``n_train``, ``n_test``; per task in ``*_tasks``); ``train_sessions`` names the
+    sessions of a ``fit`` of several."""
     demos = [d for s in fit for d in s.train]
-    return {**config.to_dict(), "mode": CROSS_SESSION, "train": ", ".join(s.name for s in fit),
-            "test": test.name, "n_train": len(demos), "n_test": len(test.train),
-            "train_tasks": _counts(demos), "test_tasks": _counts(test.train)}
+    out = {**config.to_dict(), "mode": CROSS_SESSION,
+           "train": ", ".join(s.name for s in fit) if train is None else train,
+           "test": test.name, "n_train": len(demos), "n_test": len(test.train),
+           "train_tasks": _counts(demos), "test_tasks": _counts(test.train)}
+    if len(fit) > 1:
+        out["train_sessions"] = [s.name for s in fit]
+    return out
 
 
 def describe_sessions(config: EvalConfig, sessions: Sequence[TrialSet]) -> dict:

@@ -107,7 +107,8 @@ def test_one_session_is_nothing_to_leave_out(sessions):
 def test_the_report_config_says_what_was_fitted_and_tested(sessions):
     cross = cs.describe_cross(CONFIG, sessions[:2], sessions[2])
     assert cross["mode"] == cs.CROSS_SESSION and cross["test"] == "s2"
-    assert cross["train"] == "s0, s1" and (cross["n_train"], cross["n_test"]) == (12, 6)
+    assert cross["train"] == "s0, s1" and cross["train_sessions"] == ["s0", "s1"]
+    assert (cross["n_train"], cross["n_test"]) == (12, 6)
     assert cross["train_tasks"] == {"left": 6, "right": 6}
     loso = cs.describe_sessions(CONFIG, sessions)
     assert loso["mode"] == cs.LEAVE_ONE_SESSION_OUT and loso["sessions"] == ["s0", "s1", "s2"]
