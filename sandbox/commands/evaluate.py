@@ -199,7 +199,10 @@ def _cross(args, config, load: dict) -> tuple[list[dict], dict, float]:
     test, more = [], []
     if args.test is not None:
         seed = args.seed if args.test_seed is None else args.test_seed
-        test, more = cs.load_sets(args.test, **{**load, "seed": seed})
+        try:
+            test, more = cs.load_sets(args.test, **{**load, "seed": seed})
+        except ValueError as error:         # which set a bad --tasks or folder is
+            raise ValueError(f"--test {args.test}: {error}") from None
     _skipped.report(skipped + more, args.verbose, sum(len(s.train) for s in fit + test))
     for where, sets, dropped in ((args.data, fit, skipped), (args.test, test, more)):
         for s in sets:

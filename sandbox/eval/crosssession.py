@@ -98,8 +98,9 @@ def check_tasks(fit: Sequence[TrialSet], test: TrialSet, option: str = "--test")
     missing = [t for t in test.tasks() if t not in known]
     if missing:
         names = ", ".join(s.name for s in fit)
+        hint = "; choose some with --tasks" if len(missing) < len(test.tasks()) else ""
         raise ValueError(f"{option}: {test.name} has tasks {missing} that {names} has no "
-                         f"trials of (it has {known}); choose some with --tasks")
+                         f"trials of (it has {known}){hint}")
 
 
 def fit_model(fit: Sequence[TrialSet], config: EvalConfig, *, progress: bool = False):
