@@ -37,7 +37,8 @@ from __future__ import annotations
 from sandbox.commands import _model, _observation, _outputs, _settings, _skipped, _types
 
 NAME = "evaluate"
-HELP = "leave-one-out evaluation of the static and dynamic formulations (paper sec. 5)"
+HELP = ("leave-one-out (or cross-session) evaluation of the static and dynamic formulations "
+        "(paper sec. 5)")
 WINDOWS = "1,0.5,0.2,0.1"
 RATIOS = "0.1,0.2,0.3,0.4,0.5,0.6,0.7,0.8,0.9"
 
@@ -115,7 +116,8 @@ def _prepare(args):
 
 def _sessions(args) -> list:
     """The session folders of a ``--data`` folder of sessions (``[]`` for one set), checked
-    against ``--test`` and ``--model``: one line for a combination that cannot run."""
+    against ``--test``, ``--test-seed`` and ``--model``: one line for a combination that
+    cannot run."""
     from pathlib import Path
 
     from sandbox.data.sessions import SET_LAYOUT, find_sessions
@@ -123,6 +125,9 @@ def _sessions(args) -> list:
     if args.test is not None and args.model is not None:
         raise ValueError("--test: expected either --test (fit on --data, predict --test) or "
                          "--model (predict --data with a saved model), got both")
+    if args.test_seed is not None and args.test is None:
+        raise ValueError(f"--test-seed: expected with --test (the seed of a synthetic --test "
+                         f"set), got --test-seed {args.test_seed} without --test")
     if args.test is not None and Path(args.test).is_dir() and find_sessions(args.test, "--test"):
         raise ValueError(f"--test: expected one set {SET_LAYOUT} or synthetic:NAME, got a "
                          f"folder of sessions {args.test!r}; give one session")

@@ -86,7 +86,10 @@ def load_sets(data: str | Path, **options) -> tuple[list[TrialSet], list[str]]:
     folders = [] if str(data).startswith("synthetic:") else find_sessions(data)
     sets, skipped = [], []
     for name, where in ([(f.name, f) for f in folders] or [(str(data), data)]):
-        train, test, dropped = load_pair(str(where), **options)
+        try:
+            train, test, dropped = load_pair(str(where), **options)
+        except ValueError as error:         # e.g. --tasks: say which session lacks them
+            raise ValueError(f"session {name}: {error}" if folders else str(error)) from None
         sets.append(TrialSet(name, tuple(train), tuple(test)))
         skipped += dropped
     return sets, skipped

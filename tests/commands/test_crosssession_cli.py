@@ -168,3 +168,10 @@ def test_help_names_the_options(capsys):
     text = " ".join(capsys.readouterr().out.split()).replace("- ", "-")   # unwrapped
     assert "--test DIR|synthetic:NAME" in text and "leave-one-session-out" in text
     assert "--test-seed" in text
+
+
+def test_a_test_seed_needs_a_test_set(tmp_path, capsys):
+    out = tmp_path / "r.json"
+    assert main(["evaluate", *SMALL, *QUICK, "--test-seed", "1", "--out", str(out)]) == 2
+    assert "--test-seed: expected with --test" in capsys.readouterr().err
+    assert not out.exists()
