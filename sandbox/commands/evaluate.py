@@ -212,8 +212,8 @@ def _cross(args, config, load: dict) -> tuple[list[dict], dict, float]:
     for where, sets, dropped in ((args.data, fit, skipped), (args.test, test, more)):
         for s in sets:
             if not s.train:
-                raise _skipped.no_usable(where if len(sets) == 1 else s.name, dropped,
-                                         verbose=args.verbose)
+                raise _skipped.no_usable(where if len(sets) == 1 else f"{where}/{s.name}",
+                                         dropped, verbose=args.verbose)
     if args.test is None:
         trials, runtime = cs.run_leave_one_session_out(fit, config, workers=args.workers,
                                                        progress=load["progress"])
@@ -257,3 +257,19 @@ def _summary(report: dict) -> None:
             label = f"{name} {key}" + ("" if name == "static" else " s")
             print(f"{label:12s} {m['e_p']:9.3f} {m['e_q']:9.3f} {m['e_phi']:9.3f} "
                   f"{m['recognition']:6.2f}")
+    _sessions_summary(report)
+
+
+def _sessions_summary(report: dict) -> None:
+    """Each session's figures at the report's best window (gamma equal) and middle ratio."""
+    if "per_session" not in report:
+        return
+    window = report["best_window"][next(iter(report["best_window"]))]
+    ratios = list(report["static"])
+    ratio = ratios[len(ratios) // 2]
+    print(f"\nby session (dynamic {window} s | static {ratio}): e_p (m), recognition")
+    for name, entry in report["per_session"].items():
+        dyn, sta = entry["dynamic"][window], entry["static"][ratio]
+        print(f"  {name:20s} {sum(entry['n_trials'].values()):4d} trials  "
+              f"{dyn['e_p']:6.3f} {dyn['recognition']:5.2f} | {sta['e_p']:6.3f} "
+              f"{sta['recognition']:5.2f}")

@@ -110,6 +110,8 @@ def fit_model(fit: Sequence[TrialSet], config: EvalConfig, *, progress: bool = F
     """One :class:`~sandbox.core.IProMP` of every task fitted on all trials of ``fit``
     (their training versions, ``config.observe`` selected), as a leave-one-out fold fits."""
     demos = [d for s in fit for d in s.train]
+    if not demos:
+        raise ValueError("fit: expected trials to fit on, got none")
     demos, _, fits = prepare(demos, [], config, progress=progress)
     try:
         return config.model().fit_demo_fits(fits, demos[0])
@@ -167,6 +169,7 @@ def run_leave_one_session_out(sessions: Sequence[TrialSet], config: EvalConfig, 
     sessions, or a session with a task the others have no trials of, is a
     ``ValueError`` before anything runs.
     """
+    sessions = list(sessions)
     if len(sessions) < 2:
         raise ValueError(f"sessions: expected at least 2 to leave one out, got {len(sessions)}")
     for i, session in enumerate(sessions):
