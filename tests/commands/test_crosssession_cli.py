@@ -175,3 +175,25 @@ def test_a_test_seed_needs_a_test_set(tmp_path, capsys):
     assert main(["evaluate", *SMALL, *QUICK, "--test-seed", "1", "--out", str(out)]) == 2
     assert "--test-seed: expected with --test" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_recorded_halves_left_out_in_turn(recorded_dir, tmp_path):
+    """The recorded set split by recording time into two sessions (links, no copies), with
+    EMG: every trial predicted once, by the other half."""
+    tasks = ["screw_driver", "pencil_box"]
+    for task in tasks:
+        files = sorted((recorded_dir / task).glob("*.csv"))[:8]
+        for i, path in enumerate(files):
+            link = tmp_path / "halves" / ("early" if i < 4 else "late") / task / path.name
+            link.parent.mkdir(parents=True, exist_ok=True)
+            link.symlink_to(path)
+    report = evaluate(tmp_path, "--data", str(tmp_path / "halves"), "--tasks", ",".join(tasks),
+                      "--observe", "hand,emg")
+    assert report["config"]["sessions"] == ["early", "late"]
+    assert report["config"]["observe"] == ["hand", "emg"]
+    rows = report["per_trial"]
+    names = [Path(r["source"]).name for r in rows]          # usable ones, each once
+    assert len(set(names)) == len(names) == sum(report["n_trials"].values()) >= 12
+    assert set(names) <= {p.name for p in (tmp_path / "halves").rglob("*.csv")}
+    assert {r["session"] for r in rows} == {"early", "late"}
+    assert set(report["per_session"]) == {"early", "late"}
