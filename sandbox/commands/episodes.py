@@ -87,6 +87,7 @@ def run(args) -> int:
     from sandbox.commands._outputs import check_new, write_text
 
     check_new([("--json", args.json)], args.force)
+    _check_data(args)
     out = {name: _run_policy(name, args) for name in policies}
     config = next(iter(out.values())).get("config")
     if config is not None:
@@ -97,6 +98,17 @@ def run(args) -> int:
     if args.json:
         write_text(args.json, json.dumps(out, indent=1))
     return 0
+
+
+def _check_data(args) -> None:
+    """``--test`` only in the recorded scenario, as one set; ``--data`` in one layout."""
+    if args.test is not None and args.scenario != "recorded":
+        raise ValueError(f"--test: expected with --scenario recorded (a recorded set to "
+                         f"replay), got --scenario {args.scenario}")
+    if args.scenario == "recorded" and args.data is not None:
+        from sandbox.episodes.replays import replay_mode
+
+        replay_mode(args.data, args.test, names=("--data", "--test"))
 
 
 def _run_policy(name: str, args) -> dict:

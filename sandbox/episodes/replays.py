@@ -97,20 +97,25 @@ class _Set(NamedTuple):
     demos: list
 
 
-def replay_mode(data: str | Path, test: str | Path | None = None) -> str:
-    """The mode (:data:`MODES`) of replaying ``data`` (and ``test``); ``ValueError`` for a
-    ``test`` that is a folder of sessions or a ``data`` that holds both layouts."""
+def replay_mode(data: str | Path, test: str | Path | None = None, *,
+                names: tuple[str, str] = ("data", "test")) -> str:
+    """The mode (:data:`MODES`) of replaying ``data`` (and ``test``).
+
+    ``ValueError`` for a ``test`` that is not one set (a folder of sessions
+    included) or a ``data`` that holds both layouts; ``names`` are what the
+    messages call ``data`` and ``test`` (e.g. the command's options).
+    """
     from sandbox.data.sessions import SET_LAYOUT, find_sessions
 
     if test is not None:
         if not Path(test).is_dir():
-            raise ValueError(f"test: expected a folder {SET_LAYOUT}, got {str(test)!r}")
-        if find_sessions(test, "test"):
-            raise ValueError(f"test: expected one set {SET_LAYOUT}, got a folder of sessions "
-                             f"{str(test)!r}; give one session")
-        find_sessions(data, "data")        # a folder in one layout or the other
+            raise ValueError(f"{names[1]}: expected a folder {SET_LAYOUT}, got {str(test)!r}")
+        if find_sessions(test, names[1]):
+            raise ValueError(f"{names[1]}: expected one set {SET_LAYOUT}, got a folder of "
+                             f"sessions {str(test)!r}; give one session")
+        find_sessions(data, names[0])        # a folder in one layout or the other
         return CROSS_SESSION
-    if Path(data).is_dir() and find_sessions(data, "data"):
+    if Path(data).is_dir() and find_sessions(data, names[0]):
         return LEAVE_ONE_SESSION_OUT
     return LEAVE_ONE_OUT
 

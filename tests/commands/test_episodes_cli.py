@@ -51,3 +51,78 @@ def test_bad_arguments_are_clear_errors(argv, match, capsys, tmp_path):
 def test_json_pointing_at_a_folder_is_refused_before_any_episode(tmp_path, capsys):
     assert main(["episodes", "--episodes", "1", "--json", str(tmp_path)]) == 2
     assert "--json" in capsys.readouterr().err
+
+
+@pytest.fixture(scope="module")
+def sessions(tmp_path_factory):
+    """ROOT/<session>/<task>/<trial>.csv: the same synthetic:diverging trials twice (2 per
+    task), the second session's tracker 4 cm off."""
+    from tests.data.folders import write_synthetic_set
+
+    root = tmp_path_factory.mktemp("sessions")
+    for name, shift in (("monday", 0.0), ("tuesday", 0.04)):
+        write_synthetic_set(root / name, "diverging", n_per_task=2, shift=shift)
+    return root
+
+
+def test_cross_session_replays_record_the_mode(sessions, tmp_path, capsys):
+    out = tmp_path / "cross.json"
+    monday, tuesday = sessions / "monday", sessions / "tuesday"
+    assert main(["episodes", "--scenario", "recorded", "--data", str(monday), "--test",
+                 str(tuesday), "--policies", "recorded_robot", "--episodes", "1", "--seed", "2",
+                 "--json", str(out)]) == 0
+    entry = json.loads(out.read_text())["recorded_robot"]
+    assert entry["config"] == {"scenario": "recorded", "mode": "cross-session",
+                               "observe": ["hand"], "train": str(monday),
+                               "test": str(tuesday), "n_train": 10}
+    (episode,) = entry["episodes"]
+    (expected,) = run_scenario("recorded", "recorded_robot", n_episodes=1, seed=2,
+                               data=monday, test=tuesday)
+    assert episode["options"] == expected.options and episode["replay"] == expected.replay
+    printed = capsys.readouterr().out
+    assert f"cross-session: one model fitted on {monday} (10 trials)" in printed
+    assert "| recorded_robot |" in printed and "by session" not in printed
+
+
+def test_a_folder_of_sessions_is_replayed_leave_one_session_out(sessions, tmp_path, capsys):
+    out = tmp_path / "loso.json"
+    assert main(["episodes", "--scenario", "recorded", "--data", str(sessions),
+                 "--policies", "recorded_robot", "--episodes", "2", "--seed", "5",
+                 "--json", str(out)]) == 0
+    entry = json.loads(out.read_text())["recorded_robot"]
+    assert entry["config"]["mode"] == "leave-one-session-out"
+    assert entry["config"]["sessions"] == ["monday", "tuesday"]
+    drawn = [e["replay"]["session"] for e in entry["episodes"]]
+    assert sorted(entry["per_session"]) == sorted(set(drawn))
+    for session, summary in entry["per_session"].items():
+        assert summary["n_episodes"] == drawn.count(session)
+    for e in entry["episodes"]:
+        assert e["replay"]["train"] == ({"monday", "tuesday"} - {e["replay"]["session"]}).pop()
+    printed = capsys.readouterr().out
+    assert "leave-one-session-out over 2 sessions: monday, tuesday" in printed
+    assert "by session:" in printed and f"| recorded_robot | {drawn[0]} |" in printed
+
+
+@pytest.mark.parametrize("case, match", [
+    ("sessions", "--test: expected one set"),
+    ("synthetic", "--test: expected with --scenario recorded"),
+    ("missing", "--test: expected a folder <root>/<task>/<trial>.csv"),
+    ("tasks", "has tasks ['right', 'straight', 'up'] that"),
+])
+def test_replays_that_cannot_run_exit_2_with_one_line(sessions, tmp_path, capsys, case, match):
+    import shutil
+
+    argv = ["--scenario", "recorded", "--policies", "recorded_robot", "--data",
+            str(sessions / "monday"), "--test", str(sessions)]
+    if case == "missing":
+        argv[-1] = str(tmp_path / "nowhere")
+    elif case == "synthetic":
+        argv = ["--test", str(sessions / "monday")]
+    elif case == "tasks":
+        for task in ("down", "left"):
+            shutil.copytree(sessions / "monday" / task, tmp_path / "two" / task)
+        argv[-3:] = [str(tmp_path / "two"), "--test", str(sessions / "monday")]
+    out = tmp_path / "never.json"
+    assert main(["episodes", "--episodes", "1", *argv, "--json", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert match in err and "\n" not in err and not out.exists()
