@@ -111,9 +111,8 @@ class EpisodeResult:
 
 def run_scenario(scenario: str = "diverging", policy: str | Callable = "dynamic", *,
                  n_episodes: int = 20, seed: int = 0, dow_t: float = 0.2, ratio: float = 0.3,
-                 data: str | Path | None = None, test: str | Path | None = None,
-                 env=None, model=None,
-                 options: Mapping[str, Any] | None = None,
+                 data: str | Path | None = None, test: str | Path | None = None, env=None,
+                 model=None, options: Mapping[str, Any] | None = None,
                  observe: Sequence[str] | str | None = None) -> list[EpisodeResult]:
     """Run ``n_episodes`` seeded episodes of ``scenario`` with ``policy``.
 
@@ -134,19 +133,13 @@ def run_scenario(scenario: str = "diverging", policy: str | Callable = "dynamic"
         Window (s) of the dynamic policy.
     ratio : float
         Observed fraction of the static policy.
-    data : str or Path, optional
-        ``recorded`` scenario only: the recorded set's folder (leave-one-out), or
-        a folder of sessions ``<root>/<session>/<task>/<trial>.csv``
-        (leave-one-session-out), or with ``test`` the trials the one model is
-        fitted on (a folder of sessions pooled).
-    test : str or Path, optional
-        ``recorded`` scenario only: a set whose trials are replayed with the model
-        of all of ``data`` (cross-session); its tasks must be among ``data``'s.
-        The ``recorded_robot`` policy then replays each of its trials' own robot
-        in ``data``'s meeting geometry.
+    data, test : str or Path, optional
+        ``recorded`` scenario only (:func:`sandbox.episodes.replays.plan_replays`):
+        ``data`` one set (leave-one-out) or a folder of sessions (leave-one-session-out);
+        with ``test`` (one set, its tasks among ``data``'s), ``test``'s trials are
+        replayed with one model of all of ``data``, in ``data``'s meeting geometry.
     env : gymnasium.Env, optional
-        An environment made from the scenario's id, reused (not closed); by
-        default one is made and closed.
+        An environment made from the scenario's id, reused (not closed); default: a new one.
     model : IProMP, optional
         The model (synthetic scenarios; default: fitted on the family's
         synthetic demonstrations of the ``observe`` modalities, default the
