@@ -25,6 +25,12 @@ from sandbox.data.synthetic.base import (
     sample_times,
 )
 from sandbox.data.synthetic.human import reach_positions
+from sandbox.data.synthetic.observe import check_observe, observe_human
+from sandbox.data.synthetic.robot import (
+    joint_trajectory,
+    kinematics,
+    solve_handover,
+)
 from sandbox.data.synthetic.session import Session, as_session
 from sandbox.data.synthetic.tails import (
     Tail,
@@ -37,12 +43,6 @@ from sandbox.data.synthetic.tails import (
     session_timing,
     tail_positions,
     tail_rng,
-)
-from sandbox.data.synthetic.observe import check_observe, observe_human
-from sandbox.data.synthetic.robot import (
-    joint_trajectory,
-    kinematics,
-    solve_handover,
 )
 from sandbox.data.synthetic.tasks import (
     DemoDraw,

@@ -101,7 +101,7 @@ def draw_tail(kind: str, rng: np.random.Generator) -> Tail:
 
 
 def meeting_time(t_off: float, robot_off: float) -> float:
-    """When the hand (done at ``t_off``, s) and the robot (at ``robot_off``, s) have both arrived."""
+    """When the hand (done at ``t_off``, s) and the robot (``robot_off``, s) have both arrived."""
     return max(float(t_off), float(robot_off))
 
 
