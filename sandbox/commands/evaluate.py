@@ -40,6 +40,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--workers", type=_types.WORKERS, default=2,
                         help=f"processes, 1 to {_types.MAX_WORKERS} (default 2)")
     parser.add_argument("--seed", type=_types.SEED, default=0, help="seed of synthetic data")
+    _observation.add_session_argument(parser)
     parser.add_argument("--n-per-task", type=_types.PER_TASK, default=None,
                         help="trials per task (synthetic: generated; folder: first N)")
     parser.add_argument("--out", type=_types.output_file, required=True,
@@ -95,7 +96,8 @@ def run(args) -> int:
     train, test, skipped = load_pair(args.data, seed=args.seed,
                                      tasks=_observation.split(args.tasks),
                                      n_per_task=args.n_per_task, spec=spec, observe=observe,
-                                     cache=_observation.cache(args), progress=not args.no_progress)
+                                     cache=_observation.cache(args), progress=not args.no_progress,
+                                     session=args.session)
     _skipped.report(skipped, args.verbose, len(train))
     if not train:
         raise _skipped.no_usable(args.data, skipped, verbose=args.verbose)
