@@ -162,6 +162,9 @@ class BaxterHandoverEnv(gym.Env):
     ``source`` ("synthetic" or a folder ``<root>/<task>/<trial>.csv``);
     ``trial`` (recorded: index or file name); ``speed`` (human speed factor,
     0.25-4); ``switch_to``, ``switch_phase`` (synthetic intent switch);
+    ``session`` (synthetic: a recording session's seed >= 0; the hand is shown
+    where the session's tracker reports it, see
+    :func:`~sandbox.envs.sources.synthetic_motion`);
     ``source="teleop"``: the hand follows velocity commands given to
     ``env.unwrapped.motion`` (a :class:`~sandbox.envs.teleop.TeleopMotion`);
     ``motion``: a scripted :class:`~sandbox.envs.human.HumanMotion` (e.g. from

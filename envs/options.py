@@ -15,7 +15,7 @@ from sandbox.envs.sources import family_tasks
 
 #: Keys accepted in ``options``.
 OPTION_KEYS = ("task", "object", "source", "trial", "speed", "switch_to", "switch_phase",
-               "motion")
+               "motion", "session")
 #: Sources that are not a folder: the generator, the keyboard teleop.
 NAMED_SOURCES = ("synthetic", "teleop")
 #: Accepted range of the human speed factor.
@@ -46,6 +46,9 @@ class EpisodeOptions:
     motion : HumanMotion or None
         A scripted hand motion to play instead of drawing one (e.g.
         :func:`~sandbox.envs.sources.waypoint_motion`).
+    session : int or None
+        Synthetic source only: the recording session's seed (>= 0,
+        :func:`sandbox.data.synthetic.session.draw_session`); None: today's data.
     """
 
     task: str | None = None
@@ -56,6 +59,7 @@ class EpisodeOptions:
     switch_to: str | None = None
     switch_phase: float = 0.5
     motion: HumanMotion | None = None
+    session: int | None = None
 
 
 def parse_options(options: Mapping[str, Any] | None, family: str) -> EpisodeOptions:
@@ -74,7 +78,9 @@ def parse_options(options: Mapping[str, Any] | None, family: str) -> EpisodeOpti
         On an unknown key, a task or object that does not exist, a source that is
         neither ``"synthetic"``, ``"teleop"`` nor a folder, a bad speed, or an option
         that does not apply to the source (``trial`` for synthetic, ``switch_to`` for
-        recorded or teleop; ``motion`` with ``source``, ``task``, ``trial`` or ``switch_to``).
+        recorded or teleop; ``motion`` with ``source``, ``task``, ``trial`` or ``switch_to``;
+        ``session`` not an integer >= 0, or with a source other than synthetic, a
+        ``motion`` or ``switch_to``).
     """
     if options is None:
         return EpisodeOptions()
@@ -107,7 +113,8 @@ def parse_options(options: Mapping[str, Any] | None, family: str) -> EpisodeOpti
     return EpisodeOptions(task=task, object=obj, source=source, trial=options.get("trial"),
                           speed=_speed(options.get("speed", 1.0)),
                           switch_to=options.get("switch_to"),
-                          switch_phase=_phase(options.get("switch_phase", 0.5)), motion=motion)
+                          switch_phase=_phase(options.get("switch_phase", 0.5)), motion=motion,
+                          session=_session(options, source, motion))
 
 
 def _motion(options: Mapping[str, Any]) -> HumanMotion | None:
@@ -122,6 +129,20 @@ def _motion(options: Mapping[str, Any]) -> HumanMotion | None:
         raise ValueError(f"motion: a scripted motion replaces {clash}; expected none of them, "
                          f"got {clash}")
     return motion
+
+
+def _session(options: Mapping[str, Any], source: str, motion: HumanMotion | None) -> int | None:
+    """The ``session`` option: None, or an int >= 0 for a drawn synthetic motion."""
+    from sandbox.validation import check_integer
+
+    value = options.get("session")
+    if value is None:
+        return None
+    session = check_integer(value, "session", 0)
+    if source != "synthetic" or motion is not None or options.get("switch_to") is not None:
+        raise ValueError(f"session: only for a synthetic motion without switch_to (a recorded, "
+                         f"teleop or scripted motion has its own), got session={value!r}")
+    return session
 
 
 def _source(value: Any) -> str:
