@@ -88,6 +88,21 @@ def synthetic_motion(family: str, task: str, rng: np.random.Generator, *,
         robot, ``{"times": (T,) s, "joints": (T, 7) rad}`` on the motion's
         unscaled times (so an oracle policy can replay it).
     """
+    demo, meta = _synthetic_demo(family, task, rng, switch_to, switch_phase, session)
+    times = demo.times - demo.times[0]
+    true = demo.meta.get("tracked_clean", demo.meta["clean_human"])
+    return HumanMotion(
+        times=times, true=true, measured=demo.select("hand").human, task=demo.task,
+        source=demo.source, body=demo_body(demo),
+        meta={**meta, "handover_target": np.array(demo.meta["handover_target"]),
+              "meeting_offset": _meeting_offset(demo, true),
+              "robot": {"times": times, "joints": np.array(demo.robot)}},
+    )
+
+
+def _synthetic_demo(family: str, task: str, rng: np.random.Generator, switch_to: str | None,
+                    switch_phase: float, session: int | None):
+    """The demonstration of :func:`synthetic_motion` and the motion's ``meta`` it gives."""
     specs, variability = family_specs(family)
     by_name = {spec.name: spec for spec in specs}
     for name in (task, switch_to) if switch_to is not None else (task,):
@@ -99,20 +114,10 @@ def synthetic_motion(family: str, task: str, rng: np.random.Generator, *,
     if switch_to is None:
         (demo,) = generate([by_name[task]], 1, rng, family=family, variability=variability,
                            observe=SYNTHETIC_OBSERVE, session=session)
-        meta = {} if session is None else {"session": demo.meta["session"]}
-    else:
-        demo, truth = intent_switch_demo(task, switch_to, switch_phase, rng, family=family,
-                                         observe=SYNTHETIC_OBSERVE)
-        meta = {"intent": truth}
-    times = demo.times - demo.times[0]
-    true = demo.meta.get("tracked_clean", demo.meta["clean_human"])
-    return HumanMotion(
-        times=times, true=true, measured=demo.select("hand").human, task=demo.task,
-        source=demo.source, body=demo_body(demo),
-        meta={**meta, "handover_target": np.array(demo.meta["handover_target"]),
-              "meeting_offset": _meeting_offset(demo, true),
-              "robot": {"times": times, "joints": np.array(demo.robot)}},
-    )
+        return demo, ({} if session is None else {"session": demo.meta["session"]})
+    demo, truth = intent_switch_demo(task, switch_to, switch_phase, rng, family=family,
+                                     observe=SYNTHETIC_OBSERVE)
+    return demo, {"intent": truth}
 
 
 def _meeting_offset(demo, true: np.ndarray) -> np.ndarray:

@@ -99,10 +99,8 @@ def pair_with_robot(
         Required gripper position error (m).
     max_redraws : int
         Redraw rounds before giving up.
-    session : Session, optional
-        The recording session (:func:`handover_target`).
-    tails : sequence of Tail, optional
-        Each demonstration's tail (with ``session``).
+    session, tails : Session and sequence of Tail, optional
+        The recording session and each demonstration's tail (:func:`handover_target`).
 
     Returns
     -------
@@ -125,18 +123,25 @@ def pair_with_robot(
         if round_:
             for i in todo:
                 draws[i] = redraw_end(draws[i], var, rng)
-        targets = np.array([handover_target(specs[i], draws[i], session,
-                                            None if tails is None else tails[i]) for i in todo])
-        res = solve_handover(targets, ik_tol)
+        tail_of = [None] * len(draws) if tails is None else tails
+        res = solve_handover(np.array([handover_target(specs[i], draws[i], session, tail_of[i])
+                                       for i in todo]), ik_tol)
         q_goal[todo], error[todo] = res.q, res.error
         todo = todo[~res.success]
         if todo.size == 0:
             return draws, q_goal, error
-    names = sorted({specs[i].name for i in todo})
-    raise ValueError(
+    raise _unreachable(sorted({specs[i].name for i in todo}), todo.size, error[todo].min(),
+                       ik_tol, max_redraws)
+
+
+def _unreachable(names: list[str], n: int, smallest: float, ik_tol: float,
+                 max_redraws: int) -> ValueError:
+    """The error of :func:`pair_with_robot` when ``n`` handover points of tasks ``names``
+    stay out of reach (``smallest``: the smallest error, m)."""
+    return ValueError(
         f"tasks {names}: expected handover points Baxter's left arm can reach (IK within "
-        f"{ik_tol} m), got {todo.size} still unreachable after {max_redraws} redraws "
-        f"(smallest error {error[todo].min():.3f} m); move the task's end point"
+        f"{ik_tol} m), got {n} still unreachable after {max_redraws} redraws "
+        f"(smallest error {smallest:.3f} m); move the task's end point"
     )
 
 
@@ -256,28 +261,22 @@ def generate(
         Demonstrations per task (>= 1).
     rng : numpy.random.Generator
         Source of randomness; the same seed gives the same demonstrations.
-    family : str
-        Name recorded in each demonstration's ``source``.
-    variability : Variability
-        Spreads and timing.
+    family, variability : str, Variability
+        Name recorded in each demonstration's ``source``; spreads and timing.
     tracker : TrackerModel, optional
         Tracker artefacts (default: like the recordings, ``TrackerModel()``).
-    rate_hz : float
-        Row rate (Hz).
-    ik_tol : float
-        Required gripper position error (m) at the handover point.
-    max_redraws : int
-        Rounds of end-point redraws for unreachable handover points.
+    rate_hz, ik_tol, max_redraws : float, float, int
+        Row rate (Hz); required gripper position error (m) at the handover
+        point; rounds of end-point redraws for unreachable handover points.
     observe : str or sequence of str
         Observed modalities, ``"hand"`` (default), ``"arm"`` or both (e.g.
         ``"hand,arm"``: ``human`` has 9 columns, hand then arm).
     arm_model : ArmModel, optional
         The human arm (default ``ArmModel()``); used when the arm is observed.
     session : Session or int, optional
-        The recording session (:mod:`sandbox.data.synthetic.session`; an
-        integer >= 0: :func:`~sandbox.data.synthetic.session.draw_session` of
-        it); None (default): today's data, bit for bit. The demonstrations'
-        other random numbers are those of ``session=None``.
+        The recording session (an integer >= 0:
+        :func:`~sandbox.data.synthetic.session.draw_session` of it); None
+        (default): today's data, bit for bit (:func:`session_draws`).
 
     Returns
     -------
@@ -287,22 +286,31 @@ def generate(
     tracker, observe = _check_models(tracker, observe, variability)
     session = as_session(session)
     task_of = [spec for spec in specs for _ in range(n)]
-    draws = [draw_demo(spec, variability, rng) for spec in task_of]
-    tails = None
-    if session is not None:
-        tails = [draw_tail(session.tail, tail_rng(d.tracker_seed)) for d in draws]
-        draws = [session_timing(d, session.tempo, t) for d, t in zip(draws, tails, strict=True)]
+    draws, tails = session_draws([draw_demo(spec, variability, rng) for spec in task_of], session)
     draws, q_goal, _ = pair_with_robot(task_of, draws, variability, rng, ik_tol=ik_tol,
                                        max_redraws=max_redraws, session=session, tails=tails)
+    branching = any(np.any(s.branch) for s in specs)
     return [
-        build_demo(
-            spec, draw, q, var=variability, tracker=tracker, rate_hz=rate_hz,
-            source=f"synthetic:{family}[{spec.name}#{i % n}]",
-            branching=any(np.any(s.branch) for s in specs), observe=observe, arm_model=arm_model,
-            session=session, tail=None if tails is None else tails[i],
-        )
-        for i, (spec, draw, q) in enumerate(zip(task_of, draws, q_goal, strict=True))
+        build_demo(spec, draw, q, var=variability, tracker=tracker, rate_hz=rate_hz,
+                   source=f"synthetic:{family}[{spec.name}#{i % n}]", branching=branching,
+                   observe=observe, arm_model=arm_model, session=session, tail=tail)
+        for i, (spec, draw, q, tail) in enumerate(zip(task_of, draws, q_goal, tails, strict=True))
     ]
+
+
+def session_draws(draws: list[DemoDraw], session: Session | None
+                  ) -> tuple[list[DemoDraw], list[Tail | None]]:
+    """The draws timed for ``session`` and their tails (None: the draws and no tails).
+
+    Each tail comes from its own stream (:func:`~sandbox.data.synthetic.tails.tail_rng`
+    of the draw's tracker seed) and the timing only rescales the draw's times
+    (:func:`~sandbox.data.synthetic.tails.session_timing`), so the other random
+    numbers of the demonstrations are those of ``session=None``.
+    """
+    if session is None:
+        return draws, [None] * len(draws)
+    tails = [draw_tail(session.tail, tail_rng(d.tracker_seed)) for d in draws]
+    return [session_timing(d, session.tempo, t) for d, t in zip(draws, tails, strict=True)], tails
 
 
 def _check_sizes(n_per_task, rng, rate_hz, ik_tol, max_redraws) -> tuple[int, float, float, int]:
