@@ -186,7 +186,8 @@ class BaxterHandoverEnv(gym.Env):
       ``emg_valid``; recorded replays carry the arm and EMG, synthetic
       motions the arm when generated with it. Later (issue 16), without a new
       id: ``hand_valid`` and ``hand_time``, the tracker frame's own time and
-      whether it is new.
+      whether it is new. Later (issue 21), without a new id: the ``session``
+      reset option (default None: the same episodes as before).
     * v0: initial version; ``render_mode="human"``, the ``teleop`` source and
       the ``motion`` option added without changing any other behaviour. Kept
       registered (``observe_body=False``) for one release.

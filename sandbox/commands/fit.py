@@ -141,7 +141,9 @@ def _slices(model) -> list[slice]:
 
 def _format(s: dict) -> str:
     lines = [f"Fitted {len(s['tasks'])} task models (N={s['n_basis']}) on {s['demos']} demos "
-             f"from {s['data']} (observe={','.join(s['observe'])}, "
+             f"from {s['data']}"
+             f"{'' if s['session'] is None else ' session ' + str(s['session'])} "
+             f"(observe={','.join(s['observe'])}, "
              f"preprocess={s['preprocess']})"]
     for name, t in s["tasks"].items():
         lines.append(f"  {name:<20}{t['demos']:>4} demos  T_nom {t['nominal_duration_s']:.2f} s"
