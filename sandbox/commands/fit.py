@@ -61,6 +61,7 @@ def run(args: argparse.Namespace) -> int:
 
     from sandbox.core import IProMP
     from sandbox.data.datasets import load_dataset
+    from sandbox.data.geometry import attach_geometry
     from sandbox.data.recorded import SkippedTrialWarning
 
     out = Path(args.out)
@@ -91,6 +92,7 @@ def run(args: argparse.Namespace) -> int:
     model.fit(demos)
     if args.calibrate:
         _calibrate(model, demos, args, spec, observe)
+    attach_geometry(model, demos)
     model.save(out)
     summary = _summary(model, args, out, len(demos), skipped)
     print(json.dumps(summary, indent=2) if args.json else _format(summary))
@@ -130,7 +132,22 @@ def _summary(model, args: argparse.Namespace, out: Path, n_demos: int, skipped: 
                          if m.kind == "signal"},
         "tasks": {t.name: {"demos": t.n_demos, "nominal_duration_s": t.nominal_duration,
                            "alpha_std": t.alpha_std} for t in model.task_models},
+        "meeting_geometry": _geometry(model),
     }
+
+
+def _geometry(model) -> dict:
+    """Per task the learned hand-to-fingertip offset (m) and its spread, or the note."""
+    import numpy as np
+
+    from sandbox.data.geometry import geometry_of
+
+    geometry, note = geometry_of(model)
+    if note is not None:
+        return {"note": note}
+    return {t: {"offset_m": np.round(g.mean, 4).tolist(),
+                "spread_m": round(float(np.sqrt(np.trace(g.cov))), 4), "demos": g.count}
+            for t, g in geometry.tasks.items()}
 
 
 def _slices(model) -> list[slice]:
@@ -154,6 +171,13 @@ def _format(s: dict) -> str:
         else:
             values, unit = ", ".join(f"{v:.3g}" for v in noise), s["units"][name]
         lines.append(f"  {name} observation noise ({unit}): {values}")
+    geometry = s["meeting_geometry"]
+    if "note" in geometry:
+        lines.append(f"  meeting geometry: {geometry['note']}")
+    for name, g in ({} if "note" in geometry else geometry).items():
+        offset = ", ".join(f"{1e3 * v:+.0f}" for v in g["offset_m"])
+        lines.append(f"  {name:<20}hand-to-fingertip at the meeting ({offset}) mm, spread "
+                     f"{1e3 * g['spread_m']:.0f} mm")
     if s["skipped"]:
         lines.append(f"  {_skipped.summary(s['skipped'])}")
     lines.append(f"Saved {s['out']}")

@@ -211,6 +211,9 @@ class IProMP:
                              for k, v in check_mapping(priors, "priors").items()})
         self._fitted = False
         self.calibration: Calibration | None = None
+        #: What a recording session taught besides the model (JSON-able; e.g. the meeting
+        #: geometry of :mod:`sandbox.data.geometry`): saved and loaded, never interpreted here.
+        self.session: dict[str, Any] = {}
 
     # ------------------------------------------------------------------ fit
     def fit(self, demos: Sequence[DemonstrationLike]) -> IProMP:
@@ -290,6 +293,7 @@ class IProMP:
         self.robot_names = tuple(getattr(first, "robot_names", ()) or ())
         self.priors = task_priors([t.name for t in tasks], self._prior_spec)
         self.calibration = None          # of a previous fit, if any: no longer valid
+        self.session = {}                # likewise
         self._fitted = True
 
     # ------------------------------------------------------------ accessors
@@ -379,6 +383,7 @@ class IProMP:
         model.robot_names = tuple(meta["robot_names"])
         model.priors = np.array([t["prior"] for t in meta["tasks"]], dtype=np.float64)
         model.calibration = f.calibration
+        model.session = dict(meta["session"])
         model._fitted = True
         return model
 

@@ -157,6 +157,19 @@ def run_scenario(scenario: str = "diverging", policy: str | Callable = "dynamic"
             env.close()
 
 
+def grasp_options(model, *, warn: bool = True) -> dict[str, Any]:
+    """Reset options that place the object where ``model``'s demos met the hand.
+
+    ``{"grasp_offset": {task: offset}}`` from the model's learned meeting geometry
+    (:func:`sandbox.data.geometry.geometry_of`); ``{}`` (the environment's default,
+    with a ``UserWarning`` when ``warn``) for a model without one.
+    """
+    from sandbox.data.geometry import geometry_of
+
+    geometry, _ = geometry_of(model, warn=warn)
+    return {} if geometry.source == "default" else {"grasp_offset": geometry.offsets()}
+
+
 def run_episode(env: Any, policy: Policy, seed: int,
                 options: Mapping[str, Any]) -> EpisodeResult:
     """One episode of ``policy`` in ``env`` until termination or truncation.
@@ -268,7 +281,7 @@ def _episodes(scenario, n, seed, data, model, options, observe):
         model = fit_family_model(family, observe=observe or ("hand",))
     out = []
     for i in range(n):
-        opts = dict(options)
+        opts = {**grasp_options(model), **options}
         if scenario == "intent_switch":
             rng = np.random.default_rng(seed + i)
             a, b = rng.choice(list(model.tasks), size=2, replace=False)
@@ -281,9 +294,12 @@ def _recorded_episodes(root: Path, n, seed, options, observe):
     """Each episode replays a random trial with a model fitted on all the other trials.
 
     The model is fitted on the ``observe`` modalities (default the hand) of the
-    smoothed trials; a trial that cannot provide them is left out.
+    smoothed trials; a trial that cannot provide them is left out. The object rides
+    where the other trials' robot met the hand (their meeting geometry, never the
+    replayed trial's own), for every policy alike.
     """
     from sandbox.core import IProMP
+    from sandbox.data.geometry import attach_geometry
     from sandbox.data.recorded import load_recorded
 
     demos, _ = load_recorded(root, observe=observe or ("hand",))
@@ -294,8 +310,8 @@ def _recorded_episodes(root: Path, n, seed, options, observe):
         held_out = demos[int(k)]
         # Any: a Demonstration is frozen, the core's DemonstrationLike declares plain attributes
         others: list[Any] = [d for j, d in enumerate(demos) if j != int(k)]
-        model = IProMP().fit(others)
-        opts = {**options, "source": str(root), "task": held_out.task,
+        model = attach_geometry(IProMP().fit(others), others)
+        opts = {**grasp_options(model), **options, "source": str(root), "task": held_out.task,
                 "trial": Path(held_out.source).name}
         out.append((seed + i, model, opts, held_out))
     return out

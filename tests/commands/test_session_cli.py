@@ -33,3 +33,28 @@ def test_a_bad_session_is_refused_by_argparse(command, value, tmp_path, monkeypa
     monkeypatch.chdir(tmp_path)
     assert main([*command, "--data", "synthetic:objects", "--session", value]) == 2
     assert "argument --session: expected a non-negative integer" in capsys.readouterr().err
+
+
+QUICK = ["--n-per-task", "3", "--windows", "0.5", "--ratios", "0.5", "--workers", "1",
+         "--no-progress"]
+
+
+def test_evaluate_across_two_synthetic_sessions_says_which(tmp_path):
+    out = tmp_path / "r.json"
+    assert main(["evaluate", "--data", "synthetic:objects", "--session", "1", "--test",
+                 "synthetic:objects", "--test-session", "2", *QUICK, "--out", str(out)]) == 0
+    config = json.loads(out.read_text())["config"]
+    assert (config["mode"], config["session"], config["test_session"]) == ("cross-session", 1, 2)
+
+
+def test_test_session_needs_a_synthetic_test_set(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "set" / "a").mkdir(parents=True)
+    for extra, message in ((["--test-session", "2"], "error: --test-session: expected with --test"),
+                           (["--test", str(tmp_path / "set"), "--test-session", "2"],
+                            "session: only for synthetic:NAME data")):
+        assert main(["evaluate", "--data", "synthetic:objects", *extra, *QUICK,
+                     "--out", "r.json"]) == 2
+        err = capsys.readouterr().err.strip()
+        assert message in err and "\n" not in err
+    assert not (tmp_path / "r.json").exists()

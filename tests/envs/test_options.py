@@ -24,6 +24,12 @@ def test_valid_options_are_kept(tmp_path):
 
 @pytest.mark.parametrize("options, match", [
     ({"colour": "red"}, "expected keys among"),
+    ({"grasp_offset": [0.0, 0.1]}, r"grasp_offset: expected 3 finite numbers"),
+    ({"grasp_offset": [0.0, 0.5, 0.0]}, r"grasp_offset: expected .* within 0.3 m"),
+    ({"grasp_offset": [0.0, np.nan, 0.0]}, r"grasp_offset: expected 3 finite numbers"),
+    ({"grasp_offset": "near"}, r"grasp_offset: expected 3 finite numbers"),
+    ({"grasp_offset": {}}, r"grasp_offset: expected task names -> offsets"),
+    ({"grasp_offset": {"up": [1, 1, 1]}}, r"grasp_offset\['up'\]: expected"),
     ({"task": "left"}, "task: expected one of .*objects"),
     ({"task": 3}, "task: expected a task name"),
     ({"object": "banana"}, "object: expected one of"),

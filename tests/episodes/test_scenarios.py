@@ -10,6 +10,7 @@ import pytest
 
 import sandbox.envs  # noqa: F401  (registers the environments)
 import sandbox.episodes.scenarios
+from sandbox.episodes.policies import fit_family_model
 from sandbox.episodes.scenarios import EpisodeResult, run_scenario, summarize
 from sandbox.robot import Q_HOME
 
@@ -63,7 +64,9 @@ def test_same_seed_same_results(diverging_env):
 def test_episode_result_records_recognition_over_time(diverging_env):
     (result,) = run_scenario("diverging", "dynamic", n_episodes=1, seed=3, env=diverging_env,
                              options={"task": "right"})
-    assert result.task == "right" and result.options == {"task": "right"}
+    assert result.task == "right" and result.options["task"] == "right"
+    # the object rode where the model's demos met the hand (issue 21)
+    assert set(result.options["grasp_offset"]) == set(fit_family_model("diverging").tasks)
     times = [t for t, _ in result.recognised]
     assert times[0] == 0.0 and np.all(np.diff(times) > 0) and len(times) == result.steps
     assert result.final_task == result.recognised[-1][1]
