@@ -161,7 +161,7 @@ class BaxterHandoverEnv(gym.Env):
     measurement_tape -> measuring_tape, screw_driver -> screwdriver);
     ``source`` ("synthetic" or a folder ``<root>/<task>/<trial>.csv``);
     ``trial`` (recorded: index or file name); ``speed`` (human speed factor,
-    0.25-4); ``switch_to``, ``switch_phase`` (synthetic intent switch);
+    0.25-4); ``switch_to``, ``switch_phase`` (synthetic intent switch); ``session`` (its seed);
     ``source="teleop"``: the hand follows velocity commands given to
     ``env.unwrapped.motion`` (a :class:`~sandbox.envs.teleop.TeleopMotion`);
     ``motion``: a scripted :class:`~sandbox.envs.human.HumanMotion` (e.g. from
@@ -188,7 +188,7 @@ class BaxterHandoverEnv(gym.Env):
       ``emg_valid``; recorded replays carry the arm and EMG, synthetic
       motions the arm when generated with it. Later (issue 16), without a new
       id: ``hand_valid`` and ``hand_time``, the tracker frame's own time and
-      whether it is new; (issue 21) the ``grasp_offset`` option and info.
+      whether it is new; (issue 21) the ``grasp_offset`` and ``session`` options, and info.
     * v0: initial version; ``render_mode="human"``, the ``teleop`` source and
       the ``motion`` option added without changing any other behaviour. Kept
       registered (``observe_body=False``) for one release.

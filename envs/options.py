@@ -15,7 +15,7 @@ from sandbox.envs.sources import family_tasks
 
 #: Keys accepted in ``options``.
 OPTION_KEYS = ("task", "object", "source", "trial", "speed", "switch_to", "switch_phase",
-               "motion", "grasp_offset")
+               "motion", "grasp_offset", "session")
 #: Sources that are not a folder: the generator, the keyboard teleop.
 NAMED_SOURCES = ("synthetic", "teleop")
 #: Largest grasp offset (m) from the tracked hand (the meeting geometry's own bound).
@@ -53,6 +53,9 @@ class EpisodeOptions:
         offset, or one per task (the model's learned meeting geometry,
         :meth:`sandbox.data.geometry.MeetingGeometry.offsets`); None:
         :data:`~sandbox.envs.task.DEFAULT_HOLD_OFFSET`.
+    session : int or None
+        Synthetic source only: the recording session's seed (>= 0,
+        :func:`sandbox.data.synthetic.session.draw_session`); None: today's data.
     """
 
     task: str | None = None
@@ -63,6 +66,7 @@ class EpisodeOptions:
     switch_to: str | None = None
     switch_phase: float = 0.5
     motion: HumanMotion | None = None
+    session: int | None = None
     grasp_offset: np.ndarray | dict[str, np.ndarray] | None = None
 
     def hold_offset(self, task: str) -> np.ndarray | None:
@@ -97,7 +101,9 @@ def parse_options(options: Mapping[str, Any] | None, family: str) -> EpisodeOpti
         On an unknown key, a task or object that does not exist, a source that is
         neither ``"synthetic"``, ``"teleop"`` nor a folder, a bad speed, or an option
         that does not apply to the source (``trial`` for synthetic, ``switch_to`` for
-        recorded or teleop; ``motion`` with ``source``, ``task``, ``trial`` or ``switch_to``).
+        recorded or teleop; ``motion`` with ``source``, ``task``, ``trial`` or ``switch_to``;
+        ``session`` not an integer >= 0, or with a source other than synthetic, a
+        ``motion`` or ``switch_to``).
     """
     if options is None:
         return EpisodeOptions()
@@ -131,7 +137,8 @@ def parse_options(options: Mapping[str, Any] | None, family: str) -> EpisodeOpti
                           speed=_speed(options.get("speed", 1.0)),
                           switch_to=options.get("switch_to"),
                           switch_phase=_phase(options.get("switch_phase", 0.5)), motion=motion,
-                          grasp_offset=_grasp_offset(options.get("grasp_offset")))
+                          grasp_offset=_grasp_offset(options.get("grasp_offset")),
+                          session=_session(options, source, motion))
 
 
 def _motion(options: Mapping[str, Any]) -> HumanMotion | None:
@@ -146,6 +153,20 @@ def _motion(options: Mapping[str, Any]) -> HumanMotion | None:
         raise ValueError(f"motion: a scripted motion replaces {clash}; expected none of them, "
                          f"got {clash}")
     return motion
+
+
+def _session(options: Mapping[str, Any], source: str, motion: HumanMotion | None) -> int | None:
+    """The ``session`` option: None, or an int >= 0 for a drawn synthetic motion."""
+    from sandbox.validation import check_integer
+
+    value = options.get("session")
+    if value is None:
+        return None
+    session = check_integer(value, "session", 0)
+    if source != "synthetic" or motion is not None or options.get("switch_to") is not None:
+        raise ValueError(f"session: only for a synthetic motion without switch_to (a recorded, "
+                         f"teleop or scripted motion has its own), got session={value!r}")
+    return session
 
 
 def _source(value: Any) -> str:

@@ -15,7 +15,9 @@ trials of ``--data`` (with the options the leave-one-out uses: ``--config``,
 saying ``mode: cross-session``, ``train``, ``test``, ``n_train`` and ``n_test``,
 and ``per_trial``. B's tasks must be among those of ``--data``; ``--tasks`` and
 ``--n-per-task`` apply to both; ``--test-seed`` is the seed of a synthetic B
-(default ``--seed``: the same trials as a synthetic ``--data`` of that name).
+(default ``--seed``: the same trials as a synthetic ``--data`` of that name);
+``--session`` and ``--test-session`` are the recording sessions of a synthetic
+``--data`` and ``--test`` (:mod:`sandbox.data.synthetic.session`; default none).
 
 A ``--data`` folder of sessions, ``ROOT/<session>/<task>/<trial>.csv``, is
 evaluated leave-one-session-out: each session predicted by a model fitted on
@@ -68,6 +70,10 @@ def add_arguments(parser) -> None:
     parser.add_argument("--seed", type=_types.SEED, default=0, help="seed of synthetic data")
     parser.add_argument("--test-seed", type=_types.SEED, default=None,
                         help="seed of a synthetic --test set (default: --seed)")
+    _observation.add_session_argument(parser)
+    parser.add_argument("--test-session", type=_types.SEED, default=None, metavar="S",
+                        help="recording session of a synthetic --test set, an integer >= 0 "
+                             "(default: none, today's data)")
     parser.add_argument("--n-per-task", type=_types.PER_TASK, default=None,
                         help="trials per task (synthetic: generated; folder: first N)")
     parser.add_argument("--out", type=_types.output_file, required=True,
@@ -125,6 +131,9 @@ def _sessions(args) -> list:
     if args.test is not None and args.model is not None:
         raise ValueError("--test: expected either --test (fit on --data, predict --test) or "
                          "--model (predict --data with a saved model), got both")
+    if args.test_session is not None and args.test is None:
+        raise ValueError(f"--test-session: expected with --test (the session of a synthetic "
+                         f"--test set), got --test-session {args.test_session} without --test")
     if args.test_seed is not None and args.test is None:
         raise ValueError(f"--test-seed: expected with --test (the seed of a synthetic --test "
                          f"set), got --test-seed {args.test_seed} without --test")
@@ -153,14 +162,17 @@ def run(args) -> int:
     spec, observe, model, config, sessions = _prepare(args)
     load = dict(seed=args.seed, tasks=_observation.split(args.tasks),
                 n_per_task=args.n_per_task, spec=spec, observe=observe,
-                cache=_observation.cache(args), progress=not args.no_progress)
+                cache=_observation.cache(args), progress=not args.no_progress,
+                session=args.session)
     if args.test is not None or sessions:
         trials, described, runtime = _cross(args, config, load)
     else:
         trials, described, runtime = _single(args, model, config, load)
     status("report: metrics and bootstrap intervals", not args.no_progress)
     dataset = str(args.data) if args.test is None else str(args.test)
-    report = build_report(trials, described, dataset, runtime)
+    sessions_given = {k: v for k, v in (("session", args.session),
+                                        ("test_session", args.test_session)) if v is not None}
+    report = build_report(trials, {**described, **sessions_given}, dataset, runtime)
     if "mode" in described:
         from sandbox.eval import crosssession
 
@@ -205,7 +217,8 @@ def _cross(args, config, load: dict) -> tuple[list[dict], dict, float]:
     if args.test is not None:
         seed = args.seed if args.test_seed is None else args.test_seed
         try:
-            test, more = cs.load_sets(args.test, **{**load, "seed": seed})
+            test, more = cs.load_sets(args.test, **{**load, "seed": seed,
+                                                    "session": args.test_session})
         except ValueError as error:         # which set a bad --tasks or folder is
             raise ValueError(f"--test {args.test}: {error}") from None
     _skipped.report(skipped + more, args.verbose, sum(len(s.train) for s in fit + test))

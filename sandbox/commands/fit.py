@@ -2,7 +2,8 @@
 
 Loads the demonstrations with :func:`sandbox.data.datasets.load_dataset`
 (training demos are RTS-smoothed by default, ``--preprocess``; ``--observe``
-and ``--spec`` choose the modalities), fits one Interaction ProMP per task
+and ``--spec`` choose the modalities; ``--session S`` a synthetic set's
+recording session), fits one Interaction ProMP per task
 (:class:`sandbox.core.IProMP`) and saves it in the core's format (``.npz`` +
 JSON metadata, no pickle). Prints what was fitted: tasks, demos per task,
 nominal durations, the speed prior, the estimated observation noise of every
@@ -39,6 +40,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--n-per-task", type=_types.PER_TASK, default=None,
                         help="demos per task (folder: the first N; synthetic: generated, 20)")
     parser.add_argument("--seed", type=_types.SEED, default=0, help="seed of a synthetic set (0)")
+    _observation.add_session_argument(parser)
     parser.add_argument("--preprocess", choices=("none", "causal", "smooth"), default="smooth",
                         help="human-track preprocessing of the demos (smooth)")
     _observation.add_arguments(parser)
@@ -81,7 +83,8 @@ def run(args: argparse.Namespace) -> int:
         warnings.simplefilter("always", SkippedTrialWarning)
         demos = load_dataset(args.data, spec=spec, observe=observe, seed=args.seed,
                              tasks=_observation.split(args.tasks), n_per_task=args.n_per_task,
-                             preprocess=args.preprocess, cache=_observation.cache(args))
+                             preprocess=args.preprocess, cache=_observation.cache(args),
+                             session=args.session)
     skipped = [str(w.message) for w in caught if issubclass(w.category, SkippedTrialWarning)]
     _skipped.report(skipped, args.verbose, len(demos))
     if not demos:
@@ -102,7 +105,8 @@ def _calibrate(model, demos, args, spec, observe) -> None:
 
     streams = load_dataset(args.data, spec=spec, observe=observe, seed=args.seed,
                            tasks=_observation.split(args.tasks), n_per_task=args.n_per_task,
-                           preprocess="causal", cache=_observation.cache(args))
+                           preprocess="causal", cache=_observation.cache(args),
+                           session=args.session)
     by_source = {s.source: s for s in streams}
     kept = [d for d in demos if d.source in by_source]
     if len(kept) != len(demos):
@@ -116,7 +120,8 @@ def _summary(model, args: argparse.Namespace, out: Path, n_demos: int, skipped: 
     import numpy as np
 
     return {
-        "data": str(args.data), "out": str(out), "preprocess": args.preprocess,
+        "data": str(args.data), "session": args.session, "out": str(out),
+        "preprocess": args.preprocess,
         "n_basis": model.basis.n_basis, "demos": n_demos, "skipped": skipped,
         "observe": [m.name for m in model.modalities],
         "noise_std": {m.name: [float(s) for s in np.sqrt(model.noise[sl]) * model.scale[sl]]
@@ -153,7 +158,9 @@ def _slices(model) -> list[slice]:
 
 def _format(s: dict) -> str:
     lines = [f"Fitted {len(s['tasks'])} task models (N={s['n_basis']}) on {s['demos']} demos "
-             f"from {s['data']} (observe={','.join(s['observe'])}, "
+             f"from {s['data']}"
+             f"{'' if s['session'] is None else ' session ' + str(s['session'])} "
+             f"(observe={','.join(s['observe'])}, "
              f"preprocess={s['preprocess']})"]
     for name, t in s["tasks"].items():
         lines.append(f"  {name:<20}{t['demos']:>4} demos  T_nom {t['nominal_duration_s']:.2f} s"

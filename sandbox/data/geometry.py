@@ -144,6 +144,15 @@ class MeetingGeometry:
                              f"learned meeting geometry), got {task!r}")
         return np.array(self.tasks[task].mean)
 
+    def pooled(self) -> FloatArray:
+        """Mean offset (3,) m over every task's demonstrations (the default's for a default
+        geometry): for a hand motion of none of the tasks, e.g. a scripted one."""
+        if self.source == "default" or not self.tasks:
+            return np.array(DEFAULT_OFFSET)
+        counts = np.array([max(g.count, 1) for g in self.tasks.values()], dtype=np.float64)
+        means = np.array([g.mean for g in self.tasks.values()])
+        return counts @ means / counts.sum()
+
     def offsets(self) -> dict[str, list[float]]:
         """Task -> mean offset (m), e.g. for an environment's ``grasp_offset`` reset option."""
         return {task: g.mean.tolist() for task, g in self.tasks.items()}

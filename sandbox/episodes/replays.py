@@ -76,17 +76,22 @@ class Replay(NamedTuple):
     provenance: dict
 
 
-def grasp_options(model, *, warn: bool = True) -> dict[str, Any]:
+def grasp_options(model, *, warn: bool = True, task: str | None = None) -> dict[str, Any]:
     """Reset options that place the object where ``model``'s demos met the hand.
 
     ``{"grasp_offset": {task: offset}}`` from the model's learned meeting geometry
-    (:func:`sandbox.data.geometry.geometry_of`); ``{}`` (the environment's default,
-    with a ``UserWarning`` when ``warn``) for a model without one.
+    (:func:`sandbox.data.geometry.geometry_of`); with ``task`` (a scripted motion's
+    label) not among the model's, the offset pooled over its tasks; ``{}`` (the
+    environment's default, with a ``UserWarning`` when ``warn``) for a model without one.
     """
     from sandbox.data.geometry import geometry_of
 
     geometry, _ = geometry_of(model, warn=warn)
-    return {} if geometry.source == "default" else {"grasp_offset": geometry.offsets()}
+    if geometry.source == "default":
+        return {}
+    if task is not None and task not in geometry.tasks:
+        return {"grasp_offset": geometry.pooled().tolist()}
+    return {"grasp_offset": geometry.offsets()}
 
 
 class _Set(NamedTuple):

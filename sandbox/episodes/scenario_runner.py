@@ -82,7 +82,8 @@ def reset_options(scenario: Scenario, model=None) -> dict[str, Any]:
 
     opts: dict[str, Any] = {"speed": scenario.speed}
     if model is not None:
-        opts.update(grasp_options(model))
+        scripted = scenario.human_kind not in ("synthetic", "recorded")
+        opts.update(grasp_options(model, task=scenario.human["task"] if scripted else None))
     if scenario.object is not None:
         opts["object"] = scenario.object
     human = scenario.human

@@ -149,3 +149,16 @@ def test_a_malformed_stored_geometry_is_refused(entry):
 def test_a_learned_geometry_refuses_an_unknown_task(demos):
     with pytest.raises(ValueError, match="tasks with a learned meeting geometry"):
         learn_geometry(demos).offset("sideways")
+
+
+def test_a_motion_of_no_task_gets_the_offset_pooled_over_the_tasks(demos):
+    from sandbox.episodes.scenarios import grasp_options
+
+    geometry = learn_geometry(demos)
+    offsets = np.array([g.mean for g in geometry.tasks.values()])
+    np.testing.assert_allclose(geometry.pooled(), offsets.mean(axis=0))   # 4 demos each
+    model = attach_geometry(IProMP(n_basis=11).fit(demos), demos)
+    np.testing.assert_allclose(grasp_options(model, task="scripted")["grasp_offset"],
+                               geometry.pooled())
+    assert grasp_options(model, task="up")["grasp_offset"] == geometry.offsets()
+    np.testing.assert_array_equal(MeetingGeometry.default(["a"]).pooled(), DEFAULT_OFFSET)
