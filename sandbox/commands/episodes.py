@@ -47,7 +47,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--policies", default="dynamic,static", metavar="NAMES",
                         help=f"comma-separated, among {', '.join(POLICIES)} "
                              "(default dynamic,static)")
-    parser.add_argument("--data", default=None,
+    parser.add_argument("--data", default=None, metavar="DIR",
                         help="scenario recorded: the recorded set's folder (leave-one-out), "
                              "or a folder of sessions ROOT/<session>/<task>/<trial>.csv "
                              "(leave-one-session-out), or with --test the trials to fit on")
@@ -57,7 +57,8 @@ def add_arguments(parser) -> None:
                              "geometry); its tasks among --data's")
     parser.add_argument("--observe", default=None, metavar="NAMES",
                         help="modalities the policies observe: hand, arm, emg (default: the "
-                             "hand; synthetic scenarios: the model's)")
+                             "hand; synthetic scenarios: the model's); recorded: every "
+                             "policy's model is fitted on them, recorded_robot's too")
     parser.add_argument("--episodes", type=_types.integer(1, 100_000), default=20,
                         help="episodes per policy (recorded: the number of trials replayed; "
                              "the size of the set replayed (--test, or all sessions) replays "
