@@ -126,3 +126,27 @@ def test_replays_that_cannot_run_exit_2_with_one_line(sessions, tmp_path, capsys
     assert main(["episodes", "--episodes", "1", *argv, "--json", str(out)]) == 2
     err = capsys.readouterr().err.strip()
     assert match in err and "\n" not in err and not out.exists()
+
+
+def test_recorded_halves_replayed_across_sessions(recorded_dir, tmp_path):
+    """The recorded set split by recording time (links, no copies), with EMG: the late half's
+    trials replayed with a model of the early half, in its meeting geometry."""
+    from sandbox.data.geometry import learn_geometry
+    from sandbox.data.recorded import load_recorded
+
+    for task in ("screw_driver", "pencil_box"):
+        for i, path in enumerate(sorted((recorded_dir / task).glob("*.csv"))[:8]):
+            link = tmp_path / ("early" if i < 4 else "late") / task / path.name
+            link.parent.mkdir(parents=True, exist_ok=True)
+            link.symlink_to(path)
+    out = tmp_path / "halves.json"
+    assert main(["episodes", "--scenario", "recorded", "--data", str(tmp_path / "early"),
+                 "--test", str(tmp_path / "late"), "--policies", "recorded_robot",
+                 "--observe", "hand,emg", "--episodes", "2", "--json", str(out)]) == 0
+    entry = json.loads(out.read_text())["recorded_robot"]
+    assert entry["config"]["observe"] == ["hand", "emg"]
+    early = learn_geometry(load_recorded(tmp_path / "early", observe=("hand", "emg"))[0])
+    for e in entry["episodes"]:
+        assert (tmp_path / "late" / e["task"] / e["options"]["trial"]).is_file()
+        assert e["options"]["grasp_offset"][e["task"]] == pytest.approx(
+            early.offsets()[e["task"]], abs=1e-12)
