@@ -174,7 +174,7 @@ def _load(folder: Path, name: str, observe, option: str = "data") -> _Set:
     try:
         demos, skipped = load_recorded(folder, observe=observe)
     except ValueError as error:
-        raise ValueError(f"{option} {name}: {error}") from None
+        raise ValueError(f"{option}: {str(error).removeprefix('data: ')}") from None
     if not demos:
         reasons = sorted({reason for _, reason in skipped})
         raise ValueError(f"{option}: no usable trial in {str(folder)!r} ({len(skipped)} "
