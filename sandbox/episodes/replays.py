@@ -161,7 +161,7 @@ def plan_replays(data: str | Path, n: int, seed: int, *, test: str | Path | None
     if mode == LEAVE_ONE_OUT:
         return _leave_one_out(_load(Path(data), str(data), observe), n, seed, options)
     fit = _load_sets(Path(data), observe)
-    if mode == CROSS_SESSION:
+    if test is not None:                    # cross-session
         replayed = _load(Path(test), str(test), observe, "test")
         return _cross_session(fit, str(data), replayed, n, seed, options)
     return _leave_one_session_out(fit, n, seed, options)
