@@ -55,6 +55,14 @@ def add_arguments(parser) -> None:
                         help="scenario recorded, cross-session: replay this set's trials with "
                              "one model of all of --data (the object at --data's meeting "
                              "geometry); its tasks among --data's")
+    parser.add_argument("--session", type=_types.SEED, default=None, metavar="S",
+                        help="scenarios diverging, objects: the motions of synthetic recording "
+                             "session S (tracker frame, where the fingertip meets the object, "
+                             "tempo, tail); the model is fitted on --train-session's demos and "
+                             "recorded_robot replays each motion's own robot (the oracle)")
+    parser.add_argument("--train-session", type=_types.SEED, default=None, metavar="A",
+                        help="with --session: fit the model on synthetic session A instead "
+                             "(the object rides at A's learned meeting geometry)")
     parser.add_argument("--observe", default=None, metavar="NAMES",
                         help="modalities the policies observe: hand, arm, emg (default: the "
                              "hand; synthetic scenarios: the model's); recorded: every "
@@ -103,6 +111,11 @@ def run(args) -> int:
 
 def _check_data(args) -> None:
     """``--test`` only in the recorded scenario, as one set; ``--data`` in one layout."""
+    if args.train_session is not None and args.session is None:
+        raise ValueError("--train-session: expected with --session (the session to replay)")
+    if args.session is not None and args.scenario not in ("diverging", "objects"):
+        raise ValueError(f"--session: expected with --scenario diverging or objects (synthetic "
+                         f"sessions), got --scenario {args.scenario}")
     if args.test is not None and args.scenario != "recorded":
         raise ValueError(f"--test: expected with --scenario recorded (a recorded set to "
                          f"replay), got --scenario {args.scenario}")
@@ -118,11 +131,12 @@ def _run_policy(name: str, args) -> dict:
     # recorded_robot too: its model (hence its trials and meeting geometry) is the others'
     results = run_scenario(args.scenario, name, n_episodes=args.episodes, seed=args.seed,
                            dow_t=args.dow, ratio=args.ratio, data=args.data, test=args.test,
-                           observe=args.observe)
+                           observe=args.observe, session=args.session,
+                           train_session=args.train_session)
     episodes = [{"seed": r.seed, "task": r.task, "final_task": r.final_task,
                  "success": r.success, "handover_time": r.handover_time,
                  "min_distance": r.min_distance, "final_distance": r.final_distance,
-                 "options": r.options, **({"replay": r.replay} if r.replay else {})}
+                 "options": _jsonable(r.options), **({"replay": r.replay} if r.replay else {})}
                 for r in results]
     entry = {"summary": _summary(results), "episodes": episodes}
     if args.scenario == "recorded":
@@ -132,6 +146,12 @@ def _run_policy(name: str, args) -> dict:
         entry["per_session"] = {s: _summary([r for r in results if r.replay["session"] == s])
                                 for s in sorted(sessions)}
     return entry
+
+
+def _jsonable(options: dict) -> dict:
+    """Reset options for JSON: a scripted ``motion`` (a synthetic session's) as its source."""
+    motion = options.get("motion")
+    return options if motion is None else {**options, "motion": motion.source}
 
 
 def _summary(results) -> dict:

@@ -113,7 +113,8 @@ def run_scenario(scenario: str = "diverging", policy: str | Callable = "dynamic"
                  n_episodes: int = 20, seed: int = 0, dow_t: float = 0.2, ratio: float = 0.3,
                  data: str | Path | None = None, test: str | Path | None = None, env=None,
                  model=None, options: Mapping[str, Any] | None = None,
-                 observe: Sequence[str] | str | None = None) -> list[EpisodeResult]:
+                 observe: Sequence[str] | str | None = None, session: int | None = None,
+                 train_session: int | None = None) -> list[EpisodeResult]:
     """Run ``n_episodes`` seeded episodes of ``scenario`` with ``policy``.
 
     Parameters
@@ -151,15 +152,21 @@ def run_scenario(scenario: str = "diverging", policy: str | Callable = "dynamic"
         or a list; each must be the model's). Default: every modality of the
         model the environment observes; ``recorded``: the hand (the model is
         fitted on the ``observe`` modalities loaded from the set).
+    session, train_session : int, optional
+        ``diverging``/``objects``: the episodes are motions of synthetic session
+        ``session``, the model is fitted on ``train_session``'s demos (default the
+        same) and ``recorded_robot`` replays each motion's own robot
+        (:mod:`sandbox.episodes.sessions`).
 
     Returns
     -------
     list of EpisodeResult
     """
-    observe = _check_run(scenario, policy, n_episodes, data, observe, test)
+    observe = _check_run(scenario, policy, n_episodes, data, observe, test,
+                         (session, train_session))
     make_policy = _policy_factory(policy, dow_t, ratio, observe)
     episodes = _episodes(scenario, int(n_episodes), int(seed), data, model, options or {},
-                         observe, test)
+                         observe, test, (session, train_session))
     own_env = env is None
     if own_env:
         env = _make_env(scenario)
@@ -222,17 +229,19 @@ def _make_env(scenario: str) -> Any:
     return gym.make(SCENARIOS[scenario][0])
 
 
-def _check_run(scenario, policy, n_episodes, data, observe,
-               test=None) -> tuple[str, ...] | None:
+def _check_run(scenario, policy, n_episodes, data, observe, test=None,
+               sessions=(None, None)) -> tuple[str, ...] | None:
     """Check :func:`run_scenario`'s arguments; return ``observe`` checked."""
     check_choice(scenario, "scenario", tuple(SCENARIOS))
     if not callable(policy):
         check_choice(policy, "policy", POLICIES)
     if isinstance(n_episodes, bool) or int(n_episodes) != n_episodes or n_episodes < 1:
         raise ValueError(f"n_episodes: expected an integer >= 1, got {n_episodes!r}")
-    if policy == "recorded_robot" and scenario != "recorded":
-        raise ValueError(f"policy: 'recorded_robot' replays a recorded trial's robot, expected "
-                         f"scenario='recorded', got {scenario!r}")
+    session = _check_sessions(scenario, *sessions)
+    if policy == "recorded_robot" and scenario != "recorded" and session is None:
+        raise ValueError(f"policy: 'recorded_robot' replays a recorded trial's robot (or a "
+                         f"synthetic session's), expected scenario='recorded' or a session, "
+                         f"got {scenario!r}")
     if (scenario == "recorded") != (data is not None):
         raise ValueError("data: expected the recorded set's folder for the 'recorded' "
                          f"scenario and nothing otherwise, got scenario={scenario!r}, "
@@ -245,6 +254,22 @@ def _check_run(scenario, policy, n_episodes, data, observe,
         raise ValueError("observe: expected None with a policy factory (it chooses its own "
                          f"modalities), got {checked!r}")
     return checked
+
+
+def _check_sessions(scenario: str, session, train_session) -> int | None:
+    """``session`` checked: only for the diverging and objects scenarios, and needed
+    by ``train_session``."""
+    from sandbox.episodes.sessions import check_session
+
+    session = check_session(session)
+    train = check_session(train_session, "train_session")
+    if session is not None and scenario not in ("diverging", "objects"):
+        raise ValueError(f"session: expected None for the {scenario!r} scenario (sessions are "
+                         f"synthetic: 'diverging' or 'objects'), got {session!r}")
+    if train is not None and session is None:
+        raise ValueError(f"train_session: expected a session to replay too, got only "
+                         f"train_session={train!r}")
+    return session
 
 
 def _check_observe(observe) -> tuple[str, ...] | None:
@@ -274,10 +299,17 @@ def _policy_factory(policy, dow_t: float, ratio: float, observe) -> Callable:
     return lambda model, demo: StaticPolicy(model, ratio=ratio, observe=observe)
 
 
-def _episodes(scenario, n, seed, data, model, options, observe, test=None) -> list[Replay]:
+def _episodes(scenario, n, seed, data, model, options, observe, test=None,
+              sessions=(None, None)) -> list[Replay]:
     """Every episode's seed, model, reset options, replayed demo (or None) and provenance."""
     if scenario == "recorded":
         return plan_replays(data, n, seed, test=test, observe=observe, options=options)
+    if sessions[0] is not None:
+        from sandbox.episodes.sessions import session_episodes
+
+        return session_episodes(SCENARIOS[scenario][1], n, seed, sessions[0],
+                                train_session=sessions[1], model=model, options=options,
+                                observe=observe)
     from sandbox.episodes.policies import fit_family_model
 
     if model is None:
