@@ -307,7 +307,9 @@ def _episodes(scenario, n, seed, data, model, options, observe, test=None,
     if sessions[0] is not None:
         from sandbox.episodes.sessions import session_episodes
 
-        return session_episodes(SCENARIOS[scenario][1], n, seed, sessions[0],
+        family = SCENARIOS[scenario][1]
+        assert family is not None  # sessions are checked to be of a synthetic family
+        return session_episodes(family, n, seed, sessions[0],
                                 train_session=sessions[1], model=model, options=options,
                                 observe=observe)
     from sandbox.episodes.policies import fit_family_model
