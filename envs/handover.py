@@ -161,11 +161,16 @@ class BaxterHandoverEnv(gym.Env):
     measurement_tape -> measuring_tape, screw_driver -> screwdriver);
     ``source`` ("synthetic" or a folder ``<root>/<task>/<trial>.csv``);
     ``trial`` (recorded: index or file name); ``speed`` (human speed factor,
-    0.25-4); ``switch_to``, ``switch_phase`` (synthetic intent switch);
+    0.25-4); ``switch_to``, ``switch_phase`` (synthetic intent switch); ``session`` (its seed);
     ``source="teleop"``: the hand follows velocity commands given to
     ``env.unwrapped.motion`` (a :class:`~sandbox.envs.teleop.TeleopMotion`);
     ``motion``: a scripted :class:`~sandbox.envs.human.HumanMotion` (e.g. from
-    :func:`~sandbox.envs.sources.waypoint_motion`).
+    :func:`~sandbox.envs.sources.waypoint_motion`); ``grasp_offset``: where the
+    object's grasp point rides from the tracked hand (3,) m, or one per task
+    (``{task: offset}``, e.g. ``MeetingGeometry.offsets()`` of the model's learned
+    meeting geometry, :mod:`sandbox.data.geometry`); default
+    :data:`~sandbox.envs.task.DEFAULT_HOLD_OFFSET`. ``info["grasp_offset"]`` says
+    which was used.
 
     Rendering
     ---------
@@ -183,7 +188,7 @@ class BaxterHandoverEnv(gym.Env):
       ``emg_valid``; recorded replays carry the arm and EMG, synthetic
       motions the arm when generated with it. Later (issue 16), without a new
       id: ``hand_valid`` and ``hand_time``, the tracker frame's own time and
-      whether it is new.
+      whether it is new; (issue 21) the ``grasp_offset`` and ``session`` options, and info.
     * v0: initial version; ``render_mode="human"``, the ``teleop`` source and
       the ``motion`` option added without changing any other behaviour. Kept
       registered (``observe_body=False``) for one release.
@@ -263,16 +268,18 @@ class BaxterHandoverEnv(gym.Env):
         episode = parse_options(options, self.family)
         motion = episode_motion(episode, self.family, self.np_random)
         object_name = episode.object or object_for(motion.task, self.default_object)
+        hold_offset = episode.hold_offset(motion.task)
         self.task.release()
         self.sim.restore()
         self.robot.reset(Q_HOME)
-        self.task.reset(object_name, motion.position(0.0))
+        self.task.reset(object_name, motion.position(0.0), hold_offset)
         self.motion, self.episode = motion, episode
         self._observer.reset()
         self._steps, self._t, self._prev_target = 0, 0.0, Q_HOME.copy()
         self._handover_time: float | None = None
         info = {"task": motion.task, "object": object_name, "source": motion.source,
-                "speed": episode.speed, "duration": motion.duration}
+                "speed": episode.speed, "duration": motion.duration,
+                "grasp_offset": self.task.hold_offset.tolist()}
         if self.render_mode == "human":
             self._show(new_episode=True)
         return self._observation(), info

@@ -5,7 +5,9 @@
   down, straight), optionally with an intent switch to another task. The body
   follows the clean reach, the robot observes it through the tracker model,
   and the same-side elbow and shoulder (``arm``) when the demonstration
-  carries them; never EMG (it is not simulated).
+  carries them; never EMG (it is not simulated). A *session* (an integer
+  seed, :mod:`sandbox.data.synthetic.session`) shows the scene as its tracker
+  reports it: the body follows the hand in the tracker's frame.
 * :func:`recorded_motion`: replay of a trial ``<root>/<task>/<trial>.csv`` in
   the recorded layout. The robot observes the causally filtered track
   (:func:`sandbox.data.load_trial` with ``preprocess="causal"``: only accepted
@@ -51,7 +53,8 @@ def family_tasks(family: str) -> tuple[str, ...]:
 
 
 def synthetic_motion(family: str, task: str, rng: np.random.Generator, *,
-                     switch_to: str | None = None, switch_phase: float = 0.5) -> HumanMotion:
+                     switch_to: str | None = None, switch_phase: float = 0.5,
+                     session: int | None = None) -> HumanMotion:
     """One synthetic hand motion of ``task``.
 
     Parameters
@@ -67,31 +70,73 @@ def synthetic_motion(family: str, task: str, rng: np.random.Generator, *,
         of the motion (an intent switch); the episode's task is then this one.
     switch_phase : float
         Fraction of the motion's duration at which the intent switches.
+    session : int, optional
+        A recording session's seed (>= 0; not with ``switch_to``): ``true``
+        is then the hand as a noiseless tracker of the session reports it
+        (``meta["tracked_clean"]`` of the demonstration: the scene is in the
+        robot's frame as the tracker reports the hand), ``measured`` the
+        tracked hand with its artefacts, and ``meta["session"]`` the session
+        (:meth:`~sandbox.data.synthetic.session.Session.to_dict`).
 
     Returns
     -------
     HumanMotion
-        ``meta["handover_target"]`` is where the demonstrated gripper met the hand.
+        ``meta["handover_target"]`` (3,) m is where the demonstrated gripper
+        tip met the hand (Baxter's base frame); ``meta["meeting_offset"]``
+        (3,) m the tip minus ``true`` at the meeting (both arrived; the last
+        row for an intent switch); ``meta["robot"]``: the demonstration's
+        robot, ``{"times": (T,) s, "joints": (T, 7) rad}`` on the motion's
+        unscaled times (so an oracle policy can replay it).
     """
+    demo, meta = _synthetic_demo(family, task, rng, switch_to, switch_phase, session)
+    times = demo.times - demo.times[0]
+    true = demo.meta.get("tracked_clean", demo.meta["clean_human"])
+    return HumanMotion(
+        times=times, true=true, measured=demo.select("hand").human, task=demo.task,
+        source=demo.source, body=demo_body(demo),
+        meta={**meta, "handover_target": np.array(demo.meta["handover_target"]),
+              "meeting_offset": _meeting_offset(demo, true),
+              "robot": {"times": times, "joints": np.array(demo.robot)}},
+    )
+
+
+def _synthetic_demo(family: str, task: str, rng: np.random.Generator, switch_to: str | None,
+                    switch_phase: float, session: int | None):
+    """The demonstration of :func:`synthetic_motion` and the motion's ``meta`` it gives."""
     specs, variability = family_specs(family)
     by_name = {spec.name: spec for spec in specs}
     for name in (task, switch_to) if switch_to is not None else (task,):
         if name not in by_name:
             raise ValueError(f"task: expected one of {list(by_name)} ({family}), got {name!r}")
+    if session is not None and switch_to is not None:
+        raise ValueError(f"session: expected None with switch_to (an intent switch has no "
+                         f"session), got {session!r}")
     if switch_to is None:
         (demo,) = generate([by_name[task]], 1, rng, family=family, variability=variability,
-                           observe=SYNTHETIC_OBSERVE)
-        meta = {}
-    else:
-        demo, truth = intent_switch_demo(task, switch_to, switch_phase, rng, family=family,
-                                         observe=SYNTHETIC_OBSERVE)
-        meta = {"intent": truth}
-    return HumanMotion(
-        times=demo.times - demo.times[0], true=demo.meta["clean_human"],
-        measured=demo.select("hand").human, task=demo.task, source=demo.source,
-        meta={**meta, "handover_target": np.array(demo.meta["handover_target"])},
-        body=demo_body(demo),
-    )
+                           observe=SYNTHETIC_OBSERVE, session=session)
+        return demo, ({} if session is None else {"session": demo.meta["session"]})
+    demo, truth = intent_switch_demo(task, switch_to, switch_phase, rng, family=family,
+                                     observe=SYNTHETIC_OBSERVE)
+    return demo, {"intent": truth}
+
+
+def _meeting_offset(demo, true: np.ndarray) -> np.ndarray:
+    """The fingertip minus ``true`` (T, 3) m at the demonstration's meeting, shape (3,) m.
+
+    A session's demonstration has it (``meta["meeting_offset"]``); otherwise
+    the meeting is the first row both the hand and the robot have arrived
+    (the last row for an intent switch).
+    """
+    from sandbox.data.synthetic.robot import kinematics
+    from sandbox.data.synthetic.tails import meeting_row
+    from sandbox.robot import TIP_LINK
+
+    if "meeting_offset" in demo.meta:
+        return np.array(demo.meta["meeting_offset"])
+    meta, row = demo.meta, len(demo.times) - 1
+    if "reach_time" in meta and "robot_time" in meta:
+        row = meeting_row(demo.times, meta["reach_time"], meta["robot_time"])
+    return kinematics().fk(demo.robot[row], link=TIP_LINK) - true[row]
 
 
 def episode_motion(episode, family: str, rng: np.random.Generator):
@@ -111,7 +156,7 @@ def episode_motion(episode, family: str, rng: np.random.Generator):
         tasks = family_tasks(family)
         task = episode.task or tasks[int(rng.integers(len(tasks)))]
         motion = synthetic_motion(family, task, rng, switch_to=episode.switch_to,
-                                  switch_phase=episode.switch_phase)
+                                  switch_phase=episode.switch_phase, session=episode.session)
     else:
         motion = recorded_motion(episode.source, episode.task, episode.trial, rng)
     return motion if episode.speed == 1.0 else motion.scaled(episode.speed)

@@ -2,8 +2,10 @@
 
 While the human holds it, the object moves with the kinematic hand (both are
 teleported at every physics step, the object at rest), its grasp point at
-:data:`HOLD_OFFSET` from the tracked hand point (where the demonstrated gripper
-tip met the hand). When the gripper is
+an offset from the tracked hand point: where the demonstrated gripper tip met
+the hand, learned per task from the training demonstrations (the ``grasp_offset``
+reset option, which the episode runners fill from the model's meeting geometry,
+:mod:`sandbox.data.geometry`), else :data:`DEFAULT_HOLD_OFFSET`. When the gripper is
 closed (:func:`~sandbox.envs.robot.BaxterArm.gripper_closed`) with its
 fingertip point within ``grasp_radius`` of the grasp point, the object is
 fixed to the gripper where it is (a PyBullet constraint) and the hand lets go: that is the handover,
@@ -46,9 +48,11 @@ TASK_OBJECTS = {
 }
 #: Object for any other task (e.g. the diverging family's).
 DEFAULT_OBJECT = "box"
-#: Grasp point of the held object relative to the tracked hand point (m): the
-#: median place where the recorded gripper tip met the hand.
-HOLD_OFFSET = GRASP_OFFSET
+#: Grasp point of the held object relative to the tracked hand point (m) when an episode
+#: gives none: the synthetic generator's default (:data:`sandbox.robot.GRASP_OFFSET`), right
+#: for its sessionless synthetic motions. Recorded sessions differ from it by several cm:
+#: give the model's learned geometry (``grasp_offset``) instead.
+DEFAULT_HOLD_OFFSET = GRASP_OFFSET
 #: Table placement (m): centre of its top surface, 0.74 m above the floor.
 TABLE_TOP = np.array([0.85, 0.1, FLOOR_Z + 0.74])
 
@@ -107,6 +111,7 @@ class HandoverTask:
             sim.disable_collisions(robot.name, name)
             sim.disable_collisions(human.name, name)
         self.object: str | None = None
+        self.hold_offset = np.array(DEFAULT_HOLD_OFFSET)
         self._constraint: int | None = None
         self.handed_over = False
 
@@ -121,10 +126,14 @@ class HandoverTask:
             self.sim.detach(self._constraint)
             self._constraint = None
 
-    def reset(self, object_name: str, hand: FloatArray) -> None:
-        """Put ``object_name`` in the hand at ``hand`` (3,) m."""
+    def reset(self, object_name: str, hand: FloatArray,
+              hold_offset: FloatArray | None = None) -> None:
+        """Put ``object_name`` in the hand at ``hand`` (3,) m, its grasp point at
+        ``hold_offset`` (3,) m from it (default :data:`DEFAULT_HOLD_OFFSET`)."""
         if object_name not in urdf.OBJECTS:
             raise ValueError(f"object: expected one of {list(urdf.OBJECTS)}, got {object_name!r}")
+        self.hold_offset = np.array(DEFAULT_HOLD_OFFSET if hold_offset is None else hold_offset,
+                                    dtype=np.float64)
         self.release()
         self.object, self.handed_over = object_name, False
         self.move_hand(hand)
@@ -133,7 +142,7 @@ class HandoverTask:
         """Move the hand to ``hand`` (3,) m, and the object with it until the handover."""
         self.human.move_to(hand)
         if not self.handed_over:
-            self.sim.set_pose(self._require_object(), hand + HOLD_OFFSET, at_rest=True)
+            self.sim.set_pose(self._require_object(), hand + self.hold_offset, at_rest=True)
 
     def grasp_point(self) -> FloatArray:
         """World position (3,) m of the object's grasp point."""

@@ -4,12 +4,15 @@
 :mod:`sandbox.data.spec`); ``--observe hand,arm,emg`` chooses the modalities
 (names from the built-ins or the spec; default the spec's, ``hand``);
 ``--human-columns`` and ``--robot-columns`` are shorthands that rename the
-hand's and the robot's columns of that spec.
+hand's and the robot's columns of that spec; ``--session S`` draws a synthetic
+set's recording session (:mod:`sandbox.data.synthetic.session`).
 """
 
 from __future__ import annotations
 
 import argparse
+
+from sandbox.commands import _types
 
 
 def add_arguments(parser: argparse.ArgumentParser, *, columns: bool = True) -> None:
@@ -32,6 +35,15 @@ def add_cache_argument(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-cache", action="store_true",
                         help="load and preprocess every trial file afresh, without the on-disk "
                              "cache of loaded trials (python -m sandbox data cache)")
+
+
+def add_session_argument(parser: argparse.ArgumentParser) -> None:
+    """Add ``--session S`` (synthetic sets only; read as ``args.session``, None if not given)."""
+    parser.add_argument("--session", type=_types.SEED, default=None, metavar="S",
+                        help="recording session of a synthetic set, an integer >= 0: its seed "
+                             "draws the tracker's calibration, where the fingertip meets the "
+                             "hand, the tempo and the motion's tail (default: none, today's "
+                             "data); refused for a folder or minari:ID")
 
 
 def cache(args: argparse.Namespace) -> bool:

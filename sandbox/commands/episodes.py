@@ -11,6 +11,25 @@ static policies beside the recorded robot's own motion::
 
     python -m sandbox episodes --scenario recorded --data ../shared/data/birl-handover-20180329 \\
         --policies dynamic,static,recorded_robot --observe hand,arm,emg --episodes 174
+
+With ``--test B`` the replays are cross-session: one model (and its meeting
+geometry) is fitted on all usable trials of ``--data`` A (a folder of sessions
+pooled), and the trials of B (one set; its tasks among A's) are replayed with
+it, the object riding at A's geometry; ``recorded_robot`` replays each B trial's
+own recorded robot in that scene, so it shows how well a geometry learned on A
+serves B. A ``--data`` folder of sessions ``ROOT/<session>/<task>/<trial>.csv``
+without ``--test`` is replayed leave-one-session-out: each episode's trial is
+drawn from all the sessions, its model fitted on all the other sessions
+(:mod:`sandbox.episodes.replays`). In the recorded scenario every policy is
+fitted on the ``--observe`` modalities, so all replay the same trials in the
+same scene. Each policy's JSON entry then has a ``config`` (``scenario``,
+``mode``: ``leave-one-out``, ``cross-session`` or ``leave-one-session-out``,
+``train``, ``test`` or ``sessions``, ``observe``), each episode its ``replay``
+(its trial's session, what its model was fitted on) and, leave-one-session-out,
+``per_session``: each session's summary (also printed)::
+
+    python -m sandbox episodes --scenario recorded --data early --test late \\
+        --policies recorded_robot,dynamic --observe hand,arm,emg --episodes 88
 """
 
 from __future__ import annotations
@@ -28,13 +47,30 @@ def add_arguments(parser) -> None:
     parser.add_argument("--policies", default="dynamic,static", metavar="NAMES",
                         help=f"comma-separated, among {', '.join(POLICIES)} "
                              "(default dynamic,static)")
-    parser.add_argument("--data", default=None, help="recorded set's folder (scenario recorded)")
+    parser.add_argument("--data", default=None, metavar="DIR",
+                        help="scenario recorded: the recorded set's folder (leave-one-out), "
+                             "or a folder of sessions ROOT/<session>/<task>/<trial>.csv "
+                             "(leave-one-session-out), or with --test the trials to fit on")
+    parser.add_argument("--test", default=None, metavar="DIR",
+                        help="scenario recorded, cross-session: replay this set's trials with "
+                             "one model of all of --data (the object at --data's meeting "
+                             "geometry); its tasks among --data's")
+    parser.add_argument("--session", type=_types.SEED, default=None, metavar="S",
+                        help="scenarios diverging, objects: the motions of synthetic recording "
+                             "session S (tracker frame, where the fingertip meets the object, "
+                             "tempo, tail); the model is fitted on --train-session's demos and "
+                             "recorded_robot replays each motion's own robot (the oracle)")
+    parser.add_argument("--train-session", type=_types.SEED, default=None, metavar="A",
+                        help="with --session: fit the model on synthetic session A instead "
+                             "(the object rides at A's learned meeting geometry)")
     parser.add_argument("--observe", default=None, metavar="NAMES",
                         help="modalities the policies observe: hand, arm, emg (default: the "
-                             "hand; synthetic scenarios: the model's)")
+                             "hand; synthetic scenarios: the model's); recorded: every "
+                             "policy's model is fitted on them, recorded_robot's too")
     parser.add_argument("--episodes", type=_types.integer(1, 100_000), default=20,
-                        help="episodes per policy (recorded: the number of held-out trials; "
-                             "the set's size replays each trial once) (default 20)")
+                        help="episodes per policy (recorded: the number of trials replayed; "
+                             "the size of the set replayed (--test, or all sessions) replays "
+                             "each trial once) (default 20)")
     parser.add_argument("--seed", type=_types.SEED, default=0,
                         help="seed of episode 0 (default 0)")
     parser.add_argument("--dow", type=_types.SECONDS, default=0.2,
@@ -60,40 +96,126 @@ def run(args) -> int:
     from sandbox.commands._outputs import check_new, write_text
 
     check_new([("--json", args.json)], args.force)
+    _check_data(args)
     out = {name: _run_policy(name, args) for name in policies}
+    config = next(iter(out.values())).get("config")
+    if config is not None:
+        print(_mode_line(config))
     print(table(out))
+    if any("per_session" in entry for entry in out.values()):
+        print("\nby session:\n" + session_table(out))
     if args.json:
         write_text(args.json, json.dumps(out, indent=1))
     return 0
 
 
+def _check_data(args) -> None:
+    """``--test`` only in the recorded scenario, as one set; ``--data`` in one layout."""
+    if args.train_session is not None and args.session is None:
+        raise ValueError("--train-session: expected with --session (the session to replay)")
+    if args.session is not None and args.scenario not in ("diverging", "objects"):
+        raise ValueError(f"--session: expected with --scenario diverging or objects (synthetic "
+                         f"sessions), got --scenario {args.scenario}")
+    if args.test is not None and args.scenario != "recorded":
+        raise ValueError(f"--test: expected with --scenario recorded (a recorded set to "
+                         f"replay), got --scenario {args.scenario}")
+    if args.scenario == "recorded" and args.data is not None:
+        from sandbox.episodes.replays import replay_mode
+
+        replay_mode(args.data, args.test, names=("--data", "--test"))
+
+
 def _run_policy(name: str, args) -> dict:
-    import numpy as np
+    from sandbox.episodes.scenarios import run_scenario
 
-    from sandbox.episodes.scenarios import run_scenario, summarize
-    from sandbox.eval.metrics import bootstrap_ci
-
-    observe = None if name == "recorded_robot" else args.observe
+    # recorded_robot too: its model (hence its trials and meeting geometry) is the others'
     results = run_scenario(args.scenario, name, n_episodes=args.episodes, seed=args.seed,
-                           dow_t=args.dow, ratio=args.ratio, data=args.data, observe=observe)
-    summary = summarize(results)
-    success = np.array([r.success for r in results], dtype=float)
-    summary["success_rate_ci"] = list(bootstrap_ci(success, rng=np.random.default_rng(0)))
+                           dow_t=args.dow, ratio=args.ratio, data=args.data, test=args.test,
+                           observe=args.observe, session=args.session,
+                           train_session=args.train_session)
     episodes = [{"seed": r.seed, "task": r.task, "final_task": r.final_task,
                  "success": r.success, "handover_time": r.handover_time,
                  "min_distance": r.min_distance, "final_distance": r.final_distance,
-                 "options": r.options} for r in results]
-    return {"summary": summary, "episodes": episodes}
+                 "options": _jsonable(r.options), **({"replay": r.replay} if r.replay else {})}
+                for r in results]
+    entry = {"summary": _summary(results), "episodes": episodes}
+    if args.scenario == "recorded":
+        entry["config"] = _config(args, results)
+    if entry.get("config", {}).get("mode") == "leave-one-session-out":
+        sessions = dict.fromkeys(r.replay["session"] for r in results)
+        entry["per_session"] = {s: _summary([r for r in results if r.replay["session"] == s])
+                                for s in sorted(sessions)}
+    return entry
+
+
+def _jsonable(options: dict) -> dict:
+    """Reset options for JSON: a scripted ``motion`` (a synthetic session's) as its source."""
+    motion = options.get("motion")
+    return options if motion is None else {**options, "motion": motion.source}
+
+
+def _summary(results) -> dict:
+    """:func:`~sandbox.episodes.scenarios.summarize` with the success rate's 95 % bootstrap
+    interval (``success_rate_ci``)."""
+    import numpy as np
+
+    from sandbox.episodes.scenarios import summarize
+    from sandbox.eval.metrics import bootstrap_ci
+
+    summary = summarize(results)
+    success = np.array([r.success for r in results], dtype=float)
+    summary["success_rate_ci"] = list(bootstrap_ci(success, rng=np.random.default_rng(0)))
+    return summary
+
+
+def _config(args, results) -> dict:
+    """A recorded run's ``config``: the scenario, the mode and what was fitted and replayed."""
+    from sandbox.commands._observation import split
+    from sandbox.data.sessions import find_sessions
+
+    mode = results[0].replay["mode"]
+    config = {"scenario": args.scenario, "mode": mode,
+              "observe": split(args.observe) or ["hand"]}
+    if mode == "leave-one-session-out":
+        config["sessions"] = [p.name for p in find_sessions(args.data, "--data")]
+    elif mode == "cross-session":
+        config.update(train=str(args.data), test=str(args.test),
+                      n_train=results[0].replay["n_train"])
+    else:
+        config.update(train=str(args.data), test=str(args.data))
+    return config
+
+
+def _mode_line(config: dict) -> str:
+    """One line saying how the recorded trials were replayed."""
+    if config["mode"] == "cross-session":
+        return (f"cross-session: one model fitted on {config['train']} ({config['n_train']} "
+                f"trials), replaying trials of {config['test']}")
+    if config["mode"] == "leave-one-session-out":
+        return (f"leave-one-session-out over {len(config['sessions'])} sessions: "
+                f"{', '.join(config['sessions'])} (each trial with a model of the others)")
+    return f"leave-one-out: each trial of {config['train']} with a model of the others"
 
 
 def table(out: dict) -> str:
     """The Markdown table of :func:`run`'s results (one row per policy)."""
     lines = ["| policy | success [95 % CI] | recognised at the end | handover time (s) | "
              "final distance (m) |", "|---|---|---|---|---|"]
-    for name, entry in out.items():
-        s = entry["summary"]
-        lo, hi = s["success_rate_ci"]
-        lines.append(f"| {name} | {s['success_rate']:.2f} [{lo:.2f}, {hi:.2f}] | "
-                     f"{s['recognition_rate']:.2f} | {s['handover_time_s']:.2f} | "
-                     f"{s['final_distance_m']:.3f} |")
+    lines += [f"| {name} | {_cells(entry['summary'])} |" for name, entry in out.items()]
     return "\n".join(lines)
+
+
+def session_table(out: dict) -> str:
+    """The Markdown table of each policy's ``per_session`` summaries (one row per session)."""
+    lines = ["| policy | session | episodes | success [95 % CI] | recognised at the end | "
+             "handover time (s) | final distance (m) |", "|---|---|---|---|---|---|---|"]
+    for name, entry in out.items():
+        lines += [f"| {name} | {session} | {s['n_episodes']:.0f} | {_cells(s)} |"
+                  for session, s in entry.get("per_session", {}).items()]
+    return "\n".join(lines)
+
+
+def _cells(s: dict) -> str:
+    lo, hi = s["success_rate_ci"]
+    return (f"{s['success_rate']:.2f} [{lo:.2f}, {hi:.2f}] | {s['recognition_rate']:.2f} | "
+            f"{s['handover_time_s']:.2f} | {s['final_distance_m']:.3f}")

@@ -2,7 +2,8 @@
 
 Loads the demonstrations with :func:`sandbox.data.datasets.load_dataset`
 (training demos are RTS-smoothed by default, ``--preprocess``; ``--observe``
-and ``--spec`` choose the modalities), fits one Interaction ProMP per task
+and ``--spec`` choose the modalities; ``--session S`` a synthetic set's
+recording session), fits one Interaction ProMP per task
 (:class:`sandbox.core.IProMP`) and saves it in the core's format (``.npz`` +
 JSON metadata, no pickle). Prints what was fitted: tasks, demos per task,
 nominal durations, the speed prior, the estimated observation noise of every
@@ -39,6 +40,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--n-per-task", type=_types.PER_TASK, default=None,
                         help="demos per task (folder: the first N; synthetic: generated, 20)")
     parser.add_argument("--seed", type=_types.SEED, default=0, help="seed of a synthetic set (0)")
+    _observation.add_session_argument(parser)
     parser.add_argument("--preprocess", choices=("none", "causal", "smooth"), default="smooth",
                         help="human-track preprocessing of the demos (smooth)")
     _observation.add_arguments(parser)
@@ -59,6 +61,7 @@ def run(args: argparse.Namespace) -> int:
 
     from sandbox.core import IProMP
     from sandbox.data.datasets import load_dataset
+    from sandbox.data.geometry import attach_geometry
     from sandbox.data.recorded import SkippedTrialWarning
 
     out = Path(args.out)
@@ -80,7 +83,8 @@ def run(args: argparse.Namespace) -> int:
         warnings.simplefilter("always", SkippedTrialWarning)
         demos = load_dataset(args.data, spec=spec, observe=observe, seed=args.seed,
                              tasks=_observation.split(args.tasks), n_per_task=args.n_per_task,
-                             preprocess=args.preprocess, cache=_observation.cache(args))
+                             preprocess=args.preprocess, cache=_observation.cache(args),
+                             session=args.session)
     skipped = [str(w.message) for w in caught if issubclass(w.category, SkippedTrialWarning)]
     _skipped.report(skipped, args.verbose, len(demos))
     if not demos:
@@ -88,6 +92,7 @@ def run(args: argparse.Namespace) -> int:
     model.fit(demos)
     if args.calibrate:
         _calibrate(model, demos, args, spec, observe)
+    attach_geometry(model, demos)
     model.save(out)
     summary = _summary(model, args, out, len(demos), skipped)
     print(json.dumps(summary, indent=2) if args.json else _format(summary))
@@ -100,7 +105,8 @@ def _calibrate(model, demos, args, spec, observe) -> None:
 
     streams = load_dataset(args.data, spec=spec, observe=observe, seed=args.seed,
                            tasks=_observation.split(args.tasks), n_per_task=args.n_per_task,
-                           preprocess="causal", cache=_observation.cache(args))
+                           preprocess="causal", cache=_observation.cache(args),
+                           session=args.session)
     by_source = {s.source: s for s in streams}
     kept = [d for d in demos if d.source in by_source]
     if len(kept) != len(demos):
@@ -114,7 +120,8 @@ def _summary(model, args: argparse.Namespace, out: Path, n_demos: int, skipped: 
     import numpy as np
 
     return {
-        "data": str(args.data), "out": str(out), "preprocess": args.preprocess,
+        "data": str(args.data), "session": args.session, "out": str(out),
+        "preprocess": args.preprocess,
         "n_basis": model.basis.n_basis, "demos": n_demos, "skipped": skipped,
         "observe": [m.name for m in model.modalities],
         "noise_std": {m.name: [float(s) for s in np.sqrt(model.noise[sl]) * model.scale[sl]]
@@ -125,7 +132,22 @@ def _summary(model, args: argparse.Namespace, out: Path, n_demos: int, skipped: 
                          if m.kind == "signal"},
         "tasks": {t.name: {"demos": t.n_demos, "nominal_duration_s": t.nominal_duration,
                            "alpha_std": t.alpha_std} for t in model.task_models},
+        "meeting_geometry": _geometry(model),
     }
+
+
+def _geometry(model) -> dict:
+    """Per task the learned hand-to-fingertip offset (m) and its spread, or the note."""
+    import numpy as np
+
+    from sandbox.data.geometry import geometry_of
+
+    geometry, note = geometry_of(model)
+    if note is not None:
+        return {"note": note}
+    return {t: {"offset_m": np.round(g.mean, 4).tolist(),
+                "spread_m": round(float(np.sqrt(np.trace(g.cov))), 4), "demos": g.count}
+            for t, g in geometry.tasks.items()}
 
 
 def _slices(model) -> list[slice]:
@@ -136,7 +158,9 @@ def _slices(model) -> list[slice]:
 
 def _format(s: dict) -> str:
     lines = [f"Fitted {len(s['tasks'])} task models (N={s['n_basis']}) on {s['demos']} demos "
-             f"from {s['data']} (observe={','.join(s['observe'])}, "
+             f"from {s['data']}"
+             f"{'' if s['session'] is None else ' session ' + str(s['session'])} "
+             f"(observe={','.join(s['observe'])}, "
              f"preprocess={s['preprocess']})"]
     for name, t in s["tasks"].items():
         lines.append(f"  {name:<20}{t['demos']:>4} demos  T_nom {t['nominal_duration_s']:.2f} s"
@@ -147,6 +171,13 @@ def _format(s: dict) -> str:
         else:
             values, unit = ", ".join(f"{v:.3g}" for v in noise), s["units"][name]
         lines.append(f"  {name} observation noise ({unit}): {values}")
+    geometry = s["meeting_geometry"]
+    if "note" in geometry:
+        lines.append(f"  meeting geometry: {geometry['note']}")
+    for name, g in ({} if "note" in geometry else geometry).items():
+        offset = ", ".join(f"{1e3 * v:+.0f}" for v in g["offset_m"])
+        lines.append(f"  {name:<20}hand-to-fingertip at the meeting ({offset}) mm, spread "
+                     f"{1e3 * g['spread_m']:.0f} mm")
     if s["skipped"]:
         lines.append(f"  {_skipped.summary(s['skipped'])}")
     lines.append(f"Saved {s['out']}")

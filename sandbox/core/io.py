@@ -17,6 +17,11 @@ Optional, for a model with a familiarity calibration
 ``familiarity_edges`` (B,), ``familiarity_quantiles`` (K, B, L) and
 ``familiarity_counts`` (K, B).
 
+Optional: a ``session`` object in the metadata, what a recording session taught
+besides the model (e.g. the meeting geometry, :mod:`sandbox.data.geometry`),
+kept as :attr:`IProMP.session` and never interpreted here; files without it load
+with an empty one.
+
 Version history: 1 (package 0.1.0) had the hand only (``human_names``, no
 modalities, no scale); such files still load, as one position modality
 ``"hand"``. Version 2 adds the modalities, the scale and the floors. The
@@ -60,10 +65,9 @@ from sandbox.core.limits import (
     MAX_TASKS,
     MAX_TIME_S,
     MIN_NOISE_STD,
-    MIN_REGULARIZER,
 )
 from sandbox.core.modality import Modality, check_modalities, default_modalities
-from sandbox.core.promp import WeightDistribution
+from sandbox.core.promp import WeightDistribution, check_robot_definite
 from sandbox.validation import check_number
 
 if TYPE_CHECKING:
@@ -129,6 +133,8 @@ def save_model(model: IProMP, path: str | os.PathLike) -> None:
                                "dow_t": cal.dow_t, "n_motions": cal.n_motions}
         arrays.update(familiarity_edges=cal.edges, familiarity_quantiles=cal.quantiles,
                       familiarity_counts=cal.counts)
+    if getattr(model, "session", None):
+        meta["session"] = model.session     # kept, not interpreted (e.g. the meeting geometry)
     arrays["metadata"] = np.array(json.dumps(meta))
     for i, t in enumerate(model.task_models):
         arrays[f"task{i}_mean"] = t.weights.mean
@@ -222,7 +228,7 @@ def _read_model(path: Path) -> ModelFile:
                 _read(archive, f"task{i}_mean", (D,)),
                 _read(archive, f"task{i}_factor", (D, None), max_rank=t["n_demos"]),
                 _positive(_read(archive, f"task{i}_reg", (P + Q,)), f"task{i}_reg", 0.0), N)
-            _check_robot_definite(dist, P, t["name"])
+            check_robot_definite(dist, P, t["name"])
             weights.append(dist)
         calibration = _calibration(archive, meta.get("familiarity"), len(weights))
     return ModelFile(meta, tuple(weights), noise, scale, calibration)
@@ -262,22 +268,6 @@ def _read(archive, name: str, shape: tuple, max_rank: int | None = None) -> np.n
         raise ValueError(f"member {name!r} holds values beyond +/-{MAX_MODEL_VALUE:g} "
                          f"(limits.MAX_MODEL_VALUE)")
     return arr
-
-
-def _check_robot_definite(dist: WeightDistribution, P: int, task: str) -> None:
-    """Each robot dim's regulariser at least MIN_REGULARIZER / 2 x its weights' variance.
-
-    :math:`UU^T + \\Lambda` is positive definite for any positive :math:`\\Lambda`;
-    this keeps it so in floating point, where the predictors blend the robot's.
-    """
-    N = dist.n_basis
-    U = dist.factor[P * N:].reshape(dist.n_dims - P, N, -1)
-    var = (U**2).sum(axis=2).mean(axis=1)
-    ratio = dist.reg[P:] / np.maximum(var, 1e-300)
-    if np.any(ratio < MIN_REGULARIZER / 2):
-        raise ValueError(f"task {task!r}: robot regularisers of {ratio.min():.3g} x the weights' "
-                         f"variance leave its covariance numerically singular; expected at "
-                         f"least {MIN_REGULARIZER / 2:g} (limits.MIN_REGULARIZER / 2)")
 
 
 def _check_scale(scale: np.ndarray, modalities) -> np.ndarray:
@@ -322,7 +312,14 @@ def _metadata(archive, path: Path) -> dict:
             "hyperparameters": _hyperparameters(meta["hyperparameters"], version),
             "n_human": P, "n_robot": Q, "modalities": _modalities(meta, P),
             "robot_names": _names(meta["robot_names"], "robot_names", (0, Q)),
-            "tasks": _tasks(meta["tasks"]), "familiarity": meta.get("familiarity")}
+            "tasks": _tasks(meta["tasks"]), "familiarity": meta.get("familiarity"),
+            "session": _session(meta.get("session", {}))}
+
+
+def _session(entry) -> dict:
+    if not isinstance(entry, dict):
+        raise ValueError(f"metadata session: expected an object, got {type(entry).__name__}")
+    return entry
 
 
 def _count(value, name: str) -> int:

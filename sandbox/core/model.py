@@ -20,9 +20,7 @@ Choices this project makes (DESIGN.md section 3):
   the robot and the human alike; :mod:`sandbox.core.phase` scores observations
   past a candidate's end that way instead of excluding short candidates.
   ``settle_tol=None, arrive_tol=None`` keeps whole recordings (the paper's
-  convention).
-* **The robot's part ends where it settles** (``robot_tol``): its samples up to then span
-  the motion's phase on their own (:func:`~sandbox.core.fitting.fit_one`; z = 1: settled).
+  convention). The robot's part ends where it settles (``robot_tol``, :func:`fit_one`).
 * :math:`T_{nom,k}` is the mean motion duration of task k, so :math:`\\mu_\\alpha = 1`
   and :math:`\\sigma_\\alpha` is the spread of :math:`T_i / T_{nom,k}` (ddof 1,
   floored at ``min_alpha_std``).
@@ -139,12 +137,10 @@ class IProMP:
         Per-modality floors (in the modality's normalised units) overriding the two
         above. Every floor is in [:data:`~sandbox.core.limits.MIN_NOISE_STD`,
         :data:`~sandbox.core.limits.MAX_ABS_VALUE`].
-    settle_tol : float or None
-        The motion ends once the robot stays within this distance (rad) of its final
-        configuration (:func:`motion_end`) ...
-    arrive_tol : float or None
-        ... and the hand has come within this distance (m) of its farthest
-        reach; None for both: whole recordings.
+    settle_tol, arrive_tol : float or None
+        The motion ends once the robot stays within ``settle_tol`` (rad) of its final
+        configuration and the hand has come within ``arrive_tol`` (m) of its farthest
+        reach (:func:`motion_end`); None for both: whole recordings.
     robot_tol : float or None
         The robot's part ends once within this distance (rad) of its final pose for
         good, not before the motion's end (None: at it); not stored in model files.
@@ -206,10 +202,8 @@ class IProMP:
         self.signal_floor = check_floor(signal_floor, "signal_floor")
         self.noise_floors = {k: check_floor(v, f"noise_floors[{k!r}]")
                              for k, v in check_mapping(noise_floors, "noise_floors").items()}
-        self.settle_tol = (None if settle_tol is None
-                           else check_positive(settle_tol, "settle_tol"))
-        self.arrive_tol = (None if arrive_tol is None
-                           else check_positive(arrive_tol, "arrive_tol"))
+        self.settle_tol = None if settle_tol is None else check_positive(settle_tol, "settle_tol")
+        self.arrive_tol = None if arrive_tol is None else check_positive(arrive_tol, "arrive_tol")
         self.robot_tol = None if robot_tol is None else check_positive(robot_tol, "robot_tol")
         self.min_alpha_std = check_positive(min_alpha_std, "min_alpha_std")
         self.ridge = check_positive(ridge, "ridge", allow_zero=True, high=MAX_RELATIVE)
@@ -219,6 +213,9 @@ class IProMP:
                              for k, v in check_mapping(priors, "priors").items()})
         self._fitted = False
         self.calibration: Calibration | None = None
+        #: What a recording session taught besides the model (JSON-able; e.g. the meeting
+        #: geometry of :mod:`sandbox.data.geometry`): saved and loaded, never interpreted here.
+        self.session: dict[str, Any] = {}
 
     # ------------------------------------------------------------------ fit
     def fit(self, demos: Sequence[DemonstrationLike]) -> IProMP:
@@ -298,6 +295,7 @@ class IProMP:
         self.robot_names = tuple(getattr(first, "robot_names", ()) or ())
         self.priors = task_priors([t.name for t in tasks], self._prior_spec)
         self.calibration = None          # of a previous fit, if any: no longer valid
+        self.session = {}                # likewise
         self._fitted = True
 
     # ------------------------------------------------------------ accessors
@@ -387,6 +385,7 @@ class IProMP:
         model.robot_names = tuple(meta["robot_names"])
         model.priors = np.array([t["prior"] for t in meta["tasks"]], dtype=np.float64)
         model.calibration = f.calibration
+        model.session = dict(meta["session"])
         model._fitted = True
         return model
 

@@ -23,6 +23,7 @@ import numpy as np
 import scipy.linalg
 
 from sandbox.core.basis import GaussianBasis
+from sandbox.core.limits import MIN_REGULARIZER
 from sandbox.validation import FloatArray, check_array, check_positive
 
 
@@ -189,3 +190,19 @@ def trajectory_distribution(
     idx = np.arange(D)
     cov[:, idx, idx] += dist.reg[None, :] * (psi**2).sum(axis=1)[:, None]
     return mean, cov
+
+
+def check_robot_definite(dist: WeightDistribution, P: int, task: str) -> None:
+    """Each robot dim's regulariser at least MIN_REGULARIZER / 2 x its weights' variance.
+
+    :math:`UU^T + \\Lambda` is positive definite for any positive :math:`\\Lambda`;
+    this keeps it so in floating point, where the predictors blend the robot's.
+    """
+    N = dist.n_basis
+    U = dist.factor[P * N:].reshape(dist.n_dims - P, N, -1)
+    var = (U**2).sum(axis=2).mean(axis=1)
+    ratio = dist.reg[P:] / np.maximum(var, 1e-300)
+    if np.any(ratio < MIN_REGULARIZER / 2):
+        raise ValueError(f"task {task!r}: robot regularisers of {ratio.min():.3g} x the weights' "
+                         f"variance leave its covariance numerically singular; expected at "
+                         f"least {MIN_REGULARIZER / 2:g} (limits.MIN_REGULARIZER / 2)")

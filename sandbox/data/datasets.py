@@ -62,6 +62,7 @@ def load_dataset(
     rate_hz: float | None = None,
     cache: Any = None,
     on_trial: Any = None,
+    session: int | None = None,
     **options: Any,
 ) -> list[Demonstration]:
     """Load or generate demonstrations.
@@ -96,6 +97,11 @@ def load_dataset(
     rate_hz : float, optional
         Resample every demonstration on a uniform grid at this rate
         (:func:`resample_uniform`); default: keep the sample times.
+    session : int, optional
+        Synthetic sets only: the recording session (>= 0,
+        :func:`sandbox.data.synthetic.session.draw_session`: tracker frame,
+        meeting offset, tempo, the motion's tail); None: today's data. A
+        session with a folder or ``minari:ID`` is a ``ValueError``.
     **options
         Passed to the loader / preprocessing: ``columns`` and ``max_duration``
         (folders only, :func:`sandbox.data.recorded.load_trial`), and those of
@@ -109,6 +115,8 @@ def load_dataset(
     """
     # Over 60 lines only by this docstring (its parameters); the body is steps.
     tasks = _check_selection(preprocess, seed, n_per_task, tasks)
+    if session is not None:
+        options = {**options, "session": _check_session(data, session)}
     demos = _load(data, resolve(spec), spec is not None, observe, seed, tasks, n_per_task,
                   preprocess, {"cache": cache, "on_trial": on_trial}, options)
     if rate_hz is not None:
@@ -128,6 +136,14 @@ def _check_selection(preprocess: str, seed: int, n_per_task: int | None,
             raise ValueError(f"tasks: expected a list of task names, got {tasks!r}")
         tasks = list(tasks)
     return tasks
+
+
+def _check_session(data: str | Path, session: Any) -> int:
+    """``session`` as an int >= 0; ``ValueError`` unless ``data`` is ``synthetic:NAME``."""
+    if not (isinstance(data, str) and data.startswith(SYNTHETIC_PREFIX)):
+        raise ValueError(f"session: only for synthetic:NAME data (a recorded set is one "
+                         f"session already), got a session with {str(data)!r}")
+    return check_integer(session, "session", 0)
 
 
 def _load(data: str | Path, layout: DataSpec, spec_given: bool, observe, seed: int,
@@ -184,7 +200,8 @@ def _synthetic(name, seed, tasks, n_per_task, preprocess, options) -> list[Demon
         if key in options:
             raise ValueError(f"{key}: only used for recorded folders, not synthetic:NAME")
     n = DEFAULT_SYNTHETIC_PER_TASK if n_per_task is None else int(n_per_task)
-    demos = make_dataset(name, n, np.random.default_rng(seed), observe=observe)
+    session = options.pop("session", None)
+    demos = make_dataset(name, n, np.random.default_rng(seed), observe=observe, session=session)
     if tasks is not None:
         available = list(stack_tasks(demos))
         unknown = [t for t in tasks if t not in available]

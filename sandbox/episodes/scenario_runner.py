@@ -16,8 +16,10 @@ from sandbox.episodes.scenario_files import HUMAN_KEYS, Scenario
 
 
 def build_model(scenario: Scenario):
-    """The scenario's IProMP: a saved file, the recorded set minus the trial, or synthetic."""
+    """The scenario's IProMP: a saved file, the recorded set minus the trial, or synthetic;
+    fitted ones carry the meeting geometry of their demonstrations."""
     from sandbox.core import IProMP
+    from sandbox.data.geometry import attach_geometry
 
     if "file" in scenario.model:
         return IProMP.load(scenario.model["file"])
@@ -29,7 +31,7 @@ def build_model(scenario: Scenario):
         demos, _ = load_recorded(scenario.human["recorded"], observe=scenario.observe)
         # Any: a Demonstration is frozen, the core's DemonstrationLike declares plain attributes
         others: list[Any] = [d for d in demos if Path(d.source).resolve() != held_out]
-        return IProMP(**options).fit(others)
+        return attach_geometry(IProMP(**options).fit(others), others)
     return fit_family(scenario.family, scenario.model["demos"], scenario.model["seed"],
                       scenario.observe, options)
 
@@ -51,11 +53,12 @@ def fit_family(family: str, demos: int, seed: int, observe, options: Mapping | N
     import numpy as np
 
     from sandbox.core import IProMP
+    from sandbox.data.geometry import attach_geometry
     from sandbox.data.synthetic import make_dataset
 
     made: list[Any] = make_dataset(family, demos, np.random.default_rng(seed),
                                    observe=list(names))
-    return IProMP(**options).fit(made)
+    return attach_geometry(IProMP(**options).fit(made), made)
 
 
 def make_policy(scenario: Scenario, model):
@@ -72,9 +75,15 @@ def make_policy(scenario: Scenario, model):
         raise ValueError(f"scenario {scenario.path}: policy.options: {error}") from error
 
 
-def reset_options(scenario: Scenario) -> dict[str, Any]:
-    """``env.reset`` options of the scenario (the scripted motion built here)."""
+def reset_options(scenario: Scenario, model=None) -> dict[str, Any]:
+    """``env.reset`` options of the scenario (the scripted motion built here); with
+    ``model``, the object rides at its meeting geometry (:func:`grasp_options`)."""
+    from sandbox.episodes.scenarios import grasp_options
+
     opts: dict[str, Any] = {"speed": scenario.speed}
+    if model is not None:
+        scripted = scenario.human_kind not in ("synthetic", "recorded")
+        opts.update(grasp_options(model, task=scenario.human["task"] if scripted else None))
     if scenario.object is not None:
         opts["object"] = scenario.object
     human = scenario.human
@@ -117,7 +126,7 @@ def run_scenario_file(scenario: Scenario, *, html: str | Path | None = None,
         raise ValueError(f"html: expected a file name ending in .html, got {str(html)!r}")
     model = build_model(scenario)
     policy = make_policy(scenario, model)
-    options = reset_options(scenario)
+    options = reset_options(scenario, model)
     env: Any = gym.make(scenario.env_id,
                         max_episode_steps=max(1, round(scenario.time_limit * 50)))
     env = env if wrap_env is None else wrap_env(env)

@@ -7,8 +7,14 @@ scenario           what the human does
 ``objects``        a synthetic object handover (box, glasses case or tape)
 ``intent_switch``  a diverging reach that switches to another direction at 30-60 % of it
 ``recorded``       a recorded trial replayed (needs ``data``); the model is fitted on the
-                   set's other trials (leave-one-out)
+                   set's other trials (leave-one-out), on all of ``data`` when the trials
+                   replayed are another set's (``test``: cross-session), or on the other
+                   sessions of a folder of sessions (leave-one-session-out)
 =================  =========================================================================
+
+In every scenario the object rides where the model's demonstrations met the hand
+(:func:`grasp_options`); in the ``recorded`` one that is never the replayed
+trial's own meeting point (:mod:`sandbox.episodes.replays`).
 
 Policies: ``"dynamic"`` (:class:`~sandbox.episodes.policies.IProMPPolicy`, window
 ``dow_t``), ``"static"`` (:class:`~sandbox.episodes.policies.StaticPolicy`, ``ratio``),
@@ -33,13 +39,14 @@ Examples
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from sandbox.episodes.policy import Policy, beliefs_of
+from sandbox.episodes.replays import Replay, grasp_options, plan_replays
 from sandbox.episodes.rollout import Step, rollout
 from sandbox.validation import check_choice
 
@@ -78,6 +85,10 @@ class EpisodeResult:
     steps : int
     options : dict
         The ``reset`` options used.
+    replay : dict
+        ``recorded`` scenario: where the replayed trial comes from and what its
+        model was fitted on (``mode``, ``session``, ``train``, ``n_train``:
+        :class:`sandbox.episodes.replays.Replay`); ``{}`` otherwise.
     """
 
     seed: int
@@ -90,6 +101,7 @@ class EpisodeResult:
     recognised: tuple[tuple[float, str], ...]
     steps: int
     options: dict = field(default_factory=dict)
+    replay: dict = field(default_factory=dict)
 
     @property
     def final_task(self) -> str:
@@ -99,9 +111,10 @@ class EpisodeResult:
 
 def run_scenario(scenario: str = "diverging", policy: str | Callable = "dynamic", *,
                  n_episodes: int = 20, seed: int = 0, dow_t: float = 0.2, ratio: float = 0.3,
-                 data: str | Path | None = None, env=None, model=None,
-                 options: Mapping[str, Any] | None = None,
-                 observe: Sequence[str] | str | None = None) -> list[EpisodeResult]:
+                 data: str | Path | None = None, test: str | Path | None = None, env=None,
+                 model=None, options: Mapping[str, Any] | None = None,
+                 observe: Sequence[str] | str | None = None, session: int | None = None,
+                 train_session: int | None = None) -> list[EpisodeResult]:
     """Run ``n_episodes`` seeded episodes of ``scenario`` with ``policy``.
 
     Parameters
@@ -121,11 +134,13 @@ def run_scenario(scenario: str = "diverging", policy: str | Callable = "dynamic"
         Window (s) of the dynamic policy.
     ratio : float
         Observed fraction of the static policy.
-    data : str or Path, optional
-        Folder of the recorded set (``recorded`` scenario only).
+    data, test : str or Path, optional
+        ``recorded`` scenario only (:func:`sandbox.episodes.replays.plan_replays`):
+        ``data`` one set (leave-one-out) or a folder of sessions (leave-one-session-out);
+        with ``test`` (one set, its tasks among ``data``'s), ``test``'s trials are
+        replayed with one model of all of ``data``, in ``data``'s meeting geometry.
     env : gymnasium.Env, optional
-        An environment made from the scenario's id, reused (not closed); by
-        default one is made and closed.
+        An environment made from the scenario's id, reused (not closed); default: a new one.
     model : IProMP, optional
         The model (synthetic scenarios; default: fitted on the family's
         synthetic demonstrations of the ``observe`` modalities, default the
@@ -137,21 +152,27 @@ def run_scenario(scenario: str = "diverging", policy: str | Callable = "dynamic"
         or a list; each must be the model's). Default: every modality of the
         model the environment observes; ``recorded``: the hand (the model is
         fitted on the ``observe`` modalities loaded from the set).
+    session, train_session : int, optional
+        ``diverging``/``objects``: the episodes are motions of synthetic session
+        ``session``, the model is fitted on ``train_session``'s demos (default the
+        same) and ``recorded_robot`` replays each motion's own robot
+        (:mod:`sandbox.episodes.sessions`).
 
     Returns
     -------
     list of EpisodeResult
     """
-    observe = _check_run(scenario, policy, n_episodes, data, observe)
+    observe = _check_run(scenario, policy, n_episodes, data, observe, test,
+                         (session, train_session))
     make_policy = _policy_factory(policy, dow_t, ratio, observe)
     episodes = _episodes(scenario, int(n_episodes), int(seed), data, model, options or {},
-                         observe)
+                         observe, test, (session, train_session))
     own_env = env is None
     if own_env:
         env = _make_env(scenario)
     try:
-        return [run_episode(env, make_policy(m, demo), s, opts)
-                for s, m, opts, demo in episodes]
+        return [replace(run_episode(env, make_policy(e.model, e.demo), e.seed, e.options),
+                        replay=e.provenance) for e in episodes]
     finally:
         if own_env:
             env.close()
@@ -208,25 +229,47 @@ def _make_env(scenario: str) -> Any:
     return gym.make(SCENARIOS[scenario][0])
 
 
-def _check_run(scenario, policy, n_episodes, data, observe) -> tuple[str, ...] | None:
+def _check_run(scenario, policy, n_episodes, data, observe, test=None,
+               sessions=(None, None)) -> tuple[str, ...] | None:
     """Check :func:`run_scenario`'s arguments; return ``observe`` checked."""
     check_choice(scenario, "scenario", tuple(SCENARIOS))
     if not callable(policy):
         check_choice(policy, "policy", POLICIES)
     if isinstance(n_episodes, bool) or int(n_episodes) != n_episodes or n_episodes < 1:
         raise ValueError(f"n_episodes: expected an integer >= 1, got {n_episodes!r}")
-    if policy == "recorded_robot" and scenario != "recorded":
-        raise ValueError(f"policy: 'recorded_robot' replays a recorded trial's robot, expected "
-                         f"scenario='recorded', got {scenario!r}")
+    session = _check_sessions(scenario, *sessions)
+    if policy == "recorded_robot" and scenario != "recorded" and session is None:
+        raise ValueError(f"policy: 'recorded_robot' replays a recorded trial's robot (or a "
+                         f"synthetic session's), expected scenario='recorded' or a session, "
+                         f"got {scenario!r}")
     if (scenario == "recorded") != (data is not None):
         raise ValueError("data: expected the recorded set's folder for the 'recorded' "
                          f"scenario and nothing otherwise, got scenario={scenario!r}, "
                          f"data={data!r}")
+    if test is not None and scenario != "recorded":
+        raise ValueError(f"test: expected a recorded set to replay in the 'recorded' scenario "
+                         f"only, got scenario={scenario!r}, test={test!r}")
     checked = _check_observe(observe)
     if checked is not None and callable(policy):
         raise ValueError("observe: expected None with a policy factory (it chooses its own "
                          f"modalities), got {checked!r}")
     return checked
+
+
+def _check_sessions(scenario: str, session, train_session) -> int | None:
+    """``session`` checked: only for the diverging and objects scenarios, and needed
+    by ``train_session``."""
+    from sandbox.episodes.sessions import check_session
+
+    session = check_session(session)
+    train = check_session(train_session, "train_session")
+    if session is not None and scenario not in ("diverging", "objects"):
+        raise ValueError(f"session: expected None for the {scenario!r} scenario (sessions are "
+                         f"synthetic: 'diverging' or 'objects'), got {session!r}")
+    if train is not None and session is None:
+        raise ValueError(f"train_session: expected a session to replay too, got only "
+                         f"train_session={train!r}")
+    return session
 
 
 def _check_observe(observe) -> tuple[str, ...] | None:
@@ -256,10 +299,19 @@ def _policy_factory(policy, dow_t: float, ratio: float, observe) -> Callable:
     return lambda model, demo: StaticPolicy(model, ratio=ratio, observe=observe)
 
 
-def _episodes(scenario, n, seed, data, model, options, observe):
-    """(seed, model, reset options, held-out demo or None) of every episode."""
+def _episodes(scenario, n, seed, data, model, options, observe, test=None,
+              sessions=(None, None)) -> list[Replay]:
+    """Every episode's seed, model, reset options, replayed demo (or None) and provenance."""
     if scenario == "recorded":
-        return _recorded_episodes(Path(data), n, seed, options, observe)
+        return plan_replays(data, n, seed, test=test, observe=observe, options=options)
+    if sessions[0] is not None:
+        from sandbox.episodes.sessions import session_episodes
+
+        family = SCENARIOS[scenario][1]
+        assert family is not None  # sessions are checked to be of a synthetic family
+        return session_episodes(family, n, seed, sessions[0],
+                                train_session=sessions[1], model=model, options=options,
+                                observe=observe)
     from sandbox.episodes.policies import fit_family_model
 
     if model is None:
@@ -268,34 +320,10 @@ def _episodes(scenario, n, seed, data, model, options, observe):
         model = fit_family_model(family, observe=observe or ("hand",))
     out = []
     for i in range(n):
-        opts = dict(options)
+        opts = {**grasp_options(model), **options}
         if scenario == "intent_switch":
             rng = np.random.default_rng(seed + i)
             a, b = rng.choice(list(model.tasks), size=2, replace=False)
             opts.update(task=str(a), switch_to=str(b), switch_phase=float(rng.uniform(0.3, 0.6)))
-        out.append((seed + i, model, opts, None))
-    return out
-
-
-def _recorded_episodes(root: Path, n, seed, options, observe):
-    """Each episode replays a random trial with a model fitted on all the other trials.
-
-    The model is fitted on the ``observe`` modalities (default the hand) of the
-    smoothed trials; a trial that cannot provide them is left out.
-    """
-    from sandbox.core import IProMP
-    from sandbox.data.recorded import load_recorded
-
-    demos, _ = load_recorded(root, observe=observe or ("hand",))
-    rng = np.random.default_rng(seed)
-    picks = rng.choice(len(demos), size=n, replace=n > len(demos))
-    out = []
-    for i, k in enumerate(picks):
-        held_out = demos[int(k)]
-        # Any: a Demonstration is frozen, the core's DemonstrationLike declares plain attributes
-        others: list[Any] = [d for j, d in enumerate(demos) if j != int(k)]
-        model = IProMP().fit(others)
-        opts = {**options, "source": str(root), "task": held_out.task,
-                "trial": Path(held_out.source).name}
-        out.append((seed + i, model, opts, held_out))
+        out.append(Replay(seed + i, model, opts, None, {}))
     return out

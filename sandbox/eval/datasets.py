@@ -6,14 +6,15 @@ import warnings
 
 
 def load_pair(data: str, *, seed: int = 0, tasks=None, n_per_task=None, spec=None,
-              observe=None, cache=None, progress: bool = False):
+              observe=None, cache=None, progress: bool = False, session: int | None = None):
     """The same trials preprocessed for training (smoothed) and as test streams (causal).
 
     ``data`` is a folder in the shared layout or ``synthetic:NAME``; ``spec`` (a
     :class:`~sandbox.data.spec.DataSpec` or a spec file) and ``observe`` choose
     the modalities (see :func:`sandbox.data.datasets.load_dataset`); ``cache``
     keeps a folder's loaded trials on disk (:mod:`sandbox.data.cache`; ``True``:
-    the user's cache folder); ``progress`` draws a bar on stderr. Returns
+    the user's cache folder); ``progress`` draws a bar on stderr; ``session``
+    (synthetic sets only) is the recording session's seed. Returns
     ``(train, test, skipped)``; a trial either version cannot use is dropped
     from both, with its reason in ``skipped``.
     """
@@ -21,7 +22,7 @@ def load_pair(data: str, *, seed: int = 0, tasks=None, n_per_task=None, spec=Non
     from sandbox.eval.progress import bar, status
 
     kw = dict(seed=seed, tasks=tasks, n_per_task=n_per_task, spec=spec, observe=observe,
-              cache=cache)
+              cache=cache, session=session)
     folder = _n_files(data, tasks)
     if folder is None:
         status(f"generating {data} (training and test versions)", progress)

@@ -149,14 +149,40 @@ def to_markdown(report: dict) -> str:
     for label, values in report["window_metric"].items():
         cells = [f"{values[w]:.3f}" for w in report["dynamic"]]
         lines.append(f"| {label} | " + " | ".join(cells) + f" | {report['best_window'][label]} |")
+    if "per_session" in report:
+        lines += [""] + _sessions_table(report)
     return "\n".join(lines) + "\n"
 
 
 def _mode(config: dict) -> str:
-    """How the trials were predicted: leave-one-out, or test-only by a given model."""
-    if config.get("mode") == "test-only":
+    """How the trials were predicted: leave-one-out, test-only by a given model,
+    cross-session or leave-one-session-out."""
+    mode = config.get("mode")
+    if mode == "test-only":
         return f"test-only: all predicted by the model `{config.get('model')}` (no refit)"
+    if mode == "cross-session":
+        return (f"cross-session: all predicted by a model fitted on `{config.get('train')}` "
+                f"({config.get('n_train')} trials)")
+    if mode == "leave-one-session-out":
+        return (f"leave-one-session-out over {len(config.get('sessions', []))} sessions "
+                f"({', '.join(config.get('sessions', []))})")
     return "leave-one-out"
+
+
+def _sessions_table(report: dict) -> list[str]:
+    """Each session's means (``per_session``) at the dynamic windows and static ratios."""
+    keys = ("e_p", "e_q", "e_phi", "recognition")
+    out = ["#### By session (mean over the session's tasks)", "",
+           "| session | trials | formulation | " + " | ".join(keys) + " |",
+           "|---|---|---|" + "---|" * len(keys)]
+    for name, entry in report["per_session"].items():
+        n = sum(entry["n_trials"].values())
+        rows = [(f"dow_t = {w} s", v) for w, v in entry["dynamic"].items()]
+        rows += [(f"ratio {f}", v) for f, v in entry["static"].items()]
+        for label, values in rows:
+            out.append(f"| {name} | {n} | {label} | "
+                       + " | ".join(f"{values[k]:.3f}" for k in keys) + " |")
+    return out + [""]
 
 
 def _table(title: str, rows: dict, keys) -> list[str]:

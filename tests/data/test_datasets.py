@@ -144,3 +144,25 @@ def test_importing_sandbox_data_stays_light():
             "'matplotlib', 'meshcat') if m in sys.modules]; assert not heavy, heavy; "
             "assert d.HandFilter.__name__ == 'HandFilter' and 'filterpy' in sys.modules")
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_a_synthetic_set_takes_a_session_and_a_folder_or_minari_refuses_it(tmp_path):
+    from sandbox.data.synthetic.session import draw_session
+
+    demos = load_dataset("synthetic:objects", n_per_task=2, session=4, preprocess="none")
+    assert all(d.meta["session"] == draw_session(4).to_dict() for d in demos)
+    plain = load_dataset("synthetic:objects", n_per_task=2, preprocess="none")
+    assert all("session" not in d.meta for d in plain)
+    for data in (str(tmp_path), "minari:some-id"):
+        with pytest.raises(ValueError, match="^session: only for synthetic:NAME data"):
+            load_dataset(data, session=1)
+    with pytest.raises(ValueError, match="^session: expected an integer >= 0"):
+        load_dataset("synthetic:objects", session=-1)
+
+
+def test_load_pair_passes_the_session_to_both_versions():
+    from sandbox.eval.datasets import load_pair
+
+    train, test, _ = load_pair("synthetic:objects", n_per_task=2, session=5)
+    assert train and len(train) == len(test)
+    assert {d.meta["session"]["seed"] for d in train + test} == {5}

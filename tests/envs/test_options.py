@@ -24,6 +24,12 @@ def test_valid_options_are_kept(tmp_path):
 
 @pytest.mark.parametrize("options, match", [
     ({"colour": "red"}, "expected keys among"),
+    ({"grasp_offset": [0.0, 0.1]}, r"grasp_offset: expected 3 finite numbers"),
+    ({"grasp_offset": [0.0, 0.5, 0.0]}, r"grasp_offset: expected .* within 0.3 m"),
+    ({"grasp_offset": [0.0, np.nan, 0.0]}, r"grasp_offset: expected 3 finite numbers"),
+    ({"grasp_offset": "near"}, r"grasp_offset: expected 3 finite numbers"),
+    ({"grasp_offset": {}}, r"grasp_offset: expected task names -> offsets"),
+    ({"grasp_offset": {"up": [1, 1, 1]}}, r"grasp_offset\['up'\]: expected"),
     ({"task": "left"}, "task: expected one of .*objects"),
     ({"task": 3}, "task: expected a task name"),
     ({"object": "banana"}, "object: expected one of"),
@@ -96,3 +102,32 @@ def test_intent_switch_ends_with_the_second_task(diverging_env):
     truth = diverging_env.unwrapped.motion.meta["intent"]
     assert truth.tasks == ("left", "right")
     assert truth.switch_time == pytest.approx(0.4 * info["duration"])
+
+
+def test_session_is_an_integer_for_a_drawn_synthetic_motion(tmp_path):
+    assert parse_options({"session": 3}, "objects").session == 3
+    assert parse_options({"session": None}, "objects").session is None
+    for options, match in [
+        ({"session": -1}, "^session: expected an integer >= 0"),
+        ({"session": "3"}, "^session: expected an integer >= 0"),
+        ({"session": True}, "^session: expected an integer >= 0"),
+        ({"session": 2, "source": "teleop"}, "^session: only for a synthetic motion"),
+        ({"session": 2, "source": tmp_path}, "^session: only for a synthetic motion"),
+        ({"session": 2, "switch_to": "tape"}, "^session: only for a synthetic motion"),
+    ]:
+        with pytest.raises(ValueError, match=match):
+            parse_options(options, "objects")
+
+
+def test_reset_with_a_session_is_deterministic_and_shows_the_tracked_hand(objects_env):
+    from sandbox.data.synthetic.session import draw_session
+
+    first, _ = objects_env.reset(seed=1, options={"session": 3})
+    motion = objects_env.unwrapped.motion
+    again, _ = objects_env.reset(seed=1, options={"session": 3})
+    assert all(np.array_equal(first[k], again[k]) for k in first)
+    np.testing.assert_array_equal(objects_env.unwrapped.motion.true, motion.true)
+    assert motion.meta["session"] == draw_session(3).to_dict()
+    plain, _ = objects_env.reset(seed=1)
+    assert "session" not in objects_env.unwrapped.motion.meta
+    assert not np.array_equal(plain["hand"], first["hand"])

@@ -135,3 +135,36 @@ def test_recorded_trial_without_emg_columns_has_no_emg(recorded_dir, tmp_path):
     assert set(motion.body) == {"arm"} and set(full.body) == {"arm", "emg"}
     np.testing.assert_array_equal(motion.body["arm"], full.body["arm"])
     assert np.isnan(motion.body_measurement("emg", 1.0)).all()
+
+
+def test_a_session_motion_is_the_tracked_hand_with_its_meeting_and_robot():
+    from sandbox.data.synthetic import Variability
+    from sandbox.data.synthetic.families import OBJECTS
+    from sandbox.data.synthetic.generator import generate
+
+    motion = synthetic_motion("objects", "tape", np.random.default_rng(2), session=4)
+    again = synthetic_motion("objects", "tape", np.random.default_rng(2), session=4)
+    np.testing.assert_array_equal(motion.true, again.true)
+    np.testing.assert_array_equal(motion.measured, again.measured)
+    (demo,) = generate([OBJECTS[2]], 1, np.random.default_rng(2), family="objects",
+                       variability=Variability(), observe=("hand", "arm"), session=4)
+    np.testing.assert_array_equal(motion.true, demo.meta["tracked_clean"])
+    np.testing.assert_array_equal(motion.measured, demo.select("hand").human)
+    np.testing.assert_array_equal(motion.meta["meeting_offset"], demo.meta["meeting_offset"])
+    np.testing.assert_array_equal(motion.meta["robot"]["joints"], demo.robot)
+    np.testing.assert_array_equal(motion.meta["robot"]["times"], motion.times)
+    with pytest.raises(ValueError, match="^session: expected None with switch_to"):
+        synthetic_motion("objects", "tape", np.random.default_rng(2), switch_to="box", session=1)
+
+
+def test_without_a_session_the_meeting_offset_is_measured_on_the_true_hand():
+    from sandbox.robot import TIP_LINK, BaxterKinematics
+
+    for switch_to in (None, "box"):
+        motion = synthetic_motion("objects", "tape", np.random.default_rng(2),
+                                  switch_to=switch_to)
+        assert "session" not in motion.meta
+        tip = BaxterKinematics().fk(motion.meta["robot"]["joints"], link=TIP_LINK)
+        gaps = np.linalg.norm(tip - motion.true - motion.meta["meeting_offset"], axis=1)
+        assert gaps.min() < 1e-12                        # it is the offset at one of the rows
+        assert np.linalg.norm(motion.meta["meeting_offset"]) < 0.1

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from sandbox.data.synthetic.robot import Q_HANDOVER
-from sandbox.envs.task import HOLD_OFFSET, TASK_OBJECTS, RewardWeights, object_for
+from sandbox.envs.task import DEFAULT_HOLD_OFFSET, TASK_OBJECTS, RewardWeights, object_for
 from sandbox.robot import Q_HOME, BaxterKinematics
 
 
@@ -21,7 +21,7 @@ def hold_until(env, q, t_end, close=False):
 def reach_config(env):
     """Joint angles putting the fingertip at the object's grasp point once the hand rests."""
     motion = env.unwrapped.motion
-    target = motion.true[-1] + HOLD_OFFSET
+    target = motion.true[-1] + DEFAULT_HOLD_OFFSET
     result = BaxterKinematics().ik(target[None], q_seed=Q_HANDOVER, link="left_gripper",
                                    tol=0.002)
     assert result.success.all()
@@ -35,7 +35,7 @@ def test_the_object_rides_in_the_hand(diverging_env):
         obs, *_ = env.step(np.append(Q_HOME, -1.0))
         hand, _ = env.sim.pose("human_hand")
         np.testing.assert_allclose(hand, env.motion.position(obs["time"][0]), atol=1e-9)
-        np.testing.assert_allclose(obs["object"], hand + HOLD_OFFSET, atol=5e-4)
+        np.testing.assert_allclose(obs["object"], hand + DEFAULT_HOLD_OFFSET, atol=5e-4)
 
 
 def test_closing_at_the_object_hands_it_over(diverging_env):
@@ -110,3 +110,23 @@ def test_reward_weights_scale_the_terms():
     task.weights = RewardWeights(distance=2.0, success=5.0, action_rate=0.5)
     terms = task.reward_terms(0.1, True, np.array([1.0, 2.0, 0, 0, 0, 0, 0]))
     assert terms == {"reward_distance": -0.2, "reward_success": 5.0, "reward_action_rate": -2.5}
+
+
+def test_the_object_rides_at_the_given_grasp_offset(diverging_env):
+    """The meeting geometry of a session (issue 21): one offset, or one per task."""
+    env = diverging_env.unwrapped
+    offset = np.array([0.04, -0.06, 0.03])
+    for given in (offset, {"up": offset.tolist(), "down": [0.0, 0.0, 0.0]}):
+        _, info = env.reset(seed=4, options={"task": "up", "grasp_offset": given})
+        np.testing.assert_allclose(info["grasp_offset"], offset)
+        for _ in range(20):
+            obs, *_ = env.step(np.append(Q_HOME, -1.0))
+            hand, _ = env.sim.pose("human_hand")
+            np.testing.assert_allclose(obs["object"], hand + offset, atol=5e-4)
+    _, info = env.reset(seed=4, options={"task": "up"})          # back to the default
+    np.testing.assert_allclose(info["grasp_offset"], DEFAULT_HOLD_OFFSET)
+
+
+def test_per_task_offsets_must_cover_the_episodes_task(diverging_env):
+    with pytest.raises(ValueError, match=r"grasp_offset: expected an offset for .*'up'"):
+        diverging_env.reset(seed=4, options={"task": "up", "grasp_offset": {"down": [0, 0, 0]}})

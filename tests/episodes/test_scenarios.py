@@ -10,6 +10,7 @@ import pytest
 
 import sandbox.envs  # noqa: F401  (registers the environments)
 import sandbox.episodes.scenarios
+from sandbox.episodes.policies import fit_family_model
 from sandbox.episodes.scenarios import EpisodeResult, run_scenario, summarize
 from sandbox.robot import Q_HOME
 
@@ -63,7 +64,9 @@ def test_same_seed_same_results(diverging_env):
 def test_episode_result_records_recognition_over_time(diverging_env):
     (result,) = run_scenario("diverging", "dynamic", n_episodes=1, seed=3, env=diverging_env,
                              options={"task": "right"})
-    assert result.task == "right" and result.options == {"task": "right"}
+    assert result.task == "right" and result.options["task"] == "right"
+    # the object rode where the model's demos met the hand (issue 21)
+    assert set(result.options["grasp_offset"]) == set(fit_family_model("diverging").tasks)
     times = [t for t, _ in result.recognised]
     assert times[0] == 0.0 and np.all(np.diff(times) > 0) and len(times) == result.steps
     assert result.final_task == result.recognised[-1][1]
@@ -151,13 +154,15 @@ def test_observe_chooses_the_modalities_and_the_synthetic_model(diverging_env):
 
 
 def test_recorded_model_is_fitted_on_the_observed_modalities(recorded_dir):
-    from sandbox.episodes.scenarios import _recorded_episodes
+    from sandbox.episodes.replays import plan_replays
 
-    ((_, model, opts, demo),) = _recorded_episodes(recorded_dir, 1, 0, {},
-                                                   ("hand", "arm", "emg"))
+    ((_, model, opts, demo, provenance),) = plan_replays(recorded_dir, 1, 0,
+                                                         observe=("hand", "arm", "emg"))
     assert [m.name for m in model.modalities] == ["hand", "arm", "emg"]
     assert demo.task == opts["task"] and demo.source.endswith(opts["trial"])
-    ((_, hand_model, _, _),) = _recorded_episodes(recorded_dir, 1, 0, {}, None)
+    assert provenance == {"mode": "leave-one-out", "session": str(recorded_dir),
+                          "train": f"{recorded_dir} (the other trials)", "n_train": 173}
+    ((_, hand_model, _, _, _),) = plan_replays(recorded_dir, 1, 0)
     assert [m.name for m in hand_model.modalities] == ["hand"]
     (result,) = run_scenario("recorded", "static", n_episodes=1, seed=0, data=recorded_dir,
                              observe="hand,arm,emg")

@@ -9,7 +9,10 @@ artefacts), ``observe`` (which modalities a demonstration carries), ``tasks``
 (task geometry and random draws), ``robot`` (the paired Baxter arm motion),
 ``generator`` (assembly), ``families`` (objects and diverging tasks),
 ``intent`` (a change of task mid-motion, with its ground truth), ``realism``
-(synthetic vs recorded statistics). Baxter's own facts (home pose, tip link,
+(synthetic vs recorded statistics), ``session`` (a recording session drawn
+from a seed: the tracker's calibration, where the fingertip meets the hand,
+the tempo, the motion's tail; ``make_dataset(..., session=S)``) and ``tails``
+(what the hand does after the handover in a session). Baxter's own facts (home pose, tip link,
 grasp offset) come from :mod:`sandbox.robot`.
 
 Examples
@@ -26,6 +29,11 @@ Examples
 >>> arm = make_dataset("objects", 1, np.random.default_rng(0), observe="hand,arm")
 >>> arm[0].human.shape[1], [m.name for m in arm[0].modalities], arm[0].meta["clean_arm"].shape[1]
 (9, ['hand', 'arm'], 6)
+>>> from sandbox.data.synthetic import draw_session
+>>> linger = draw_session(3, tail="linger")
+>>> lab = make_dataset("objects", 1, np.random.default_rng(0), session=linger)
+>>> lab[0].meta["session"]["tail"], lab[0].meta["tracked_clean"].shape == lab[0].human.shape
+('linger', True)
 """
 
 from sandbox.data.synthetic.arm import ArmModel, arm_positions
@@ -44,6 +52,7 @@ from sandbox.data.synthetic.realism import (
     realism_stats,
 )
 from sandbox.data.synthetic.registry import DATASETS, make_dataset
+from sandbox.data.synthetic.session import TAILS, Session, draw_session
 from sandbox.data.synthetic.tasks import TaskSpec, Variability
 from sandbox.data.synthetic.tracker import TrackerModel
 from sandbox.data.synthetic.two_task import two_task_demos
@@ -56,6 +65,8 @@ __all__ = [
     "IntentSwitch",
     "OBJECTS",
     "ROBOT_NAMES",
+    "Session",
+    "TAILS",
     "TaskSpec",
     "TrackerModel",
     "Variability",
@@ -64,6 +75,7 @@ __all__ = [
     "compare_arm_realism",
     "compare_realism",
     "diverging_demos",
+    "draw_session",
     "make_dataset",
     "intent_switch_demo",
     "minimum_jerk",

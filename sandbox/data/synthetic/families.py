@@ -23,6 +23,7 @@ import numpy as np
 from sandbox.data.demonstration import Demonstration
 from sandbox.data.synthetic.arm import ArmModel
 from sandbox.data.synthetic.generator import generate
+from sandbox.data.synthetic.session import Session
 from sandbox.data.synthetic.tasks import TaskSpec, Variability
 from sandbox.data.synthetic.tracker import TrackerModel
 from sandbox.validation import check_positive
@@ -79,6 +80,7 @@ def objects_demos(
     ik_tol: float = 0.01,
     observe: Sequence[str] | str = ("hand",),
     arm_model: ArmModel | None = None,
+    session: Session | int | None = None,
 ) -> list[Demonstration]:
     """Handovers of a box, a glasses case and a roll of tape (Experiment 1).
 
@@ -101,6 +103,9 @@ def objects_demos(
         has 9 columns, hand then elbow and shoulder) or ``"arm"``.
     arm_model : ArmModel, optional
         The human arm (default ``ArmModel()``), used when the arm is observed.
+    session : Session or int, optional
+        The recording session (see :func:`~sandbox.data.synthetic.generator.generate`);
+        None: today's data.
 
     Returns
     -------
@@ -110,7 +115,7 @@ def objects_demos(
     return generate(
         OBJECTS, n_per_task, rng, family="objects", tracker=tracker,
         variability=variability or Variability(), rate_hz=rate_hz, ik_tol=ik_tol,
-        observe=observe, arm_model=arm_model,
+        observe=observe, arm_model=arm_model, session=session,
     )
 
 
@@ -126,6 +131,7 @@ def diverging_demos(
     ik_tol: float = 0.01,
     observe: Sequence[str] | str = ("hand",),
     arm_model: ArmModel | None = None,
+    session: Session | int | None = None,
 ) -> list[Demonstration]:
     """Tasks that share their start and diverge at phase ~0.5 (Experiment 2).
 
@@ -139,7 +145,7 @@ def diverging_demos(
         Tasks, from ``"left", "right", "up", "down", "straight"``.
     branch_m : float
         Distance (m) of each branch's end from the straight path's end.
-    tracker, variability, rate_hz, ik_tol, observe, arm_model
+    tracker, variability, rate_hz, ik_tol, observe, arm_model, session
         As in :func:`objects_demos` (default variability:
         :data:`DIVERGING_VARIABILITY`).
 
@@ -152,5 +158,5 @@ def diverging_demos(
     return generate(
         diverging_specs(directions, branch_m), n_per_task, rng, family="diverging",
         tracker=tracker, variability=variability or DIVERGING_VARIABILITY, rate_hz=rate_hz,
-        ik_tol=ik_tol, observe=observe, arm_model=arm_model,
+        ik_tol=ik_tol, observe=observe, arm_model=arm_model, session=session,
     )

@@ -9,7 +9,7 @@ dataset is the hand-only dataset's.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -53,6 +53,7 @@ def observe_human(
     tracker: TrackerModel,
     seed: int,
     arm_model: ArmModel | None = None,
+    frame: Callable[[FloatArray], FloatArray] | None = None,
 ) -> tuple[FloatArray, tuple[Modality, ...], dict[str, Any]]:
     """The tracked human of one demonstration, its modalities and extra ``meta``.
 
@@ -71,6 +72,11 @@ def observe_human(
         ``default_rng(seed)``, the arm :func:`~sandbox.data.synthetic.arm.arm_rng`.
     arm_model : ArmModel, optional
         The arm (default ``ArmModel()``).
+    frame : callable, optional
+        Maps clean positions (T, 3k) m of Baxter's base frame to the tracker's
+        frame (a session's :meth:`~sandbox.data.synthetic.session.Session.to_tracker`),
+        applied before the artefacts; default: the tracker's frame is Baxter's.
+        The arm itself is built from the true hand, ``clean_arm`` is the true arm.
 
     Returns
     -------
@@ -81,11 +87,12 @@ def observe_human(
     meta : dict
         ``{"clean_arm": (T, 6) m}`` when the arm is observed, else empty.
     """
-    hand, schedule = track_hand(times, clean, tracker, np.random.default_rng(seed))
+    seen = (lambda x: x) if frame is None else frame
+    hand, schedule = track_hand(times, seen(clean), tracker, np.random.default_rng(seed))
     columns, meta = {"hand": hand}, {}
     if "arm" in observe:
         rng = arm_rng(seed)
         meta["clean_arm"] = arm_positions(times, clean, rng, model=arm_model)
-        columns["arm"] = track_arm(times, meta["clean_arm"], tracker, schedule, rng)
+        columns["arm"] = track_arm(times, seen(meta["clean_arm"]), tracker, schedule, rng)
     human = np.column_stack([columns[name] for name in observe])
     return human, tuple(SYNTHETIC_MODALITIES[name] for name in observe), meta

@@ -10,6 +10,7 @@ import numpy as np
 from sandbox.data.demonstration import Demonstration
 from sandbox.data.synthetic.families import diverging_demos, objects_demos
 from sandbox.data.synthetic.observe import check_observe
+from sandbox.data.synthetic.session import Session, as_session
 from sandbox.data.synthetic.two_task import two_task_demos
 
 _GENERATORS: dict[str, Callable[..., list[Demonstration]]] = {
@@ -28,6 +29,7 @@ def make_dataset(
     rng: np.random.Generator,
     *,
     observe: Sequence[str] | str = ("hand",),
+    session: Session | int | None = None,
     **options: Any,
 ) -> list[Demonstration]:
     """Generate a named synthetic dataset of paired human/robot demonstrations.
@@ -46,6 +48,12 @@ def make_dataset(
         Observed modalities: ``"hand"`` (default), ``"hand,arm"`` (``human``
         has 9 columns: the hand, then the elbow and the shoulder) or ``"arm"``.
         The hand is the same with or without the arm.
+    session : Session or int, optional
+        A recording session (:mod:`sandbox.data.synthetic.session`: tracker
+        frame, where the fingertip meets the hand, tempo, the motion's tail);
+        an integer >= 0 is :func:`~sandbox.data.synthetic.session.draw_session`
+        of it. None (default): today's data, bit for bit. ``"two_task"`` has
+        no robot kinematics and takes None only.
     **options
         Keyword options of the dataset's generator.
 
@@ -56,4 +64,10 @@ def make_dataset(
     """
     if name not in _GENERATORS:
         raise ValueError(f"name: expected one of {list(DATASETS)}, got {name!r}")
-    return _GENERATORS[name](n_per_task, rng, observe=check_observe(observe), **options)
+    observe, session = check_observe(observe), as_session(session)
+    if session is None:
+        return _GENERATORS[name](n_per_task, rng, observe=observe, **options)
+    if name == "two_task":
+        raise ValueError("session: expected None for 'two_task' (its robot is no arm meeting "
+                         "the hand); use 'objects' or 'diverging' for sessions")
+    return _GENERATORS[name](n_per_task, rng, observe=observe, session=session, **options)

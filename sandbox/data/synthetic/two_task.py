@@ -128,7 +128,8 @@ def _demo(
     human, mods, meta = _observed(observe, t, clean, hand, draw.noise_m, arm_rng, arm_model)
     return Demonstration(
         times=t, human=human, robot=robot, task=task, robot_names=ROBOT_NAMES,
-        modalities=mods, source=f"synthetic:two_task[{task}#{i}]", meta=meta,
+        modalities=mods, source=f"synthetic:two_task[{task}#{i}]",
+        meta={**meta, "robot_meets_hand": False},   # no meeting geometry (sandbox.data.geometry)
     )
 
 
