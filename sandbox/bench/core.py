@@ -108,6 +108,7 @@ def _timed_update(pred: DynamicPredictor, t: float) -> Callable[[], object]:
     def run():
         pred._plan = state
         pred.updates.clear()
+        pred.ended = False             # an update that ends the motion holds the task after it
         return pred.update(t)
 
     return run
