@@ -126,14 +126,10 @@ def run_scenario(scenario: str = "diverging", policy: str | Callable = "dynamic"
         :class:`~sandbox.episodes.policy.Policy`: it maps an observation to an
         action, has ``reset()`` and ``beliefs``; one with a ``task`` attribute
         instead of ``beliefs`` is accepted too).
-    n_episodes : int
-        Episodes (>= 1).
-    seed : int
-        Episode ``i`` resets with ``seed + i``.
-    dow_t : float
-        Window (s) of the dynamic policy.
-    ratio : float
-        Observed fraction of the static policy.
+    n_episodes, seed : int
+        Episodes (>= 1); episode ``i`` resets with ``seed + i``.
+    dow_t, ratio : float
+        Window (s) of the dynamic policy; observed fraction of the static one.
     data, test : str or Path, optional
         ``recorded`` scenario only (:func:`sandbox.episodes.replays.plan_replays`):
         ``data`` one set (leave-one-out) or a folder of sessions (leave-one-session-out);
@@ -162,14 +158,13 @@ def run_scenario(scenario: str = "diverging", policy: str | Callable = "dynamic"
     -------
     list of EpisodeResult
     """
-    observe = _check_run(scenario, policy, n_episodes, data, observe, test,
-                         (session, train_session))
+    sessions = (session, train_session)
+    observe = _check_run(scenario, policy, n_episodes, data, observe, test, sessions)
     make_policy = _policy_factory(policy, dow_t, ratio, observe)
     episodes = _episodes(scenario, int(n_episodes), int(seed), data, model, options or {},
-                         observe, test, (session, train_session))
+                         observe, test, sessions)
     own_env = env is None
-    if own_env:
-        env = _make_env(scenario)
+    env = _make_env(scenario) if own_env else env
     try:
         return [replace(run_episode(env, make_policy(e.model, e.demo), e.seed, e.options),
                         replay=e.provenance) for e in episodes]
