@@ -138,9 +138,8 @@ def run_scenario(scenario: str = "diverging", policy: str | Callable = "dynamic"
     env : gymnasium.Env, optional
         An environment made from the scenario's id, reused (not closed); default: a new one.
     model : IProMP, optional
-        The model (synthetic scenarios; default: fitted on the family's
-        synthetic demonstrations of the ``observe`` modalities, default the
-        hand, seed 0, 20 per task).
+        Synthetic scenarios; default fitted on 20 demos per task of the family (seed 0)
+        of the ``observe`` modalities (default the hand).
     options : mapping, optional
         Extra ``reset`` options for every episode (e.g. ``{"speed": 1.5}``).
     observe : sequence of str or str, optional
@@ -154,9 +153,7 @@ def run_scenario(scenario: str = "diverging", policy: str | Callable = "dynamic"
         same) and ``recorded_robot`` replays each motion's own robot
         (:mod:`sandbox.episodes.sessions`).
 
-    Returns
-    -------
-    list of EpisodeResult
+    Returns a list of :class:`EpisodeResult`.
     """
     sessions = (session, train_session)
     observe = _check_run(scenario, policy, n_episodes, data, observe, test, sessions)
