@@ -13,15 +13,20 @@ from sandbox.data.recorded import HUMAN_COLUMNS, ROBOT_COLUMNS
 
 
 def write_trial(path: Path, n: int = 60, seed: int = 0, end_z: float = 0.2) -> Path:
-    """A 30 Hz hand on 90 Hz rows (each frame sent 3 times), a smooth robot."""
+    """A 30 Hz hand on 90 Hz rows (each frame sent 3 times), a smooth robot whose
+    fingertip ends 2 cm above where the hand ends (a handover: ``fit`` learns where)."""
+    from sandbox.robot import TIP_LINK, BaxterKinematics
+
     rng = np.random.default_rng(seed)
     t = np.arange(n) / 90.0 * (1 + 0.1 * seed)
     s = np.clip(t / t[-1], 0, 1)
     s = s**3 * (10 - 15 * s + 6 * s**2)
-    hand = np.array([1.1, -0.1, 0.25]) + s[:, None] * ([-0.3, 0.3, end_z - 0.25])
+    robot = 0.1 * np.arange(7) + s[:, None] * (0.2 + 0.5 * end_z)
+    start = np.array([1.1, -0.1, 0.25])
+    end = BaxterKinematics().fk(robot[-1], link=TIP_LINK) - [0.0, 0.0, 0.02]
+    hand = start + s[:, None] * (end - start)
     hand = hand + rng.normal(0, 1e-3, hand.shape)
     hand = hand[(np.arange(n) // 3) * 3]  # sample-and-hold at a third of the row rate
-    robot = 0.1 * np.arange(7) + s[:, None] * (0.2 + 0.5 * end_z)
     path.parent.mkdir(parents=True, exist_ok=True)
     lines = [",".join(["t", *HUMAN_COLUMNS, *ROBOT_COLUMNS])]
     lines += [",".join(f"{v:.6f}" for v in row) for row in np.column_stack([t, hand, robot])]
