@@ -283,7 +283,7 @@ def learn_geometry(demos: Sequence, *, max_offset: float = MAX_OFFSET_M) -> Meet
     from sandbox.robot import BaxterKinematics
 
     tasks = list(dict.fromkeys(str(d.task) for d in demos))
-    usable = [d for d in demos if carries_geometry(d) and _hand(d) is not None]
+    usable = [d for d in demos if carries_geometry(d) and _tracked(_hand(d))]
     if not usable:
         return MeetingGeometry.default(tasks)
     kin = BaxterKinematics()
@@ -306,6 +306,11 @@ def learn_geometry(demos: Sequence, *, max_offset: float = MAX_OFFSET_M) -> Meet
         raise ValueError(f"tasks {missing}: expected a demonstration with Baxter's robot "
                          "trajectory to learn where the handover happens, got none")
     return MeetingGeometry({t: _task_geometry(offsets[t]) for t in tasks})
+
+
+def _tracked(hand: FloatArray | None) -> bool:
+    """Whether a demo's hand has a finite row (a meeting can be found)."""
+    return hand is not None and bool(np.isfinite(hand).all(axis=1).any())
 
 
 def _finite_near(hand: FloatArray, index: int) -> int:

@@ -162,3 +162,10 @@ def test_a_motion_of_no_task_gets_the_offset_pooled_over_the_tasks(demos):
                                geometry.pooled())
     assert grasp_options(model, task="up")["grasp_offset"] == geometry.offsets()
     np.testing.assert_array_equal(MeetingGeometry.default(["a"]).pooled(), DEFAULT_OFFSET)
+
+
+def test_a_task_whose_hand_was_never_tracked_is_named(demos):
+    lost = [_with_hand(d, np.full_like(d.human, np.nan)) if d.task == "down" else d
+            for d in demos]
+    with pytest.raises(ValueError, match=r"tasks \['down'\]"):
+        learn_geometry(lost)
