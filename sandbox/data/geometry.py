@@ -224,11 +224,16 @@ def meeting_offset(times, hand, robot, kinematics=None,
     robot = check_array(robot, "robot", 2, shape=(n, 7))
     shift = np.zeros(3) if expected is None else check_array(expected, "expected", 1, shape=(3,))
     tip = (kinematics or BaxterKinematics()).fk(robot, link=TIP_LINK)
-    distance = np.linalg.norm(tip - hand - shift, axis=1)
+    index = _nearest(hand, tip, shift)
+    return tip[index] - hand[index], index
+
+
+def _nearest(hand: FloatArray, tip: FloatArray, expected: FloatArray) -> int:
+    """The sample (T,) at which ``tip`` is nearest ``hand + expected`` (NaN rows skipped)."""
+    distance = np.linalg.norm(tip - hand - expected, axis=1)
     if not np.isfinite(distance).any():
         raise ValueError("hand: expected at least one finite row, got none")
-    index = int(np.nanargmin(distance))
-    return tip[index] - hand[index], index
+    return int(np.nanargmin(distance))
 
 
 def task_offsets(tracks: Sequence[tuple[FloatArray, FloatArray, int]],
@@ -251,12 +256,7 @@ def task_offsets(tracks: Sequence[tuple[FloatArray, FloatArray, int]],
     expected = np.nanmean([tip[_finite_near(hand, i)] - hand[_finite_near(hand, i)]
                            for hand, tip, i in tracks], axis=0)
     for _ in range(max_rounds):
-        found = []
-        for hand, tip, _ in tracks:
-            distance = np.linalg.norm(tip - hand - expected, axis=1)
-            if not np.isfinite(distance).any():
-                raise ValueError("hand: expected at least one finite row, got none")
-            found.append(int(np.nanargmin(distance)))
+        found = [_nearest(hand, tip, expected) for hand, tip, _ in tracks]
         offsets = np.array([tip[i] - hand[i] for (hand, tip, _), i in zip(tracks, found)])
         if found == moments:
             break

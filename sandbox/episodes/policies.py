@@ -35,9 +35,7 @@ an environment's family, cached in-process.
 
 from __future__ import annotations
 
-import functools
 from collections.abc import Mapping
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -150,19 +148,9 @@ def fit_family_model(family: str = "diverging", n_per_task: int = 20, seed: int 
         demonstrations' meeting geometry (:mod:`sandbox.data.geometry`).
     """
     names = [n.strip() for n in observe.split(",")] if isinstance(observe, str) else observe
-    return _fit_family_model(family, n_per_task, seed, n_basis, tuple(names))
+    from sandbox.episodes.sessions import fit_synthetic
 
-
-@functools.lru_cache(maxsize=8)
-def _fit_family_model(family: str, n_per_task: int, seed: int, n_basis: int | None,
-                      observe: tuple[str, ...]) -> IProMP:
-    from sandbox.data.geometry import attach_geometry
-    from sandbox.data.synthetic import make_dataset
-    # Any: a Demonstration is frozen, the core's DemonstrationLike declares plain attributes
-    demos: list[Any] = make_dataset(family, n_per_task, np.random.default_rng(seed),
-                                    observe=observe)
-    model = IProMP() if n_basis is None else IProMP(n_basis=n_basis)
-    return attach_geometry(model.fit(demos), demos)
+    return fit_synthetic(family, n_per_task, seed, n_basis, tuple(names))
 
 
 class _Steering:

@@ -53,20 +53,24 @@ def fit_session_model(family: str, session: int, observe=("hand",), *,
     """
     names = tuple(n.strip() for n in observe.split(",")) if isinstance(observe, str) \
         else tuple(observe)
-    return _fit_session_model(family, check_integer(session, "session", 0), names,
-                              check_integer(n_per_task, "n_per_task", 2), int(seed))
+    return fit_synthetic(family, check_integer(n_per_task, "n_per_task", 2), int(seed), None,
+                         names, check_integer(session, "session", 0))
 
 
 @functools.lru_cache(maxsize=8)
-def _fit_session_model(family: str, session: int, observe: tuple[str, ...], n_per_task: int,
-                       seed: int):
+def fit_synthetic(family: str, n_per_task: int, seed: int, n_basis: int | None,
+                  observe: tuple[str, ...], session: int | None = None):
+    """An IProMP (default options but ``n_basis``) fitted on a synthetic family's demos of
+    ``session`` (None: sessionless), with their meeting geometry; cached, do not modify."""
     from sandbox.core import IProMP
     from sandbox.data.geometry import attach_geometry
     from sandbox.data.synthetic import make_dataset
 
+    # Any: a Demonstration is frozen, the core's DemonstrationLike declares plain attributes
     demos: list[Any] = make_dataset(family, n_per_task, np.random.default_rng(seed),
                                     observe=observe, session=session)
-    return attach_geometry(IProMP().fit(demos), demos)
+    model = IProMP() if n_basis is None else IProMP(n_basis=n_basis)
+    return attach_geometry(model.fit(demos), demos)
 
 
 def session_episodes(family: str, n: int, seed: int, session: int, *,
