@@ -237,8 +237,11 @@ def _scenario(args) -> int:
 
     def show(belief) -> None:
         probs = " ".join(f"{k}={v:.2f}" for k, v in belief.posterior.items())
+        extra = "" if belief.familiarity is None else f" familiarity={belief.familiarity:.2f}"
+        if belief.moving < 0.5:
+            extra += f" (hand at rest: p(moving)={belief.moving:.2f})"
         print(f"  t={belief.time:5.2f}s task={belief.task} p[{probs}] T={belief.duration:.2f}s "
-              f"jump={belief.jump:.4f} rad", flush=True)
+              f"jump={belief.jump:.4f} rad{extra}", flush=True)
 
     wrap, save = args.record
     summary = run_scenario_file(scenario, html=html, on_update=show,

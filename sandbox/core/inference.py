@@ -20,6 +20,7 @@ from sandbox.core.likelihood import Scorer
 from sandbox.core.phase import ended_probability, estimate_phase
 from sandbox.core.promp import WeightDistribution, trajectory_distribution
 from sandbox.core.recognition import task_posterior
+from sandbox.core.rest import chosen_task, motion_probability, rest_log_likelihood, with_rest
 from sandbox.core.statistics import StreamStatistics
 from sandbox.validation import FloatArray
 
@@ -49,6 +50,9 @@ class Prediction:
     n_values : int or None
         Observed values (finite entries of the observations) it was made from
         (what :func:`~sandbox.core.familiarity.statistic` divides by).
+    motion_probability : float
+        Probability that the hand had started moving, against the rest
+        hypothesis (:mod:`sandbox.core.rest`); 1 when it was not weighed.
     """
 
     task_index: int
@@ -61,6 +65,7 @@ class Prediction:
     factors: FloatArray | None = None
     grid: list | None = None
     n_values: int | None = None
+    motion_probability: float = 1.0
 
     def trajectory(self, basis, times) -> tuple[FloatArray, FloatArray]:
         """Robot mean (T, Q) and covariance (T, Q, Q) at ``times`` (s); holds after the end."""
@@ -91,7 +96,8 @@ class Prediction:
 def predict(model: IProMP, scorer: Scorer, times: FloatArray, values: FloatArray, *,
             likelihood: str = "joint", n_candidates: int = 50, width: float = 3.0,
             refine_steps: int = 1, stats: StreamStatistics | None = None,
-            task: int | None = None, duration: float | None = None) -> Prediction:
+            task: int | None = None, duration: float | None = None,
+            rest: bool = True) -> Prediction:
     """Estimate speeds and task from observations and condition the robot (one update).
 
     Parameters
@@ -110,11 +116,23 @@ def predict(model: IProMP, scorer: Scorer, times: FloatArray, values: FloatArray
     task, duration : optional
         Condition this task at this duration instead of the estimated ones (an
         oracle); the posterior and speed estimates are still reported.
+    rest : bool
+        Weigh the hypothesis that the hand has not started (:mod:`sandbox.core.rest`)
+        into the task posterior. Only for observations from the start of the
+        stream (a later window of a held hand is the end of a motion, not a rest).
     """
     est = estimate_phase(scorer, model.task_models, times, values, n_candidates=n_candidates,
                          width=width, refine_steps=refine_steps, mode=likelihood, stats=stats)
     post = task_posterior(est.log_likelihood, model.priors)     # eq. 14-15
-    k = int(np.argmax(post)) if task is None else int(task)
+    p_motion = 1.0
+    if rest:
+        still = rest_log_likelihood(values, scorer.sigma2, scorer.start_mean, scorer.start_var,
+                                    joint=likelihood == "joint")
+        p_motion = motion_probability(est.log_likelihood, model.priors, still)
+        post, chosen = with_rest(post, model.priors, p_motion), post
+    else:
+        chosen = post
+    k = chosen_task(post, chosen) if task is None else int(task)
     T = float(est.durations[k]) if duration is None else float(duration)
     if duration is None and est.factors is not None:
         factor = est.factors[k]
@@ -123,4 +141,4 @@ def predict(model: IProMP, scorer: Scorer, times: FloatArray, values: FloatArray
     robot = condition_robot(model.task_models[k].weights, factor, model.n_human,
                             scorer.rank[k])
     return Prediction(k, post, est.alphas, est.durations, est.log_likelihood, robot, T,
-                      est.factors, est.grid, int(np.isfinite(values).sum()))
+                      est.factors, est.grid, int(np.isfinite(values).sum()), p_motion)

@@ -47,6 +47,7 @@ import numpy as np
 from sandbox.core.factor import b_part, factor_scores
 from sandbox.core.interaction import LOG_2PI
 from sandbox.core.promp import WeightDistribution
+from sandbox.core.rest import start_distribution
 from sandbox.validation import FloatArray
 
 if TYPE_CHECKING:
@@ -117,6 +118,7 @@ class Scorer:
         self.P, self.N, self.K = P, N, len(model.task_models)
         self.sigma2 = np.asarray(model.noise, dtype=np.float64)
         self.log_sigma2 = np.log(self.sigma2)
+        self.start_mean, self.start_var = start_distribution(model)   # the rest hypothesis
         self.rank = [t.weights.factor.shape[1] for t in model.task_models]
         self.R = max(self.rank)
         self.reg_h = np.array([t.weights.reg[:P] for t in model.task_models])  # (K, P)

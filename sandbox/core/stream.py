@@ -186,5 +186,10 @@ class ObservationStream:
         """Kept observations: times (s,) and values (s, P), normalised, NaN where unobserved."""
         return np.array(self._t), np.array(self._y).reshape(-1, self.n_human)
 
+    @property
+    def first_time(self) -> float:
+        """Time (s) of the first kept observation; inf before any."""
+        return self._t[0] if self._t else float("inf")
+
     def __len__(self) -> int:
         return len(self._t)

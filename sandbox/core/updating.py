@@ -79,6 +79,10 @@ class Update:
         How well the observations fit the best task, against held-out training
         motions (:mod:`sandbox.core.familiarity`), in (0, 1]; None when the
         model carries no calibration or the likelihood is marginal.
+    motion_probability : float
+        Probability that the hand had started moving, against the hypothesis
+        that it rests at its start (:mod:`sandbox.core.rest`); the task
+        posterior leans back to the prior by the rest.
     """
 
     time: float
@@ -94,6 +98,7 @@ class Update:
     seconds: float
     after_end: bool = False
     familiarity: float | None = None
+    motion_probability: float = 1.0
 
 
 class PredictorBase:
@@ -283,9 +288,11 @@ class PredictorBase:
             return None
         start = _time.perf_counter()
         stats = self._stats if self._stats is not None and self._stats.count == times.size else None
+        first = self.stream.first_time
         pred = predict(self.model, self.scorer, times, values, likelihood=self.likelihood,
                        n_candidates=self.n_candidates, width=self.width,
-                       refine_steps=self.refine_steps, stats=stats)
+                       refine_steps=self.refine_steps, stats=stats,
+                       rest=bool(times[0] <= first))   # a later window is no rest (rest.py)
         return self.apply(t, pred, n_observations=int(times.size), started=start)
 
     def apply(self, t: float, prediction: Prediction, *, n_observations: int = 0,
@@ -326,7 +333,7 @@ class PredictorBase:
                      prediction.task_posterior, prediction.alphas, prediction.durations,
                      prediction.log_likelihood, float(prediction.alphas[k]),
                      prediction.duration, jump, _time.perf_counter() - start, held,
-                     familiarity)
+                     familiarity, prediction.motion_probability)
         self.updates.append(upd)
         self._after_update()
         return upd

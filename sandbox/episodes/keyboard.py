@@ -211,7 +211,7 @@ def status_line(t: float, hand, seen, beliefs, *, gripper=None, meeting=None) ->
     post = beliefs.task_posterior
     probs = " ".join(f"{k}={v:.2f}" for k, v in post.items())
     hand = np.asarray(hand, dtype=float)
-    line = (f"t={t:5.2f}s hand={_xyz(hand)} seen={_xyz(seen)} m task={beliefs.task} "
+    line = (f"t={t:5.2f}s hand={_xyz(hand)} seen={_xyz(seen)} m task={beliefs.task or '-'} "
             f"p[{probs}] T={beliefs.duration:.2f}s")
     if gripper is not None:
         line += f" gripper-hand={np.linalg.norm(np.asarray(gripper, dtype=float) - hand):.3f}m"

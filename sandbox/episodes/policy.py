@@ -41,7 +41,8 @@ class Beliefs:
     Attributes
     ----------
     task : str
-        The task recognised now (``""`` if the policy recognises none).
+        The task recognised now (``""`` if the policy recognises none, e.g. a
+        predictor before its first update: the prior's favourite is no recognition).
     tasks : tuple of str
         Every task the policy knows, in the model's order.
     task_posterior : mapping of str to float
@@ -95,12 +96,26 @@ class Beliefs:
     def of_predictor(cls, predictor: Any) -> Beliefs:
         """The beliefs of a :class:`~sandbox.core.DynamicPredictor` or
         :class:`~sandbox.core.StaticPredictor` now."""
-        return cls(task=predictor.task, tasks=tuple(predictor.model.tasks),
+        return cls(task=predictor.task if predictor.updates else "",
+                   tasks=tuple(predictor.model.tasks),
                    task_posterior=dict(predictor.task_posterior),
                    duration=float(predictor.duration), alpha=float(predictor.alpha),
                    familiar=predictor.familiar, updates=tuple(predictor.updates),
                    _plan=predictor.plan, _command=predictor.command,
                    _observations=predictor.observations)
+
+
+def recognitions(beliefs: Beliefs, n_known: int, time: float) -> list[tuple[float, str]]:
+    """The (time s, task) recognitions a step adds, on the updates' clock.
+
+    A predictor's: one per update after the first ``n_known``, stamped with the
+    update's own time (the observation it was made at); nothing before its
+    first update. A policy without a predictor: its task at ``time`` (the
+    observation the policy acted on).
+    """
+    if beliefs.updates:
+        return [(float(u.time), str(u.task)) for u in beliefs.updates[n_known:]]
+    return [(float(time), beliefs.task)] if beliefs.task else []
 
 
 @runtime_checkable

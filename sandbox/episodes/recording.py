@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from sandbox.episodes.policy import Policy, beliefs_of
+from sandbox.episodes.policy import Policy, beliefs_of, recognitions
 from sandbox.episodes.rollout import Step, rollout
 
 
@@ -41,6 +41,12 @@ class Belief:
         Estimated duration of the human motion (s), ``nan`` before the first update.
     jump : float
         Change of the robot command (rad) the update caused (0 for a non-update).
+    familiarity : float or None
+        How familiar the motion was (:attr:`sandbox.core.Update.familiarity`);
+        None without a calibrated model.
+    moving : float
+        Probability that the hand had started moving
+        (:attr:`sandbox.core.Update.motion_probability`).
     """
 
     time: float
@@ -48,12 +54,15 @@ class Belief:
     posterior: dict[str, float]
     duration: float
     jump: float = 0.0
+    familiarity: float | None = None
+    moving: float = 1.0
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready form (``nan`` becomes ``None``)."""
         return {"time": round(self.time, 4), "task": self.task,
                 "posterior": {k: round(float(v), 4) for k, v in self.posterior.items()},
-                "duration": _finite(self.duration), "jump": _finite(self.jump)}
+                "duration": _finite(self.duration), "jump": _finite(self.jump),
+                "familiarity": _finite(self.familiarity), "moving": round(self.moving, 4)}
 
 
 @dataclass
@@ -76,7 +85,10 @@ class EpisodeRecord:
         Episode time (s) at the end.
     steps : int
     recognised : list of (float, str)
-        The recognised task after each step: (time s, task).
+        (time s, task): a predictor's task after each of its updates, at the
+        update's time; nothing before its first update
+        (:func:`~sandbox.episodes.policy.recognitions`). A policy without a
+        predictor: its task after each step.
     updates : list of Belief
         One per predictor update.
     truth : list of (float, str)
@@ -201,7 +213,8 @@ class _Recorder:
     def step(self, step: Step) -> None:
         record, beliefs, t = self.record, beliefs_of(self.policy), step.time
         record.steps = step.n
-        record.recognised.append((t, beliefs.task))
+        seen = float(step.previous["time"][0]) if step.previous is not None else t
+        record.recognised += recognitions(beliefs, len(record.updates), seen)
         if self.truth is not None:
             record.truth.append((t, str(self.truth.task_at(t))))
         self.distances.append(step.info["distance"])
@@ -228,4 +241,6 @@ class _Recorder:
 def _belief(update, tasks) -> Belief:
     posterior = {task: float(p) for task, p in zip(tasks, update.task_posterior)}
     return Belief(time=float(update.time), task=update.task, posterior=posterior,
-                  duration=float(update.duration), jump=float(update.jump))
+                  duration=float(update.duration), jump=float(update.jump),
+                  familiarity=getattr(update, "familiarity", None),
+                  moving=float(getattr(update, "motion_probability", 1.0)))

@@ -45,7 +45,7 @@ from typing import Any
 
 import numpy as np
 
-from sandbox.episodes.policy import Policy, beliefs_of
+from sandbox.episodes.policy import Policy, beliefs_of, recognitions
 from sandbox.episodes.replays import Replay, grasp_options, plan_replays
 from sandbox.episodes.rollout import Step, rollout
 from sandbox.validation import check_choice
@@ -81,7 +81,8 @@ class EpisodeResult:
     min_distance : float
         Smallest such distance (m) during the episode.
     recognised : tuple of (float, str)
-        The task the policy recognised after each step's observation: (time s, task).
+        (time s, task) on the updates' clock (:func:`~sandbox.episodes.policy.recognitions`):
+        a predictor's task after each update, nothing before its first.
     steps : int
     options : dict
         The ``reset`` options used.
@@ -174,16 +175,19 @@ def run_episode(env: Any, policy: Policy, seed: int,
                 options: Mapping[str, Any]) -> EpisodeResult:
     """One episode of ``policy`` in ``env`` until termination or truncation.
 
-    The recognised task after each step is read from ``policy.beliefs``
-    (a policy without beliefs: its ``task`` attribute) and stamped with the
-    time of the observation the policy acted on.
+    The recognised task is read from ``policy.beliefs`` (a policy without
+    beliefs: its ``task`` attribute) after every step, on the updates' clock
+    (:func:`~sandbox.episodes.policy.recognitions`).
     """
     recognised: list[tuple[float, str]] = []
     distances: list[float] = []
+    n_updates = [0]
 
     def on_step(step: Step) -> None:
         assert step.previous is not None
-        recognised.append((float(step.previous["time"][0]), beliefs_of(policy).task))
+        beliefs = beliefs_of(policy)
+        recognised.extend(recognitions(beliefs, n_updates[0], float(step.previous["time"][0])))
+        n_updates[0] = len(beliefs.updates)
         distances.append(step.info["distance"])
 
     last = rollout(env, policy, seed=seed, options=options, on_step=on_step)

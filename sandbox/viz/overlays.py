@@ -42,6 +42,9 @@ from sandbox.viz.geometry import FloatArray, polyline_tube, sample_paths, task_c
 from sandbox.viz.panel import NEUTRAL, Panel
 from sandbox.viz.panel import translation as _translation
 
+#: Colour (RGBA) of the prior plan, drawn before any task is recognised.
+PRIOR_COLOR = np.array([0.6, 0.6, 0.6, 1.0])
+
 
 @dataclass(frozen=True)
 class OverlayStyle:
@@ -203,14 +206,15 @@ class PredictionOverlay:
         covs : array_like, shape (n, 7, 7)
             Their covariances (rad²).
         task : str
-            Task the plan is for (its colour).
+            Task the plan is for (its colour); ``""`` for the prior plan, before
+            any task is recognised (grey).
 
         Returns
         -------
         ndarray, shape (m, 3)
             The mean gripper path drawn (m).
         """
-        color = self._color(task)
+        color = self._color(task) if task else PRIOR_COLOR
         path, samples = self.gripper_paths(means, covs)
         if self._prediction >= 0:
             self.vis["prediction"][f"u{self._prediction}"].delete()
@@ -337,7 +341,8 @@ class PredictionOverlay:
             start = new[-1].time if new else t
             future = plan_t >= start
             if future.sum() >= 2:
-                self.show_prediction(means[future], covs[future], predictor.task)
+                self.show_prediction(means[future], covs[future],
+                                     predictor.task if predictor.updates else "")
             self.show_tasks(predictor.task_posterior, predictor.alpha)
         return len(new)
 

@@ -44,7 +44,9 @@ def test_outcome_matches_the_environment(switch_record):
     assert record.task == "right" and record.object == "box"
     assert record.success and record.handover_time == pytest.approx(record.end_time)
     assert record.final_distance >= record.min_distance >= 0.0
-    assert record.steps == len(record.recognised) == len(record.truth)
+    assert record.steps == len(record.truth)
+    # one recognition per update, at its time; nothing before the first update
+    assert record.recognised == [(b.time, b.task) for b in record.updates]
     assert record.truth[0][1] == "up" and record.truth[-1][1] == "right"  # the intent switch
     assert record.recognised_at(record.end_time) == record.recognised[-1][1]
     assert record.recognised_at(-1.0) == ""
@@ -60,6 +62,9 @@ def test_summary_is_json_ready(switch_record):
     assert times == sorted(times)
     tasks = [r["task"] for r in summary["recognised"]]
     assert all(a != b for a, b in zip(tasks, tasks[1:]))  # only the changes
+    update_times = {round(b.time, 4) for b in record.updates}
+    assert set(times) <= update_times     # one clock: a change happens at an update's time
+    assert {"familiarity", "moving"} <= set(summary["updates"][0])
 
 
 def test_static_policy_and_step_limit(env, model):
