@@ -227,7 +227,8 @@ class _Recorder:
             for body in self.viewer.bodies.values():
                 body.update()
             if self.overlay is not None:
-                self.overlay.show(beliefs, t, executed_q=step.obs["q"], truth=self.intent(t))
+                self.overlay.show(beliefs, t, executed_q=step.obs["q"], truth=self.intent(t),
+                                  truth_since=getattr(self.truth, "switch_time", None))
         record.success = bool(step.info["is_success"])
         record.handover_time = step.info["handover_time"]
         record.final_distance, record.end_time = float(step.info["distance"]), t

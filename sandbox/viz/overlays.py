@@ -258,17 +258,18 @@ class PredictionOverlay:
         self.board.set_title(title)
 
     def show_truth(self, task: str | None, t: float,
-                   hand_point: ArrayLike | None = None) -> bool:
+                   hand_point: ArrayLike | None = None, since: float | None = None) -> bool:
         """Show what the human pursues at time ``t`` (s); return whether it switched.
 
         A change from one known task to another is an intent switch: the
-        panel says since when, and a cube (``switch/m<k>``, the new task's
-        colour) marks ``hand_point`` (3,) m, if given. ``None`` (unknown) clears
-        the row.
+        panel says since when (``since``, the source's own switch time in s,
+        when it knows it; else ``t``, the frame that first shows it), and a cube
+        (``switch/m<k>``, the new task's colour) marks ``hand_point`` (3,) m, if
+        given. ``None`` (unknown) clears the row.
         """
         switched = task is not None and self._truth is not None and task != self._truth
         if switched:
-            self._switch = (self._truth, float(t))
+            self._switch = (self._truth, float(t if since is None else since))
             if hand_point is not None:
                 point = check_array(hand_point, "hand_point", 1, shape=(3,))
                 node = self.vis["switch"][f"m{self._n_switches}"]
@@ -298,7 +299,8 @@ class PredictionOverlay:
     # -- from a predictor ---------------------------------------------------------------------
 
     def show(self, predictor, t: float, *, executed_q: ArrayLike | None = None,
-             human_to_world: ArrayLike | None = None, truth: str | None = None) -> int:
+             human_to_world: ArrayLike | None = None, truth: str | None = None,
+             truth_since: float | None = None) -> int:
         """Draw the state of a predictor at time ``t``; return the number of new updates.
 
         Parameters
@@ -317,6 +319,9 @@ class PredictionOverlay:
             The task the human actually pursues at ``t``, when the source knows it
             (e.g. ``env.unwrapped.human_intent()``); a change is marked as an intent
             switch. None: unknown (nothing shown).
+        truth_since : float, optional
+            When the source's intent switched (s), if it knows: the panel's
+            switch time is then the same clock as the summary's.
         """
         times, human = predictor.observations()
         human = _apply(human_to_world, human[:, :3]) if len(human) else np.zeros((0, 3))
@@ -324,7 +329,7 @@ class PredictionOverlay:
             self.reset()  # the predictor was reset: a new episode
         self.show_human(human)
         self.show_time(t)
-        self.show_truth(truth, t, human[-1] if len(human) else None)
+        self.show_truth(truth, t, human[-1] if len(human) else None, since=truth_since)
         self.show_familiar(getattr(predictor, "familiar", None))
         q = predictor.command(t)[0] if executed_q is None else check_array(
             executed_q, "executed_q", 1, shape=(7,))

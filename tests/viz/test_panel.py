@@ -101,6 +101,11 @@ def test_true_task_and_intent_switch(drawn):
     assert color == _hex(overlay.colors["right"])  # in the new task's colour
     overlay.show_truth(None, 1.0)  # unknown (e.g. teleop): the row is cleared
     assert _texts(scene, "/meshcat/overlays/panel/truth/") == []
+    # a source that knows its switch time: the panel says it, not the frame's time
+    overlay.show_truth("left", 1.1, hand)
+    assert overlay.show_truth("up", 1.4, hand, since=1.34)
+    assert _texts(scene, "/meshcat/overlays/panel/truth/") == [
+        "human: up (switched from left at 1.34 s)"]
 
 
 def _hex(rgba) -> int:
