@@ -5,7 +5,8 @@ from __future__ import annotations
 from sandbox.commands import _types
 
 NAME = "bench"
-HELP = "measure the speed of the predictor update (and of the environments, if present)"
+HELP = ("measure the speed of the predictor update (and of the environments, if present); "
+        "about a minute or two, its stages counted by a progress bar on stderr")
 
 
 def add_arguments(parser) -> None:
@@ -17,26 +18,40 @@ def add_arguments(parser) -> None:
                         help="skip the environment benchmarks")
     parser.add_argument("--skip-vector", action="store_true",
                         help="skip the vector-environment benchmark (gym.make_vec, N = 1, 2, 4)")
+    parser.add_argument("--no-progress", action="store_true",
+                        help="no progress bar on stderr")
 
 
 def run(args) -> int:
     from sandbox.bench import print_result, restart_single_threaded
 
     restart_single_threaded("sandbox")
-    from sandbox.bench.core import run_core_benchmarks
+    from sandbox.eval.progress import bar
 
     result = {"blas_threads": 1}
-    result.update(run_core_benchmarks(repeats=args.repeats, seed=args.seed))
-    if not args.skip_env:
-        try:
-            from sandbox.bench.env import run_env_benchmarks
-        except ImportError:
-            run_env_benchmarks = None
-        if run_env_benchmarks is not None:
-            result.update(run_env_benchmarks())
-            if not args.skip_vector:
-                from sandbox.bench.env import run_vector_benchmarks
-
-                result.update(run_vector_benchmarks())
+    stages = _stages(args)
+    with bar(len(stages), "bench", not args.no_progress, unit="stage") as shown:
+        for name, measure in stages:
+            shown.set_postfix_str(name)
+            result.update(measure())
+            shown.update()
     print_result(result, args.json, 36)
     return 0
+
+
+def _stages(args) -> list:
+    """(name, function returning figures) of every benchmark this run measures."""
+    from sandbox.bench.core import run_core_benchmarks
+
+    stages = [("predictor update",
+               lambda: run_core_benchmarks(repeats=args.repeats, seed=args.seed))]
+    if args.skip_env:
+        return stages
+    try:
+        from sandbox.bench.env import run_env_benchmarks, run_vector_benchmarks
+    except ImportError:       # the environments' packages are missing: core figures only
+        return stages
+    stages.append(("environments", run_env_benchmarks))
+    if not args.skip_vector:
+        stages.append(("vector environments", run_vector_benchmarks))
+    return stages

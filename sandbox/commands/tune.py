@@ -12,7 +12,8 @@ from sandbox.commands import _executor, _observation, _outputs, _settings, _skip
 
 NAME = "tune"
 HELP = ("cross-validate likelihood, window mode, regulariser, noise floors, motion end and "
-        "basis size")
+        "basis size: one leave-one-out per grid value (the grid has about 20), so it takes "
+        "about 20 evaluate runs; a progress bar on stderr counts the trials and gives an ETA")
 SETTINGS_SUFFIXES = (".yaml", ".yml", ".json")
 
 
@@ -37,6 +38,8 @@ def add_arguments(parser) -> None:
                         help="write all rows and the choice as JSON")
     _outputs.add_force(parser, "--out, --markdown and --json files")
     _skipped.add_argument(parser)
+    parser.add_argument("--no-progress", action="store_true",
+                        help="no progress bar on stderr")
 
 
 def _check(args) -> None:
@@ -68,7 +71,7 @@ def run(args) -> int:
     print("| " + " | ".join(HEADER) + " |")
     grid = grid_for(spec.observed(observe))
     best, rows = tune(train, test, base=EvalConfig(observe=observe), window=args.window,
-                      grid=grid, **_executor.options(args))
+                      grid=grid, progress=not args.no_progress, **_executor.options(args))
     chosen = {k: getattr(best, k) for k in grid}
     print(f"\nchosen: {chosen}")
     if args.out:

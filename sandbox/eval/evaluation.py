@@ -18,7 +18,7 @@ import math
 import os
 import tempfile
 from collections import Counter
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -121,8 +121,13 @@ class Evaluation:
             self._folds[token] = len(train)
         return token
 
-    def run(self, jobs: Sequence[tuple[EvalConfig, str]]) -> Iterator[Evaluated]:
-        """Evaluate each ``(config, token)``; yield each distinct one as its last task ends."""
+    def run(self, jobs: Sequence[tuple[EvalConfig, str]], *,
+            on_trials: Callable[[int], None] | None = None) -> Iterator[Evaluated]:
+        """Evaluate each ``(config, token)``; yield each distinct one as its last task ends.
+
+        ``on_trials(n)`` is called as each task of ``n`` trials ends (e.g. a
+        progress bar's ``update``).
+        """
         jobs = list({config_key(c, t): (c, t) for c, t in jobs}.items())
         tasks: list[Task] = []
         for key, (config, token) in jobs:
@@ -136,6 +141,8 @@ class Evaluation:
         for outcome in run_tasks(self.executor, tasks, dropped=failed):
             key = outcome.task.key
             parts[key].append(outcome)
+            if on_trials is not None:
+                on_trials(len(outcome.task.folds))
             if outcome.error is not None:
                 failed.add(key)
             if len(parts[key]) == expected[key]:

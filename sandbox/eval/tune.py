@@ -21,6 +21,7 @@ The configurations of each step are evaluated together by
 
 from __future__ import annotations
 
+import sys
 from dataclasses import replace
 
 from sandbox.eval.loocv import EvalConfig
@@ -72,27 +73,40 @@ def objective(entry: dict, jump_p95: float = 0.0) -> float:
 
 def tune(train, test, *, base: EvalConfig | None = None, grid: dict | None = None,
          window: float = WINDOW, ratio: float = RATIO, workers: int = 2, tol: float = 0.05,
-         log=print, scheduler: str | None = None, timeout: float | None = None) -> tuple:
+         log=print, scheduler: str | None = None, timeout: float | None = None,
+         progress: bool = False) -> tuple:
     """Sweep ``grid`` from ``base``; returns (best config, rows of the table).
 
     ``workers``, ``scheduler`` and ``timeout`` choose where the leave-one-out
     runs (:func:`~sandbox.eval.executors.open_executor`). A configuration whose
     evaluation failed (its worker died twice) is logged and is not a candidate.
+    ``progress`` draws a bar of the leave-one-out trials on stderr (at most one
+    run per grid value; a value equal to the current choice is not re-run, and
+    the bar's total shrinks by it).
     """
     from sandbox.eval.evaluation import Evaluation
     from sandbox.eval.executors import TIMEOUT, open_executor
+    from sandbox.eval.progress import bar
 
     grid = GRID if grid is None else grid
     best = replace(base or EvalConfig(), windows=(window,), ratios=(ratio,))
     seen: dict = {}
     rows = []
-    with open_executor(workers, scheduler, TIMEOUT if timeout is None else timeout) as ex:
+    n_runs = sum(len(values) for values in grid.values())
+    with open_executor(workers, scheduler, TIMEOUT if timeout is None else timeout) as ex, \
+            bar(n_runs * len(train), f"tune ({n_runs} runs)", progress) as shown:
         evaluation = Evaluation(ex)
         token = evaluation.add(train, test)
         for name, values in grid.items():
             configs = [replace(best, **{name: value}) for value in values]
             fresh = [(c, token) for c in configs if _key(c) not in seen]
-            done = {_key(e.config): (e.report, e.error) for e in evaluation.run(fresh)}
+            repeated = len(configs) - len(fresh)
+            if repeated:
+                shown.total -= repeated * len(train)
+                shown.refresh()
+            shown.set_postfix_str(name)
+            done = {_key(e.config): (e.report, e.error)
+                    for e in evaluation.run(fresh, on_trials=shown.update)}
             scores = {}
             for value, cfg in zip(values, configs):
                 key = _key(cfg)
@@ -100,11 +114,12 @@ def tune(train, test, *, base: EvalConfig | None = None, grid: dict | None = Non
                     rep, error = done[key]
                     seen[key] = None if rep is None else _row(rep, cfg, window, ratio, name,
                                                               value)
-                    if seen[key] is None:
-                        log(f"failed: {name}={value} ({error})")
-                    else:
+                    line = (f"failed: {name}={value} ({error})" if seen[key] is None
+                            else _format(seen[key]))
+                    if seen[key] is not None:
                         rows.append(seen[key])
-                        log(_format(seen[key]))
+                    with shown.external_write_mode(file=sys.stdout):   # not through the bar
+                        log(line)
                 if seen[key] is not None:
                     scores[value] = seen[key]["J"]
             best = _step(best, name, scores, tol)

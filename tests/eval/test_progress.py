@@ -54,3 +54,32 @@ def test_shown_needs_both(monkeypatch, capsys):
     assert not progress.shown(True)
     progress.status("hidden", True)
     assert capsys.readouterr().err == ""
+
+
+TUNE = ("from sandbox.eval.datasets import load_pair\n"
+        "from sandbox.eval.loocv import EvalConfig\n"
+        "from sandbox.eval.tune import tune\n"
+        "train, test, _ = load_pair('synthetic:two_task', n_per_task=4, seed=0)\n"
+        "best, rows = tune(train, test, grid={{'noise_floor': [0.01, 0.02], "
+        "'likelihood': ['joint', 'marginal']}}, workers=1, progress={enabled})\n"
+        "print('rows', len(rows))\n")
+
+
+def test_tune_counts_its_trials_on_a_terminal():
+    """Issue 27: tune showed nothing for a minute; now a bar of k of N trials with an ETA.
+
+    2 values of noise_floor, then 2 of likelihood of which 'joint' (the current choice)
+    is not re-run: 3 runs of 8 trials; the bar's total shrinks from 32 to 24.
+    """
+    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    master, slave = pty.openpty()
+    proc = subprocess.Popen([sys.executable, "-c", TUNE.format(enabled=True)],
+                            stdout=subprocess.PIPE, stderr=slave, env=env)
+    os.close(slave)
+    err = read_terminal(master, proc, timeout=600).decode(errors="replace")
+    out = proc.communicate(timeout=600)[0].decode()
+    os.close(master)
+    assert proc.returncode == 0, err
+    assert "tune (4 runs)" in err and "24/24" in err
+    assert out.count("noise_floor") == 2 and out.rstrip().endswith("rows 3")
+    assert "tune (" not in out                    # the bar never goes to stdout
