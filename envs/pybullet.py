@@ -13,11 +13,10 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
-import pybullet
 from numpy.typing import ArrayLike, NDArray
-from pybullet_utils.bullet_client import BulletClient
 
 from sandbox.robot.bullet import BulletBaxter, _quiet, load_baxter
+from sandbox.robot.pybullet_quiet import BulletClient, pybullet
 from sandbox.validation import check_positive
 
 FloatArray = NDArray[np.float64]

@@ -59,7 +59,7 @@ def _env_block(env, n_steps: int, rng: np.random.Generator) -> float:
 
 def _raw_block(env, n_steps: int, rng: np.random.Generator) -> float:
     """Seconds for ``n_steps`` steps of the same scene driven directly through PyBullet."""
-    import pybullet
+    from sandbox.robot.pybullet_quiet import pybullet
 
     base = env.unwrapped
     client, body = base.sim.client, base.robot.baxter.body

@@ -23,8 +23,8 @@ COMPARISON_FIGURE = "average_comparison.png"
 
 
 def add_force(parser: argparse.ArgumentParser, what: str = "output files") -> None:
-    """Add ``--force`` (overwrite existing ``what``)."""
-    parser.add_argument("--force", action="store_true", help=f"overwrite existing {what}")
+    """Add ``--force`` (overwrite ``what`` if it exists)."""
+    parser.add_argument("--force", action="store_true", help=f"overwrite {what} if it exists")
 
 
 def check_new(outputs: Iterable[tuple[str, str | Path | None]], force: bool) -> None:

@@ -38,14 +38,23 @@ HELP = ("inspect a recorded dataset: summary of trials and tracker glitches, fil
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     sub = parser.add_subparsers(dest="data_command", metavar="ACTION", required=True)
-    summary = sub.add_parser("summary", help="tasks, durations, rates, glitches, skipped trials")
+    summary = sub.add_parser(
+        "summary", help="tasks, durations, rates, glitches, skipped trials",
+        description="Summarise a recorded set beside a synthetic one: per task the trials, "
+                    "durations and sample rates, the tracker glitches found, and every trial "
+                    "skipped with its reason (--verbose lists them).")
     _common(summary)
     summary.add_argument("--json", action="store_true", help="print JSON instead of text")
     summary.add_argument(
         "--synthetic", default="objects", metavar="NAME",
         help="synthetic set to compare with the recordings (default objects; 'none' to skip)",
     )
-    check = sub.add_parser("check-filter", help="held-out error of the hand filter settings")
+    check = sub.add_parser(
+        "check-filter", help="held-out error of the hand filter settings",
+        description="Score the hand tracker filter's settings on a recorded set: every third "
+                    "tracker frame of the first 60 % of each trial is hidden, the filter runs on "
+                    "the rest, and the smoothed and causal estimates' errors at the hidden "
+                    "frames are printed for the given (or default) settings.")
     _common(check)
     check.add_argument("--accel-std", type=_filter("accel_std"), default=None,
                        help="m s^-1.5, > 0 (default 6)")
@@ -56,7 +65,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     check.add_argument("--gate-prob", type=_filter("gate_prob", 1.0), default=None,
                        help="in (0, 1] (default 0.999)")
     check.add_argument("--json", action="store_true", help="print JSON instead of text")
-    cache = sub.add_parser("cache", help="where the cache of loaded trials is, its size; --clear")
+    cache = sub.add_parser(
+        "cache", help="where the cache of loaded trials is, its size; --clear",
+        description="Show where the cache of loaded trials lives (fit, evaluate, tune and sweep "
+                    "reuse preprocessed trials from it) and how big it is; --clear empties it.")
     cache.add_argument("--clear", action="store_true", help="delete every cached trial")
     _add_export(sub)
 
@@ -64,7 +76,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def _add_export(sub) -> None:
     """``data export``: demonstrations as a Minari dataset (optional extra)."""
     export = sub.add_parser("export", help="write demonstrations as a Minari dataset "
-                                           '(pip install -e ".[minari]")')
+                                           '(pip install -e ".[minari]")',
+                            description="Write demonstrations (a recorded folder or a synthetic "
+                                        "set) as a Minari dataset of the handover environment's "
+                                        "observations and joint-target actions; fit --data "
+                                        "minari:ID reads it back. Needs "
+                                        'pip install -e ".[minari]".')
     export.add_argument("--data", required=True, metavar="DIR|synthetic:NAME",
                         help="dataset folder <DIR>/<task>/<trial>.csv or synthetic:NAME")
     export.add_argument("--minari-id", required=True, metavar="ID",

@@ -102,6 +102,7 @@ def run(args) -> int:
     if config is not None:
         print(_mode_line(config))
     print(table(out))
+    print(notes(args, out))
     if any("per_session" in entry for entry in out.values()):
         print("\nby session:\n" + session_table(out))
     if args.json:
@@ -195,6 +196,27 @@ def _mode_line(config: dict) -> str:
         return (f"leave-one-session-out over {len(config['sessions'])} sessions: "
                 f"{', '.join(config['sessions'])} (each trial with a model of the others)")
     return f"leave-one-out: each trial of {config['train']} with a model of the others"
+
+
+def notes(args, out: dict) -> str:
+    """What the table is over and how to read it, printed beneath it."""
+    n = next(iter(out.values()))["summary"]["n_episodes"]
+    if args.scenario == "recorded":
+        what = f"{n:.0f} episodes per policy, each replaying one recorded trial (the same trials " \
+               f"for every policy)"
+    else:
+        session = "" if args.session is None else f" of synthetic session {args.session}"
+        what = (f"{n:.0f} episodes per policy{session}, seeds {args.seed} to "
+                f"{args.seed + int(n) - 1} (the same motions for every policy)")
+    lines = [f"{what}. Success: the handover happened (95 % bootstrap interval over episodes); "
+             "recognised at the end: the final recognised task is the true one; handover time: "
+             "the mean over the successful episodes only; final distance: the median "
+             "fingertip-to-object distance at the end."]
+    if "recorded_robot" in out:
+        lines.append("recorded_robot is no predictor: it replays each motion's own recorded (or "
+                     "synthetic) robot, so its row is the reference the others are measured "
+                     "against.")
+    return "\n".join(lines)
 
 
 def table(out: dict) -> str:

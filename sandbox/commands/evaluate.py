@@ -261,15 +261,16 @@ def _summary(report: dict) -> None:
     elif config.get("mode") == "leave-one-session-out":
         print(f"\nleave-one-session-out over {len(config['sessions'])} sessions: "
               + ", ".join(f"{k} ({n})" for k, n in config["session_trials"].items()))
-    print(f"\n{'':12s} {'e_p (m)':>9} {'e_q (rad)':>9} {'e_phi (s)':>9} {'recog':>6}")
-    print(f"{'oracle':12s} {report['oracle']['mean']['e_p']:9.3f} "
+    rows = [(f"{name} {key}" + ("" if name == "static" else " s"), entry["mean"])
+            for name, section in (("static", report["static"]), ("dynamic", report["dynamic"]))
+            for key, entry in section.items()]
+    width = max([len("oracle")] + [len(label) for label, _ in rows])   # the labels line up
+    print(f"\n{'':{width}s} {'e_p (m)':>9} {'e_q (rad)':>9} {'e_phi (s)':>9} {'recog':>6}")
+    print(f"{'oracle':{width}s} {report['oracle']['mean']['e_p']:9.3f} "
           f"{report['oracle']['mean']['e_q']:9.3f} {0:9.3f}")
-    for name, section in (("static", report["static"]), ("dynamic", report["dynamic"])):
-        for key, entry in section.items():
-            m = entry["mean"]
-            label = f"{name} {key}" + ("" if name == "static" else " s")
-            print(f"{label:12s} {m['e_p']:9.3f} {m['e_q']:9.3f} {m['e_phi']:9.3f} "
-                  f"{m['recognition']:6.2f}")
+    for label, m in rows:
+        print(f"{label:{width}s} {m['e_p']:9.3f} {m['e_q']:9.3f} {m['e_phi']:9.3f} "
+              f"{m['recognition']:6.2f}")
     _sessions_summary(report)
 
 

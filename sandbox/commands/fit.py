@@ -157,8 +157,9 @@ def _slices(model) -> list[slice]:
 
 
 def _format(s: dict) -> str:
-    lines = [f"Fitted {len(s['tasks'])} task models (N={s['n_basis']}) on {s['demos']} demos "
-             f"from {s['data']}"
+    n = len(s['tasks'])
+    lines = [f"Fitted {n} task model{'s' if n != 1 else ''} (N={s['n_basis']}) on "
+             f"{s['demos']} demos from {s['data']}"
              f"{'' if s['session'] is None else ' session ' + str(s['session'])} "
              f"(observe={','.join(s['observe'])}, "
              f"preprocess={s['preprocess']})"]

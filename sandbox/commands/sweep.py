@@ -37,6 +37,8 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
+    from pathlib import Path
+
     from sandbox.eval.loocv import EvalConfig
     from sandbox.eval.sweep import sweep
 
@@ -52,5 +54,6 @@ def run(args) -> int:
     ranked, failed = summary["ranked"], summary["failed"]
     for entry in ranked[:5]:
         print(f"{entry['rank']:3d}. J = {entry['J']:.3f}  {entry['label']}")
-    print(f"{len(ranked)} configurations ranked, {len(failed)} failed -> {args.out}/summary.md")
+    where = Path(args.out) / "summary.md"        # no "out//summary.md" for an --out ending in /
+    print(f"{len(ranked)} configurations ranked, {len(failed)} failed -> {where}")
     return 1 if failed else 0

@@ -18,12 +18,11 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
-import pybullet
 from numpy.typing import ArrayLike, NDArray
-from pybullet_utils.bullet_client import BulletClient
 
 from sandbox.robot.assets import urdf_path
 from sandbox.robot.facts import ARM_JOINTS, TIP_LINK
+from sandbox.robot.pybullet_quiet import BulletClient, pybullet
 from sandbox.validation import check_array
 
 FloatArray = NDArray[np.float64]

@@ -21,9 +21,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import pybullet
 from numpy.typing import NDArray
-from pybullet_utils.bullet_client import BulletClient
+
+from sandbox.robot.pybullet_quiet import BulletClient, pybullet
 
 FloatArray = NDArray[np.float64]
 

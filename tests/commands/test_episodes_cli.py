@@ -25,13 +25,20 @@ def test_policies_run_the_same_episodes_and_match_run_scenario(tmp_path, capsys)
         assert 0.0 <= lo <= summary["success_rate"] <= hi <= 1.0
     table = capsys.readouterr().out
     assert "| dynamic |" in table and "| static |" in table
+    # what the table is over and how to read it (issue 27)
+    assert "2 episodes per policy, seeds 3 to 4" in table
+    assert "the mean over the successful episodes only" in table
+    assert "recorded_robot is no predictor" not in table
 
 
-def test_recorded_robot_beside_the_dynamic_policy(recorded_dir, tmp_path):
+def test_recorded_robot_beside_the_dynamic_policy(recorded_dir, tmp_path, capsys):
     out = tmp_path / "recorded.json"
     assert main(["episodes", "--scenario", "recorded", "--data", str(recorded_dir),
                  "--policies", "recorded_robot,dynamic", "--episodes", "1",
                  "--json", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "1 episodes per policy, each replaying one recorded trial" in printed
+    assert "recorded_robot is no predictor" in printed
     result = json.loads(out.read_text())
     trials = [entry["episodes"][0]["options"]["trial"] for entry in result.values()]
     assert trials[0] == trials[1]            # the same held-out trial for both
