@@ -174,7 +174,8 @@ def _readme_text(readme) -> str:
 
 
 def _summary_table(reports: dict) -> str:
-    rows = ["| data | formulation | e_p (m) | e_q (rad) | e_phi (s) | recognition |",
+    rows = ["| data | formulation | e_p (m) | e_q (rad) | e_phi (s) | recognition "
+            "(task-averaged) |",
             "|---|---|---|---|---|---|"]
     for rep in reports.values():
         for label, entry in (("oracle (floor)", rep["oracle"]["mean"]),
@@ -257,8 +258,9 @@ def _evaluate(train, test, config, data, workers, label: str) -> dict:
 
 
 def _table(reports: dict, window: float) -> str:
-    rows = ["| observe | e_p (m) | e_q (rad) | e_phi (s) | recognition at 30 % | at the end | "
-            "late decay (peak - end) | wall (s) |", "|---|---|---|---|---|---|---|---|"]
+    rows = ["| observe | e_p (m) | e_q (rad) | e_phi (s) | recognition at 30 % (share of "
+            "trials) | at the end | late decay (peak - end) | wall (s) |",
+            "|---|---|---|---|---|---|---|---|"]
     w = f"{window:.1f}"
     for label, rep in reports.items():
         d, c = rep["dynamic"][w]["mean"], rep["recognition_over_time_ci"][w]

@@ -113,7 +113,7 @@ def _recognition(report, path):
     for w in _windows(report):
         axes[0].plot(curve["fractions"], curve[w], marker="o", label=f"dynamic, dow_t = {w} s")
     axes[0].set_xlabel("fraction of the recording observed (idle tail included)")
-    axes[0].set_ylabel("trials with the right task")
+    axes[0].set_ylabel("share of trials with the right task")
     axes[0].set_ylim(0, 1.02)
     axes[0].axhline(1 / len(report["tasks"]), color="k", ls=":", label="chance")
     axes[0].legend(fontsize=8)
@@ -123,7 +123,7 @@ def _recognition(report, path):
         style = dict(color="k", lw=2.5) if task == "mean" else dict(lw=1.2)
         axes[1].plot([float(f) for f in ratios], y, marker="o", label=task, **style)
     axes[1].set_xlabel("static observed ratio f")
-    axes[1].set_ylabel("static recognition rate")
+    axes[1].set_ylabel("static recognition rate (task-averaged: mean)")
     axes[1].set_ylim(0, 1.02)
     axes[1].legend(fontsize=8)
     for ax in axes:
@@ -147,7 +147,7 @@ def plot_curves(reports: dict[str, dict], path, window: str = "0.2",
         ax.fill_between(x, band["lo"], band["hi"], color=line.get_color(), alpha=0.12)
     ax.axhline(1 / len(first["tasks"]), color="k", ls=":", label="chance")
     ax.set_xlabel("fraction of the recording observed (idle tail included)")
-    ax.set_ylabel(f"trials with the right task (dow_t = {window} s)")
+    ax.set_ylabel(f"share of trials with the right task (dow_t = {window} s)")
     ax.set_ylim(0, 1.02)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="lower right")

@@ -9,6 +9,13 @@ over time (``recognition_over_time``: the fraction of trials whose task is
 believed at each fraction of the recording; ``recognition_over_time_ci``: its
 bootstrap intervals and its late decay, peak minus end), the differences
 static - dynamic for every ratio and window.
+
+Recognition comes in two figures, named apart everywhere: **task-averaged**
+(``recognition``: the mean over tasks of each task's rate, as the paper's
+tables) and **share of trials** (``recognition_share`` beside it in each
+section's ``"mean"``, and the curve ``recognition_over_time``). They differ when
+the tasks have unequal numbers of trials; ``recognition_over_time_task_averaged``
+is the curve averaged the other way.
 """
 
 from __future__ import annotations
@@ -57,6 +64,10 @@ def _section(trials: list[dict], tasks: list[str], get, keys, n_boot: int,
             else:
                 lo, hi = float("nan"), float("nan")
             entry[f"{key}_ci"] = [lo, hi]
+            if task == "mean" and key == "recognition" and values.size:
+                entry["recognition_share"] = float(values.mean())     # of trials, not tasks
+                entry["recognition_share_ci"] = list(metrics.bootstrap_ci(
+                    values, groups, draws=cache[key_], statistic=lambda v, g: v.mean()))
         out[task] = entry
     return out
 
@@ -95,6 +106,11 @@ def build_report(trials: list[dict], config: dict, dataset: str, runtime_s: floa
         **{w: np.mean([r["dynamic"][w]["recognition_curve"] for r in trials], axis=0).tolist()
            for w in windows}}
     labels = [r["task"] for r in trials]
+    report["recognition_over_time_task_averaged"] = {
+        "fractions": list(config["curve"]),
+        **{w: np.mean([np.mean([r["dynamic"][w]["recognition_curve"] for r in trials
+                                if r["task"] == t], axis=0) for t in tasks], axis=0).tolist()
+           for w in windows}}
     report["recognition_over_time_ci"] = {
         w: metrics.curve_bootstrap([r["dynamic"][w]["recognition_curve"] for r in trials],
                                    labels, n_boot=n_boot) for w in windows}
@@ -129,12 +145,14 @@ def to_markdown(report: dict) -> str:
              f"{sum(report['n_trials'].values())} trials "
              f"({', '.join(f'{t}: {n}' for t, n in report['n_trials'].items())}), "
              f"{_mode(report['config'])}, {report['runtime_s']} s.", ""]
+    share = ("recognition_share",) if "recognition_share" in next(
+        iter(report["dynamic"].values()))["mean"] else ()
     lines += _table("Dynamic formulation (mean over tasks)",
                     {f"dow_t = {w} s": report["dynamic"][w]["mean"] for w in report["dynamic"]},
-                    MEASURES + ("recognition", "time_to_correct", "coverage"))
+                    MEASURES + ("recognition",) + share + ("time_to_correct", "coverage"))
     lines += _table("Static formulation (mean over tasks)",
                     {f"ratio {f}": report["static"][f]["mean"] for f in report["static"]},
-                    MEASURES + ("recognition", "coverage"))
+                    MEASURES + ("recognition",) + share + ("coverage",))
     lines += _table("Oracle (all observations, true task and duration)",
                     {"oracle": report["oracle"]["mean"]}, MEASURES)
     lines += ["#### Static recognition rate by task and ratio (paper Table II)", "",
@@ -185,9 +203,14 @@ def _sessions_table(report: dict) -> list[str]:
     return out + [""]
 
 
+#: Column names of measures whose key alone would be ambiguous.
+NAMES = {"recognition": "recognition (task-averaged)",
+         "recognition_share": "recognition (share of trials)"}
+
+
 def _table(title: str, rows: dict, keys) -> list[str]:
     units = {"e_p": "m", "e_q": "rad", "e_phi": "s"}
-    head = " | ".join(f"{k} ({units[k]})" if k in units else k for k in keys)
+    head = " | ".join(f"{k} ({units[k]})" if k in units else NAMES.get(k, k) for k in keys)
     out = [f"#### {title}", "", f"| | {head} |", "|---|" + "---|" * len(keys)]
     for name, entry in rows.items():
         cells = [f"{entry[k]:.3f} [{entry[k + '_ci'][0]:.3f}, {entry[k + '_ci'][1]:.3f}]"

@@ -46,6 +46,24 @@ def test_report_keys_and_known_means():
     assert np.isfinite(rep["jumps"]["0.2"]["max"])
 
 
+def test_two_recognition_figures_are_named_apart():
+    """Issue 30: task-averaged (the paper's) and share of trials differ when tasks are
+    unbalanced; both are reported and labelled, the curve both ways too."""
+    trials = [_trial("a", 0.1), _trial("a", 0.3), _trial("a", 0.2), _trial("b", 0.2, rec=0.0)]
+    config = EvalConfig(ratios=(0.1, 0.5), windows=(1.0, 0.2)).to_dict()
+    rep = build_report(trials, config, "synthetic:test", 1.5, n_boot=50)
+    mean = rep["dynamic"]["0.2"]["mean"]
+    assert mean["recognition"] == pytest.approx(0.5)             # (1 + 0) / 2 tasks
+    assert mean["recognition_share"] == pytest.approx(0.75)      # 3 of 4 trials
+    lo, hi = mean["recognition_share_ci"]
+    assert lo <= 0.75 <= hi
+    assert rep["static"]["0.5"]["mean"]["recognition_share"] == pytest.approx(0.75)
+    assert rep["recognition_over_time"]["0.2"][-1] == pytest.approx(0.75)
+    assert rep["recognition_over_time_task_averaged"]["0.2"][-1] == pytest.approx(0.5)
+    text = to_markdown(rep)
+    assert "recognition (task-averaged)" in text and "recognition (share of trials)" in text
+
+
 def test_tune_keeps_the_current_value_unless_clearly_better(monkeypatch):
     from contextlib import nullcontext
 
@@ -68,7 +86,7 @@ def test_tune_keeps_the_current_value_unless_clearly_better(monkeypatch):
         def add(self, train, test):
             return "trials"
 
-        def run(self, jobs):
+        def run(self, jobs, on_trials=None):
             for cfg, token in jobs:
                 yield evaluation.Evaluated(evaluation.config_key(cfg, token), cfg, report(cfg),
                                           None)
