@@ -37,6 +37,13 @@ WARNING = (1.0, 0.55, 0.1, 1.0)
 NEUTRAL = (0.2, 0.2, 0.2, 1.0)
 #: Text of the warning shown when the predictor reports an unfamiliar motion.
 UNSURE = "unsure / unknown motion"
+#: Colour (RGBA) of the tracked arm (:class:`~sandbox.viz.skeleton.ArmStyle`): a crimson
+#: no task colour (:data:`~sandbox.viz.geometry.PALETTE`) comes near.
+ARM = (0.80, 0.10, 0.25, 1.0)
+#: Swatch of the unused objects, parked on the floor behind the robot.
+PARKED = (0.55, 0.55, 0.55, 1.0)
+#: Rows of the legend (two entries per row).
+LEGEND_ROWS = 4
 #: Average width of a character in units of the font size (sans-serif), to size labels.
 CHAR_WIDTH = 0.55
 
@@ -93,19 +100,27 @@ class Panel:
 
     # -- layout ------------------------------------------------------------------------------
 
+    @property
+    def pitch(self) -> float:
+        """Distance (m) between columns: a bar and its gap, or the longest task name
+        at the full label height (names are never shrunk to fit their column)."""
+        longest = max([len(n) for n in self.tasks] + [len("speed")])
+        name = CHAR_WIDTH * self.style.label_height * longest + 0.2 * self.style.bar_gap
+        return max(self.style.bar_width + self.style.bar_gap, name)
+
     def _column_y(self, i: int) -> float:
-        return i * (self.style.bar_width + self.style.bar_gap)
+        return i * self.pitch
 
     @property
     def left(self) -> float:
         """y (m) of the board's left margin."""
-        return -self.style.bar_width / 2 - self.style.bar_gap / 2
+        return -self.pitch / 2
 
     @property
     def width(self) -> float:
         """Width (m) of the board: the columns, at least the legend."""
-        columns = self._column_y(len(self.tasks)) + self.style.bar_width / 2 + self.style.bar_gap
-        return max(columns - self.left + self.style.bar_gap / 2, 0.8)
+        columns = self._column_y(len(self.tasks)) + self.pitch / 2
+        return max(columns - self.left, 0.8)
 
     def _z(self, row: str) -> float:
         line = self.style.label_height
@@ -117,7 +132,7 @@ class Panel:
 
     def _build(self) -> None:
         s = self.style
-        bottom = self._z("legend") - 3 * 1.2 * s.label_height
+        bottom = self._z("legend") - LEGEND_ROWS * 1.2 * s.label_height
         top = self._z("title") + 1.4 * s.label_height
         centre = [-0.01, self.left + self.width / 2, (top + bottom) / 2]
         self.node["board"].set_object(objects.box([0.004, self.width, top - bottom], BOARD))
@@ -129,7 +144,8 @@ class Panel:
             column["bar"]["box"].set_object(objects.box([0.02, s.bar_width, s.bar_height], rgba))
             column["bar"]["box"].set_transform(translation([0.0, 0.0, s.bar_height / 2]))
             column["bar"].set_property("scale", [1.0, 1.0, 1e-3])
-            column["name"].set_object(objects.label(name, height=s.label_height))
+            label, _ = text(name, s.label_height)        # characters label_height tall
+            column["name"].set_object(label)
             column["name"].set_transform(translation([0.01, 0.0, -0.03]))
         self._build_legend()
 
@@ -141,7 +157,9 @@ class Panel:
                    ("plan: mean, goal", task, "line"),
                    (f"plan: ±{s.n_sigma:g}σ tube", [*task[:3], s.tube_alpha], "box"),
                    ("bead: update (hand)", task, "bead"),
-                   ("intent switch", NEUTRAL, "cube")]
+                   ("intent switch", NEUTRAL, "cube"),
+                   ("arm (tracker, when seen)", ARM, "line"),
+                   ("objects far behind: unused", PARKED, "box")]
         half = self.width / 2
         for k, (line, rgba, kind) in enumerate(entries):
             y = self.left + 0.03 + half * (k % 2)
@@ -183,8 +201,10 @@ class Panel:
         return True
 
     def set_title(self, title: str) -> None:
-        """Replace the first line of the board."""
-        self._set_text("title", str(title), height=1.2 * self.style.label_height)
+        """Replace the first line of the board (smaller type if it would not fit its width)."""
+        title = str(title)
+        room = (self.width - 0.04) / (CHAR_WIDTH * max(len(title), 1))
+        self._set_text("title", title, height=min(1.2 * self.style.label_height, room))
 
     def show_time(self, t: float) -> bool:
         """Show ``t = ... s`` (one decimal); return whether the shown text changed."""

@@ -236,7 +236,10 @@ class Scene:
     def static_html(self, title: str = "handover-sandbox replay") -> str:
         """One HTML page holding the viewer, the scene and its animation (no external file)."""
         blobs = ",\n".join(f'"{base64.b64encode(c).decode("ascii")}"' for c in self.commands())
-        return _HTML.format(title=title, viewer=VIEWER_JS.read_text(encoding="utf-8"), blobs=blobs)
+        frames = self.timeline.n_frames
+        duration = (frames - 1) / self.timeline.fps if frames > 1 else 0.0
+        return _HTML.format(title=title, viewer=VIEWER_JS.read_text(encoding="utf-8"), blobs=blobs,
+                            duration=f"{duration:.6f}")
 
     # -- internals ---------------------------------------------------------------------------
 
@@ -299,11 +302,26 @@ for (var i = 0; i < commands.length; i++) {{
     for (var j = 0; j < text.length; j++) {{ bytes[j] = text.charCodeAt(j); }}
     viewer.handle_command_bytearray(bytes);
 }}
-// replay.html#t=1.5 shows the frame at 1.5 s, paused
-var seek = /[#&]t=([0-9.]+)/.exec(location.hash);
-if (seek && viewer.animator.actions.length) {{
+// replay.html#t=1.5 shows the frame at 1.5 s, paused. A #t= that is not a time within the
+// recording shows its first frame and says so in a banner (never the last frame silently).
+var duration = {duration};
+var asked = /[#&]t=([^&]*)/.exec(location.hash);
+if (asked && viewer.animator.actions.length) {{
+    var t = /^[0-9]+([.][0-9]*)?$/.test(asked[1]) ? parseFloat(asked[1]) : NaN;
     viewer.animator.pause();
-    viewer.animator.seek(parseFloat(seek[1]));
+    if (isFinite(t) && t <= duration + 1e-9) {{
+        viewer.animator.seek(t);
+    }} else {{
+        viewer.animator.seek(0);
+        var banner = document.createElement("div");
+        banner.id = "bad-time";
+        banner.textContent = "#t=" + decodeURIComponent(asked[1]) + " is not a time in [0, " +
+            duration.toFixed(2) + "] s: showing t = 0";
+        banner.style.cssText = "position:fixed;top:0;left:0;right:0;padding:6px 10px;" +
+            "background:#c0392b;color:#fff;font:14px sans-serif;z-index:10";
+        document.body.appendChild(banner);
+        document.title = document.title + " (bad #t)";
+    }}
 }}
 document.title = document.title + " (loaded)";
 </script>

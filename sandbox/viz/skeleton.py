@@ -28,6 +28,7 @@ from numpy.typing import ArrayLike
 from sandbox.validation import check_array
 from sandbox.viz import objects
 from sandbox.viz.geometry import FloatArray
+from sandbox.viz.panel import ARM
 
 #: Shortest segment drawn (m); a shorter one is hidden.
 MIN_LENGTH = 1e-6
@@ -37,7 +38,7 @@ MIN_LENGTH = 1e-6
 class ArmStyle:
     """Colour (RGBA) and sizes (m) of the tracked arm."""
 
-    color: tuple = (0.95, 0.55, 0.15, 1.0)
+    color: tuple = ARM          # the panel's legend entry; no task colour is near it
     bead_radius: float = 0.02
     segment_radius: float = 0.006
 

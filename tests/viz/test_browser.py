@@ -157,3 +157,24 @@ def test_live_teleop_view_shows_the_panel_and_a_large_hand(chromium, live_teleop
     col, row = _project(viewer, live_teleop.motion.position(live_teleop._t))
     assert abs(np.median(cols) - col) < 60 and abs(np.median(rows) - row) < 60, (
         "the hand is not where the replay's camera sees it")  # the live view uses that camera
+
+
+def _banner(pixels: np.ndarray) -> float:
+    """Share of the top 20 rows in the #bad-time banner's red (#c0392b)."""
+    top = pixels[:20].reshape(-1, 3)
+    return float((np.abs(top - [192, 57, 43]).sum(axis=1) < 40).mean())
+
+
+@pytest.mark.parametrize("fragment, bad", [("#t=0.5", False), ("#t=abc", True),
+                                           ("#t=99", True), ("#t=-1", True)])
+def test_a_time_outside_the_recording_is_said_not_shown_as_the_last_frame(
+        chromium, replays, tmp_path, fragment, bad):
+    """Issue 27: a malformed or out-of-range #t= silently showed the last frame."""
+    _, _, scene, html, _ = replays
+    pixels = _screenshot(chromium, html, tmp_path, fragment)
+    assert (_banner(pixels) > 0.5) == bad
+    if fragment == "#t=abc":     # the first frame, not the last
+        first = _screenshot(chromium, html, tmp_path, "#t=0")
+        last = _screenshot(chromium, html, tmp_path, "#t=1.0")
+        assert _changed(pixels[40:-40], first[40:-40]).mean() < 0.01
+        assert _changed(pixels[40:-40], last[40:-40]).mean() > 0.01

@@ -179,3 +179,57 @@ def test_the_warning_goes_when_the_motion_is_familiar_again(fitted):
     overlay.show(predictor, 1.1)
     assert _texts(scene, "/meshcat/panel/warning/") == []
     assert "/meshcat/panel/warning_box" not in scene.nodes
+
+
+RECORDED = ("gummed_paper", "measurement_tape", "pencil_box", "screw_driver")
+
+
+def _plane_width(scene, path) -> float:
+    return umsgpack.unpackb(scene.nodes[path].object)["object"]["geometries"][0]["width"]
+
+
+def test_long_task_names_keep_their_height_and_their_column():
+    """Issue 27: 'measurement_tape' was squeezed into its bar's column (about 4 px tall)."""
+    from sandbox.viz.panel import CHAR_WIDTH, text
+
+    scene = Scene(fps=10)
+    overlay = PredictionOverlay(meshcat.Visualizer(window=scene)["overlays"],
+                                rng=np.random.default_rng(0), tasks=RECORDED)
+    board, height = overlay.board, overlay.style.label_height
+    for i, name in enumerate(RECORDED):
+        width = _plane_width(scene, f"/meshcat/overlays/panel/c{i}/name")
+        assert width == pytest.approx(text(name, height)[1])     # characters `height` tall
+        assert width >= CHAR_WIDTH * height * len(name) - 1e-12
+        assert width <= board.pitch                              # never into the next column
+    short = PredictionOverlay(meshcat.Visualizer(window=Scene(fps=10))["overlays"],
+                              rng=np.random.default_rng(0), tasks=TASKS).board
+    assert short.pitch == pytest.approx(short.style.bar_width + short.style.bar_gap)
+
+
+def test_a_long_title_fits_the_board():
+    scene = Scene(fps=10)
+    overlay = PredictionOverlay(meshcat.Visualizer(window=scene)["overlays"],
+                                rng=np.random.default_rng(0), tasks=TASKS)
+    title = "recorded measurement tape handover of trial 17, replayed with the dynamic policy"
+    overlay.set_title(title)
+    (path,) = [k for k in scene.nodes if k.startswith("/meshcat/overlays/panel/title/")
+               and scene.nodes[k].object is not None]
+    side = _plane_width(scene, path)
+    assert side == pytest.approx(overlay.board.width - 0.04)     # was wider than the board
+    overlay.set_title("short")                                    # short: the usual size
+    assert _texts(scene, "/meshcat/overlays/panel/title/")[-1] == "short"
+
+
+def test_legend_names_the_arm_and_the_parked_objects_in_their_own_colours():
+    from sandbox.viz.geometry import PALETTE
+    from sandbox.viz.panel import ARM
+    from sandbox.viz.skeleton import ArmStyle
+
+    scene = Scene(fps=10)
+    PredictionOverlay(meshcat.Visualizer(window=scene)["overlays"],
+                      rng=np.random.default_rng(0), tasks=RECORDED)
+    legend = _texts(scene, "/meshcat/overlays/panel/legend/")
+    assert "arm (tracker, when seen)" in legend and "objects far behind: unused" in legend
+    assert ArmStyle().color == ARM
+    # no task colour is near the arm's (it was the second task's orange)
+    assert np.min(np.linalg.norm(PALETTE[:, :3] - np.array(ARM[:3]), axis=1)) > 0.3
