@@ -107,6 +107,18 @@ class TeleopMotion:
         p = self._anchor_p + self._velocity * max(t - self._anchor_t, 0.0)
         return np.clip(p, WORKSPACE[:, 0], WORKSPACE[:, 1])
 
+    def edges(self, t: float) -> list[tuple[int, int, float]]:
+        """``(axis, side, value m)`` of every workspace edge the hand rests on at ``t`` (s)
+        while commanded beyond it (side -1: the lower bound, +1: the upper)."""
+        p = self._anchor_p + self._velocity * max(float(t) - self._anchor_t, 0.0)
+        out = []
+        for axis in range(3):
+            if p[axis] < WORKSPACE[axis, 0] and self._velocity[axis] < 0:
+                out.append((axis, -1, float(WORKSPACE[axis, 0])))
+            elif p[axis] > WORKSPACE[axis, 1] and self._velocity[axis] > 0:
+                out.append((axis, 1, float(WORKSPACE[axis, 1])))
+        return out
+
     def measurement(self, t: float) -> FloatArray:
         """The tracker's latest frame (3,) m at time ``t`` (s): a noisy sample of the hand."""
         frame = self._frame(t)

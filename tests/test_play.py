@@ -198,6 +198,10 @@ def test_keys_move_the_hand_and_the_posterior_follows(tmp_path):
                             what="the viewer's URL")
         assert url
         term.wait_for(lambda s: "press space" in s and "q  quit" in s, what="the help")
+        assert "observes hand and re-predicts every 0.2 s" in term.text
+        term.type("h")          # the help says where each task's hand ends
+        term.wait_for(lambda s: "each task's hand ends" in s and "straight" in s,
+                      what="the meeting points")
         servers = _servers_watching(term.proc.pid)
         assert len(servers) == 1
         term.drain(0.6)
@@ -231,6 +235,7 @@ def test_keys_move_the_hand_and_the_posterior_follows(tmp_path):
         term.type("n")  # a new episode: the hand back at the start, the clock stopped
         term.wait_for(lambda s: "episode 2" in s[mark:] and "press space" in s[mark:],
                       what="the reset")
+        assert "slow motion is still on (c: off)" in term.text[mark:]   # a reminder (issue 27)
         term.drain(0.8)
         assert term.statuses(mark) == []  # the clock waits for space again
         term.type(" ")

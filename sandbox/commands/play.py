@@ -27,6 +27,8 @@ still at home unless ``--model`` is given.
 
 from __future__ import annotations
 
+import sys
+
 from sandbox.commands import _model, _outputs, _settings, _types
 
 NAME = "play"
@@ -160,12 +162,17 @@ def _teleop(args, recorder=None) -> int:
 
     env_id = ENV_IDS[0] if args.family == "objects" else ENV_IDS[1]
     model, policy, known = _teleop_policy(args)
+    policy_observe = list(getattr(policy, "observe", ()) or ["hand"])   # before any wrapper
     if recorder is not None and args.model is None:
         from sandbox.episodes.demos_recording import HeldRobot
 
         policy, known = HeldRobot(policy), known + "; the robot holds still while you record"
+    observed = ",".join(policy_observe)
     print(f"the robot knows {len(model.tasks)} tasks {list(model.tasks)} ({known}); it "
-          f"re-predicts every {args.dow:g} s", flush=True)
+          f"observes {observed} and re-predicts every {args.dow:g} s", flush=True)
+    if not sys.stdin.isatty():
+        print("stdin is not a terminal: keys are read from it as they come, and when it ends "
+              "the clock runs the episode out by itself", flush=True)
     if recorder is not None:
         print(f"recording demos of task '{recorder.task}' in {recorder.folder}: each episode is "
               f"saved when it ends (n, q, handover, time limit)", flush=True)

@@ -238,6 +238,21 @@ def meeting_point(beliefs, kinematics, link: str = TIP_LINK) -> np.ndarray:
     return kinematics.fk(means[-1], link=link)
 
 
+def _meetings(policy) -> str:
+    """Where each task's hand ends, on average over the model's demos (for ``h``)."""
+    model = getattr(getattr(policy, "predictor", None), "model", None)
+    if model is None:
+        return ""
+    from sandbox.core.promp import trajectory_distribution
+
+    lines = ["", "  each task's hand ends (m, Baxter's base frame; aim for it):"]
+    for task in model.task_models:
+        mean, _ = trajectory_distribution(task.weights.dims(slice(0, 3)), model.basis,
+                                          np.ones(1))
+        lines.append(f"    {task.name:12s} {_xyz(mean[0] * model.scale[:3])}")
+    return "\n".join(lines)
+
+
 def _outcome(info: dict, t: float) -> str:
     if info.get("is_success"):
         return f"handover at {info['handover_time']:.2f} s"
@@ -305,7 +320,9 @@ class _Loop:
             self.recorder.start()
             self._record(0.0)
         self.out(f"episode {self.episodes}: the hand is at the start; "
-                 + ("the clock runs" if self.state.running else "press space to start the clock"))
+                 + ("the clock runs" if self.state.running else "press space to start the clock")
+                 + ("; slow motion is still on (c: off)" if self.state.slow else ""))
+        self._edges: set[tuple[int, int]] = set()
         if self.overlay is None:
             self.viewer = self.env.unwrapped.viewer
             self.overlay = self.viewer.add_overlay(
@@ -325,6 +342,8 @@ class _Loop:
             if self.keyboard.closed and not self.state.running:
                 self.state.running = True  # no more keys: play the episode out
                 self.viewer.restart_pacing()
+                self.out("> input ended: the clock runs the episode out (the hand keeps its "
+                         "last command)")
             if self.state.running:
                 self.env.unwrapped.motion.set_velocity(self.state.velocity)
                 return False
@@ -334,6 +353,7 @@ class _Loop:
         env, beliefs = self.env.unwrapped, beliefs_of(self.policy)
         self.obs, t = step.obs, step.time
         self._record(t)
+        self._say_edges(env.motion, t)
         if int(round(t * self.viewer.scene.timeline.fps)) != self.frame:
             self.frame = int(round(t * self.viewer.scene.timeline.fps))
             self.overlay.show(beliefs, t, executed_q=self.obs["q"], truth=env.human_intent(t))
@@ -348,6 +368,17 @@ class _Loop:
             self.out(f"episode over: {_outcome(info, t)}, gripper {100 * info['distance']:.1f} cm "
                      f"from the object, task {beliefs.task}; n: new episode, q: quit")
             self.save()
+
+    def _say_edges(self, motion, t: float) -> None:
+        """Say once when the hand stops at an edge of the workspace it is driven toward."""
+        edges = getattr(motion, "edges", None)
+        if edges is None:
+            return
+        for axis, side, value in edges(t):
+            if (axis, side) not in self._edges:
+                self._edges.add((axis, side))
+                self.out(f"> the hand stopped at the workspace's edge ({'xyz'[axis]} = "
+                         f"{value:+.2f} m); {'xyz'[axis]} keys the other way move it back")
 
     def after_episode(self) -> str:
         """Keys after the episode ended, until ``n`` (``"reset"``) or ``q`` / closed input."""
@@ -372,7 +403,7 @@ class _Loop:
         """Apply a key; return its action."""
         action = self.state.apply(key)
         if action == "help":
-            self.out("keys:\n" + HELP_TEXT)
+            self.out("keys:\n" + HELP_TEXT + _meetings(self.policy))
         elif action == "reset":
             self.save()
         elif action == "move":

@@ -31,6 +31,18 @@ def test_hand_stays_in_the_workspace():
     np.testing.assert_allclose(far, [WORKSPACE[0, 0], HAND_START[1], WORKSPACE[2, 1]])
 
 
+def test_edges_name_where_the_hand_is_held_back():
+    """Issue 27: the hand stopped at the workspace's bounds silently; now they are named."""
+    hand = TeleopMotion(np.random.default_rng(0))
+    assert hand.edges(0.0) == []
+    hand.set_velocity([-1.0, 0.0, 1.0])
+    assert hand.edges(0.05) == []                          # not there yet
+    assert hand.edges(10.0) == [(0, -1, WORKSPACE[0, 0]), (2, 1, WORKSPACE[2, 1])]
+    hand.position(10.0)
+    hand.set_velocity([0.5, 0.0, 0.0])                     # away from the edge: free again
+    assert hand.edges(10.1) == []
+
+
 def test_speed_factor_scales_commands():
     hand = TeleopMotion(np.random.default_rng(0)).scaled(2.0)
     hand.set_velocity([0.0, 0.1, 0.0])
