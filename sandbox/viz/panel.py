@@ -44,6 +44,8 @@ ARM = (0.80, 0.10, 0.25, 1.0)
 PARKED = (0.55, 0.55, 0.55, 1.0)
 #: Rows of the legend (two entries per row).
 LEGEND_ROWS = 4
+#: Height (m) of the bars' value labels' centre above the bars' full height.
+VALUE_LIFT = 0.03
 #: Average width of a character in units of the font size (sans-serif), to size labels.
 CHAR_WIDTH = 0.55
 
@@ -124,7 +126,8 @@ class Panel:
 
     def _z(self, row: str) -> float:
         line = self.style.label_height
-        warning = self.style.bar_height + 0.05 + 0.6 * line
+        # the warning's box clears the value labels above the bars (it covered them)
+        warning = self.style.bar_height + VALUE_LIFT + 0.6 * line + 0.6 * line + 0.02
         rows = {"warning": warning, "truth": warning + 1.7 * line,
                 "time": warning + 3.4 * line, "title": warning + 5.3 * line,
                 "legend": -0.05 - 0.9 * line}
@@ -261,4 +264,4 @@ class Panel:
                 column[f"value{old}"].delete()
             label = column[f"value{self.version}"]
             label.set_object(objects.label(value, height=self.style.label_height))
-            label.set_transform(translation([0.01, 0.0, self.style.bar_height + 0.03]))
+            label.set_transform(translation([0.01, 0.0, self.style.bar_height + VALUE_LIFT]))

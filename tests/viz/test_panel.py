@@ -233,3 +233,20 @@ def test_legend_names_the_arm_and_the_parked_objects_in_their_own_colours():
     assert ArmStyle().color == ARM
     # no task colour is near the arm's (it was the second task's orange)
     assert np.min(np.linalg.norm(PALETTE[:, :3] - np.array(ARM[:3]), axis=1)) > 0.3
+
+
+def test_the_warning_covers_no_value_label():
+    """Issue 27: "unsure / unknown motion" was drawn over the row of % labels."""
+    from sandbox.viz.panel import VALUE_LIFT
+
+    scene = Scene(fps=10)
+    overlay = PredictionOverlay(meshcat.Visualizer(window=scene)["overlays"],
+                                rng=np.random.default_rng(0), tasks=TASKS)
+    overlay.show_tasks({"left": 1.0, "right": 0.0}, alpha=1.0)
+    assert overlay.show_familiar(False)
+    box = scene.nodes["/meshcat/overlays/panel/warning_box"]
+    z = np.reshape(umsgpack.unpackb(box.transform)["matrix"], (4, 4)).T[2, 3]
+    height = umsgpack.unpackb(box.object)["object"]["geometries"][0]["depth"]
+    style = overlay.style
+    labels_top = style.bar_height + VALUE_LIFT + style.label_height / 2
+    assert z - height / 2 > labels_top + 0.01
