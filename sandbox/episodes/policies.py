@@ -212,7 +212,8 @@ class IProMPPolicy(_Steering):
     beliefs : Beliefs
         What the predictor believes now (read-only).
     history : list of (float, str)
-        The recognised task after each observation: ``(time, task)``.
+        The recognised task after each observation: ``(time, task)`` (``""`` before the
+        predictor's first update).
 
     Examples
     --------
@@ -259,7 +260,7 @@ class IProMPPolicy(_Steering):
         self._last_time = t
         q = check_array(obs["q"], "obs['q']", 1, shape=(7,))
         self.predictor.observe(*tracker_row(obs, self.observe, required=self._required))
-        self.history.append((t, self.predictor.task))
+        self.history.append((t, self.task))
         mean, _ = self.predictor.command(t + self.dt)
         return self._act(q, mean, obs)
 
@@ -270,8 +271,9 @@ class IProMPPolicy(_Steering):
 
     @property
     def task(self) -> str:
-        """The task the predictor recognises now."""
-        return self.predictor.task
+        """The task the predictor recognises now (``""`` before its first update, as
+        :attr:`Beliefs.task <sandbox.episodes.policy.Beliefs>`)."""
+        return self.predictor.task if self.predictor.updates else ""
 
     @property
     def task_posterior(self) -> dict[str, float]:
