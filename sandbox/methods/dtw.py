@@ -1,0 +1,136 @@
+"""Open-end dynamic time warping against every training demo, and its robot part.
+
+The observed prefix :math:`y_{1:s}` (kept observations, observed dims) is
+aligned with each training demo's human trajectory :math:`r_{i}(z_j)`, its
+basis reconstruction at M phases :math:`z_j = j/(M-1)`, by the accumulated cost
+
+.. math::
+    D[a, j] = c(a, j) + \\min(D[a-1, j],\\ D[a-1, j-1],\\ D[a, j-1]), \\qquad
+    c(a, j) = \\sum_{d\\,\\mathrm{observed}} (y_{a,d} - r_{i,d}(z_j))^2 / \\sigma_{y,d}^2
+
+(both start at their beginning; the end is open: the prefix may end anywhere
+in the demo). The distance of demo i is :math:`d_i = \\min_j D[s, j]` and the
+phase it reached :math:`z^*_i = z_{j^*}`. Costs are normalised by the core's
+observation noise, so positions (m) and signals weigh by their noise.
+
+**Prediction**: the robot part of the best demo, or with ``k > 1`` the
+average of the k best demos' robot weights weighted by :math:`1/\\bar d_i`
+(:math:`\\bar d_i = d_i / s`, the cost per observation), their weighted
+spread plus the core's robot regulariser as covariance. It is time-warped to
+the remaining duration: the human reached phase :math:`z^*` in the time
+``t`` observed, so the motion lasts :math:`\\hat T = t / z^*` (the weighted
+mean of the k best), clipped to [0.5, 2] x the task's demo durations' range;
+the robot's phase is :math:`\\tau/\\hat T`.
+
+**Recognition**: the best distance of each task,
+:math:`\\log p(y | k) = -\\tfrac12 \\min_{i \\in k} d_i` (the cost is
+:math:`-2\\log` of the Gaussian observation noise along the path), normalised
+over tasks with p(k) (eq. 14-15).
+
+Choices left open: M = ``n_samples`` (default 50, 2 % of the phase);
+the symmetric step pattern above; the alignment is extended incrementally,
+one row per kept observation (exactly the batch result).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from sandbox.methods.base import MethodPredictor, robot_distribution
+from sandbox.validation import FloatArray, check_integer
+
+#: Ratio bounds of the time-warped duration to the task's demo durations.
+WARP_BOUNDS = (0.5, 2.0)
+
+
+def dtw_rows(cost: FloatArray, previous: FloatArray | None) -> FloatArray:
+    """The next rows of the accumulated cost, shape (n, M), from this observation's
+    ``cost`` (n, M) against n references and the previous rows (None for the first)."""
+    out = np.empty_like(cost)
+    if previous is None:
+        return np.cumsum(cost, axis=1)
+    diag = np.r_["1", np.full((cost.shape[0], 1), np.inf), previous[:, :-1]]
+    best = np.minimum(previous, diag) + cost           # from above or the diagonal
+    out[:, 0] = best[:, 0]
+    for j in range(1, cost.shape[1]):                   # from the left: sequential in j
+        out[:, j] = np.minimum(best[:, j], out[:, j - 1] + cost[:, j])
+    return out
+
+
+def dtw_distance(query: FloatArray, reference: FloatArray, noise: FloatArray) -> tuple[float, int]:
+    """Open-end DTW of ``query`` (s, P) against ``reference`` (M, P): distance and end index."""
+    rows = None
+    for y in query:
+        ok = np.isfinite(y)
+        c = (((reference[:, ok] - y[ok]) ** 2) / noise[ok]).sum(axis=1)[None]
+        rows = dtw_rows(c, rows)
+    return float(rows[0].min()), int(np.argmin(rows[0]))
+
+
+class DTWPredictor(MethodPredictor):
+    """Open-end DTW nearest demos behind the predictor interface (module docstring).
+
+    Parameters
+    ----------
+    library : DemoLibrary
+    dow_t : float
+        Seconds between updates.
+    k : int
+        Demos averaged (1: the best match).
+    n_samples : int
+        Samples M of each demo's phase.
+    **options
+        Of :class:`~sandbox.methods.base.MethodPredictor`.
+    """
+
+    name = "dtw"
+
+    def __init__(self, library, dow_t: float = 0.2, *, k: int = 1, n_samples: int = 50,
+                 **options) -> None:
+        self.k = check_integer(k, "k", 1)
+        self.n_samples = check_integer(n_samples, "n_samples", 2, 10_000)
+        super().__init__(library, dow_t, **options)
+        z = np.linspace(0.0, 1.0, self.n_samples)
+        self._refs = [library.human(i, z) for i in range(len(library.weights))]   # (n_k, M, P)
+
+    def _reset_method(self) -> None:
+        self._rows: list[FloatArray | None] = [None] * len(self.library.weights)
+
+    def estimate(self, t, times, values):
+        noise = self.library.model.noise
+        for y in values[self._fed:]:
+            ok = np.isfinite(y)
+            if not ok.any():
+                continue
+            for i, ref in enumerate(self._refs):
+                c = (((ref[:, :, ok] - y[ok]) ** 2) / noise[ok]).sum(axis=2)
+                self._rows[i] = dtw_rows(c, self._rows[i])
+        self._fed = times.size
+        z = np.linspace(0.0, 1.0, self.n_samples)
+        t_last = float(times[-1])
+        ll, durations, picks = [], [], []
+        for k, rows in enumerate(self._rows):
+            d, j = rows.min(axis=1), rows.argmin(axis=1)
+            order = np.argsort(d)[:self.k]
+            w = 1.0 / np.maximum(d[order] / times.size, 1e-12)
+            w /= w.sum()
+            T_k = self.library.durations[k]
+            lo, hi = WARP_BOUNDS[0] * T_k.min(), WARP_BOUNDS[1] * T_k.max()
+            warped = np.clip(t_last / np.maximum(z[j[order]], 1e-9), lo, hi)
+            ll.append(-0.5 * d[order[0]])
+            durations.append(max(float(w @ warped), t_last if z[j[order[0]]] >= 1 else 0.0))
+            picks.append((order, w))
+        return self._make_prediction(np.array(ll), durations,
+                                     lambda k: _weighted_robot(self.library, k, *picks[k]))
+
+
+def _weighted_robot(library, k: int, order: FloatArray, w: FloatArray):
+    """Robot distribution of task k's demos ``order`` weighted by ``w`` (sum 1)."""
+    model = library.model
+    robots = library.robot_weights(k)[order]
+    mean = w @ robots
+    reg = model.task_models[k].weights.reg[model.n_human:]
+    if order.size == 1:
+        return robot_distribution(mean, robots, reg, model.basis.n_basis)
+    members = mean + (robots - mean) * np.sqrt(w * (order.size - 1))[:, None]
+    return robot_distribution(mean, members, reg, model.basis.n_basis)
