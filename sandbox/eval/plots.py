@@ -12,6 +12,8 @@ notebook leaves its inline backend alone.
   against the observed ratio (static).
 * :func:`plot_curves` (``modalities.png``): recognition over the recording for
   several reports (e.g. observation sets), with bootstrap bands.
+* :func:`plot_methods` (``recognition.png`` of ``compare``): recognition over the
+  recording of several methods, with bootstrap bands.
 * :func:`plot_sweep` (``summary.png``): the objective J of every configuration
   of a sweep, best first.
 """
@@ -152,6 +154,27 @@ def plot_curves(reports: dict[str, dict], path, window: str = "0.2",
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="lower right")
     fig.suptitle(title)
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    return _save(fig, Path(path))
+
+
+def plot_methods(comparison: dict, path) -> Path:
+    """Recognition over the recording of every method of a comparison
+    (:mod:`sandbox.eval.compare`), one curve and its 95 % bootstrap band each."""
+    fig, ax = _figure(1, (7, 4))
+    x = comparison["curve"]
+    for method, row in comparison["rows"].items():
+        line = ax.plot(x, row["recognition_curve"], marker="o", label=method)[0]
+        lo, hi = row["recognition_curve_ci"]
+        ax.fill_between(x, lo, hi, color=line.get_color(), alpha=0.10)
+    ax.axhline(1 / max(1, len(comparison["tasks"])), color="k", ls=":", label="chance")
+    ax.set_xlabel("fraction of the recording observed (idle tail included)")
+    ax.set_ylabel("trials with the right task")
+    ax.set_ylim(0, 1.02)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="lower right")
+    fig.suptitle(f"Recognition over the recording: {comparison['n_trials']} trials, "
+                 f"{comparison['split']}")
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     return _save(fig, Path(path))
 
