@@ -34,7 +34,7 @@ from sandbox.methods.nearest import NearestPredictor
 
 __all__ = ["METHODS", "OTHER_METHODS", "BIPPredictor", "DTWPredictor", "DemoLibrary",
            "EBIPPredictor", "MethodPredictor", "NearestPredictor", "PhasePrediction",
-           "check_methods", "make_predictor"]
+           "check_methods", "check_observable", "make_predictor"]
 
 #: The methods of this package, by name.
 OTHER_METHODS = {"bip": BIPPredictor, "ebip": EBIPPredictor, "dtw": DTWPredictor,
@@ -58,15 +58,18 @@ def check_methods(names, option: str = "methods") -> tuple[str, ...]:
     return names
 
 
-def check_observable(methods, modalities, option: str = "observe") -> None:
+def check_observable(methods, modalities, option: str = "observe", *,
+                     kinds: dict | None = None) -> None:
     """Every method can observe every modality (a ``Modality`` with ``name`` and ``kind``);
-    a one-line ``ValueError`` naming what a method observes otherwise."""
+    a one-line ``ValueError`` naming what a method observes otherwise. ``kinds`` maps a
+    method to the kinds it observes (default :data:`OBSERVABLE_KINDS`)."""
+    table = OBSERVABLE_KINDS if kinds is None else kinds
     for name in methods:
-        kinds = OBSERVABLE_KINDS[name]
+        kinds_of = table[name]
         for m in modalities:
-            if m.kind not in kinds:
+            if m.kind not in kinds_of:
                 raise ValueError(f"{option}: method {name!r} cannot observe {m.name!r} (a "
-                                 f"{m.kind} modality); it observes {', '.join(kinds)} "
+                                 f"{m.kind} modality); it observes {', '.join(kinds_of)} "
                                  f"modalities")
 
 
