@@ -203,8 +203,9 @@ def _fit(demos: list):
     """An :class:`~sandbox.core.IProMP` of every task of ``demos``, with their geometry."""
     from sandbox.core import IProMP
     from sandbox.data.geometry import attach_geometry
+    from sandbox.episodes.libraries import remember_demos
 
-    return attach_geometry(IProMP().fit(demos), demos)
+    return remember_demos(attach_geometry(IProMP().fit(demos), demos), demos)
 
 
 def _replay(seed: int, model, held_out, replayed: _Set, options: dict,

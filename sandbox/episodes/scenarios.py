@@ -57,7 +57,7 @@ SCENARIOS = {
     "intent_switch": ("sandbox/BaxterHandoverDiverging-v1", "diverging"),
     "recorded": ("sandbox/BaxterHandover-v1", None),
 }
-POLICIES = ("dynamic", "static", "recorded_robot")
+POLICIES = ("dynamic", "static", "recorded_robot", "bip", "ebip", "dtw", "nearest")
 
 
 @dataclass(frozen=True)
@@ -292,6 +292,10 @@ def _policy_factory(policy, dow_t: float, ratio: float, observe) -> Callable:
         return lambda model, demo: IProMPPolicy(model, dow_t=dow_t, observe=observe)
     if policy == "recorded_robot":
         return lambda model, demo: RecordedRobotPolicy.from_demo(demo)
+    if policy != "static":
+        from sandbox.episodes.policies import MethodPolicy
+
+        return lambda model, demo: MethodPolicy(model, policy, dow_t=dow_t, observe=observe)
     return lambda model, demo: StaticPolicy(model, ratio=ratio, observe=observe)
 
 

@@ -69,8 +69,10 @@ def fit_synthetic(family: str, n_per_task: int, seed: int, n_basis: int | None,
     # Any: a Demonstration is frozen, the core's DemonstrationLike declares plain attributes
     demos: list[Any] = make_dataset(family, n_per_task, np.random.default_rng(seed),
                                     observe=observe, session=session)
+    from sandbox.episodes.libraries import remember_demos
+
     model = IProMP() if n_basis is None else IProMP(n_basis=n_basis)
-    return attach_geometry(model.fit(demos), demos)
+    return remember_demos(attach_geometry(model.fit(demos), demos), demos)
 
 
 def session_episodes(family: str, n: int, seed: int, session: int, *,
