@@ -45,10 +45,12 @@ from sandbox.core.recognition import task_posterior
 TASKS = ("left", "right", "up", "down")
 
 
-def reference_case(seed: int = 0, n_per_task: int = 20, *, multimodal: bool = False):
+def reference_case(seed: int = 0, n_per_task: int = 20, *, multimodal: bool = False,
+                   with_demos: bool = False):
     """Fitted 4-task model, and the held-out motion's first 2 s at 100 Hz (times, human).
 
     ``multimodal``: the demos also carry ``arm`` and ``emg`` (P = 17, :func:`_arm_and_emg`).
+    ``with_demos``: the training demos are returned too, last.
     """
     from sandbox.data.synthetic import make_dataset
 
@@ -65,6 +67,8 @@ def reference_case(seed: int = 0, n_per_task: int = 20, *, multimodal: bool = Fa
     model = IProMP(n_basis=31).fit(train)
     t = test.times - test.times[0]
     keep = t < 2.0 - 1e-9
+    if with_demos:
+        return model, t[keep][:200], test.human[keep][:200], train
     return model, t[keep][:200], test.human[keep][:200]
 
 

@@ -14,6 +14,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--repeats", type=_types.integer(1, 1_000_000), default=200,
                         help="repetitions per timed case, 1 to 1e6 (default 200)")
     parser.add_argument("--seed", type=_types.SEED, default=0, help="seed of the reference data")
+    parser.add_argument("--methods", action="store_true",
+                        help="also time the update of every method of 'compare' (dynamic, "
+                             "static, bip, ebip, dtw, nearest; sandbox.bench.methods)")
     parser.add_argument("--skip-env", action="store_true",
                         help="skip the environment benchmarks")
     parser.add_argument("--skip-vector", action="store_true",
@@ -45,6 +48,10 @@ def _stages(args) -> list:
 
     stages = [("predictor update",
                lambda: run_core_benchmarks(repeats=args.repeats, seed=args.seed))]
+    if args.methods:
+        from sandbox.bench.methods import run_method_benchmarks
+
+        stages.append(("methods", lambda: run_method_benchmarks(seed=args.seed)))
     if args.skip_env:
         return stages
     try:
