@@ -8,9 +8,9 @@ observed modalities (every one its model has and the environments carry:
 :class:`~sandbox.core.DynamicPredictor` and steers the arm along the blended
 plan; :class:`StaticPolicy` does the same with the static baseline
 (:class:`~sandbox.core.StaticPredictor`, one prediction after a fraction of
-the motion); :class:`MethodPolicy` with one of the other methods
-(:mod:`sandbox.methods`: BIP, eBIP, DTW, nearest). :class:`RecordedRobotPolicy` replays what the real robot did in a
-recorded trial: the ceiling a predictor of the recorded robot can reach in a
+the motion; :class:`~sandbox.episodes.method_policy.MethodPolicy` does it with
+BIP, eBIP, DTW or nearest-neighbour). :class:`RecordedRobotPolicy` replays what
+the real robot did in a recorded trial: the ceiling a predictor of the recorded robot can reach in a
 replay of that trial. A modality missing at a step (NaN, e.g. no EMG in a synthetic
 episode) is marginalised by the predictor, not zero-filled.
 
@@ -301,38 +301,6 @@ class StaticPolicy(IProMPPolicy):
         self._setup(model, observe, control_hz, close_radius, max_velocity)
         self.predictor = StaticPredictor(model, ratio=ratio, subsample=self.subsample,
                                          observe=self.observe, **{**CLOSED_LOOP, **options})
-        self.reset()
-
-
-class MethodPolicy(IProMPPolicy):
-    """Another method (:mod:`sandbox.methods`: ``bip``, ``ebip``, ``dtw``, ``nearest``) as a
-    controller: fed, updated and followed exactly as :class:`IProMPPolicy`.
-
-    Parameters
-    ----------
-    model : IProMP
-        A fitted model; the method learns from its demos
-        (:func:`~sandbox.episodes.libraries.library_of`).
-    method : str
-        One of :data:`sandbox.methods.OTHER_METHODS`.
-    dow_t, control_hz, close_radius, max_velocity, observe, **options
-        As for :class:`IProMPPolicy` (``options`` may hold the method's own).
-    """
-
-    def __init__(self, model: IProMP, method: str, *, dow_t: float = 0.2,
-                 control_hz: float = 50.0, close_radius: float = 0.045, max_velocity=None,
-                 observe=None, **options) -> None:
-        from sandbox.methods import OTHER_METHODS, make_predictor
-
-        if method not in OTHER_METHODS:
-            raise ValueError(f"method: expected one of {', '.join(OTHER_METHODS)}, "
-                             f"got {method!r}")
-        self._setup(model, observe, control_hz, close_radius, max_velocity)
-        from sandbox.episodes.libraries import library_of
-
-        self.predictor = make_predictor(method, library_of(model), dow_t=dow_t,
-                                        subsample=self.subsample, observe=self.observe,
-                                        **{**CLOSED_LOOP, **options})
         self.reset()
 
 

@@ -293,7 +293,7 @@ def _policy_factory(policy, dow_t: float, ratio: float, observe) -> Callable:
     if policy == "recorded_robot":
         return lambda model, demo: RecordedRobotPolicy.from_demo(demo)
     if policy != "static":
-        from sandbox.episodes.policies import MethodPolicy
+        from sandbox.episodes.method_policy import MethodPolicy
 
         return lambda model, demo: MethodPolicy(model, policy, dow_t=dow_t, observe=observe)
     return lambda model, demo: StaticPolicy(model, ratio=ratio, observe=observe)

@@ -1,4 +1,4 @@
-"""Every method on the same folds, preprocessing and observation stream (``python -m sandbox compare``).
+"""Every method on the same folds, preprocessing and stream (``python -m sandbox compare``).
 
 For each method of :data:`~sandbox.methods.METHODS` and each fold, the models
 are fitted on the same training trials (:func:`~sandbox.eval.loocv.prepare`'s

@@ -92,7 +92,8 @@ class BipFilter:
         self.P = np.zeros((n, n))
         self.P[0, 0], self.P[1, 1] = phase_std**2, rate_std**2
         self.P[2:, 2:] = cov
-        self.N, self.noise, self.q, self.basis = int(n_basis), np.asarray(noise), process_noise, basis
+        self.N, self.noise, self.q = int(n_basis), np.asarray(noise), process_noise
+        self.basis = basis
         self.time = 0.0
         self.log_likelihood = 0.0
 
