@@ -282,7 +282,8 @@ def run_compare(train, test, config: CompareConfig, out: str | Path, *, workers:
             log(f"{method}: done before ({out / 'methods' / (method + '.json')})")
         rows[method], runtimes[method] = result["row"], result["runtime_s"]
     tasks = list(dict.fromkeys(d.task for d in train))
-    return {"dataset": dataset, "tasks": tasks, "n_trials": len(train),
+    n_trials = next(iter(rows.values()))["n_trials"] if rows else 0
+    return {"dataset": dataset, "tasks": tasks, "n_trials": n_trials,
             "split": f"holdout {config.holdout} per task (true task given)" if config.holdout
             else "leave-one-out", "config": config.to_dict(), "curve": list(CURVE),
             "rows": rows, "runtime_s": runtimes}
