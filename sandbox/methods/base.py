@@ -60,16 +60,22 @@ def end_time(phase: float, rate: float, t: float) -> float:
     return float(t + (1.0 - phase) / max(rate, MIN_RATE))
 
 
-def robot_distribution(mean: FloatArray, members: FloatArray | None, reg: FloatArray,
-                       n_basis: int, cov: FloatArray | None = None) -> WeightDistribution:
-    """A robot :class:`WeightDistribution` from a mean (Q*N,) and either ensemble ``members``
-    (E, Q*N) or a dense ``cov`` (Q*N, Q*N); ``reg`` (Q,) is the task's robot regulariser,
-    added to an ensemble's sample covariance so the result stays positive definite."""
-    if cov is not None:
-        vals, vecs = np.linalg.eigh(0.5 * (cov + cov.T))
-        floor = np.repeat(reg, n_basis).min() * 1e-6
-        factor = vecs * np.sqrt(np.maximum(vals - floor, 0.0))
-        return WeightDistribution(mean, factor, np.full(reg.size, floor), n_basis)
+def robot_from_cov(mean: FloatArray, cov: FloatArray, reg: FloatArray,
+                   n_basis: int) -> WeightDistribution:
+    """A robot :class:`WeightDistribution` from a mean (Q*N,) and a dense positive definite
+    ``cov`` (Q*N, Q*N): its eigen-factor, with a regulariser of 1e-6 x the smallest of
+    ``reg`` (Q,) split off the spectrum so it stays positive definite."""
+    vals, vecs = np.linalg.eigh(0.5 * (cov + cov.T))
+    floor = float(reg.min()) * 1e-6
+    factor = vecs * np.sqrt(np.maximum(vals - floor, 0.0))
+    return WeightDistribution(mean, factor, np.full(reg.size, floor), n_basis)
+
+
+def robot_from_members(mean: FloatArray, members: FloatArray, reg: FloatArray,
+                       n_basis: int) -> WeightDistribution:
+    """A robot :class:`WeightDistribution` from a mean (Q*N,) and ensemble ``members``
+    (E, Q*N): their sample covariance plus the task's robot regulariser ``reg`` (Q,), so the
+    result stays positive definite with E below Q*N."""
     dev = (members - mean).T / np.sqrt(max(members.shape[0] - 1, 1))
     return WeightDistribution(mean, dev, reg, n_basis)
 

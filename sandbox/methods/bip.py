@@ -46,7 +46,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg
 
-from sandbox.methods.base import MIN_RATE, MethodPredictor, end_time, robot_distribution
+from sandbox.methods.base import MIN_RATE, MethodPredictor, end_time, robot_from_cov
 from sandbox.validation import FloatArray, check_positive
 
 #: Step of the central difference of the basis' derivative (phase units).
@@ -198,7 +198,7 @@ class BIPPredictor(MethodPredictor):
 
         def robot(k: int):
             f, reg = self.filters[k], model.task_models[k].weights.reg[model.n_human:]
-            return robot_distribution(f.x[2 + PN:], None, reg, N, cov=f.P[2 + PN:, 2 + PN:])
+            return robot_from_cov(f.x[2 + PN:], f.P[2 + PN:, 2 + PN:], reg, N)
 
         phases = [f.x[0] for f in self.filters]
         rates = [f.x[1] for f in self.filters]

@@ -41,8 +41,9 @@ one row per kept observation (exactly the batch result).
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import NDArray
 
-from sandbox.methods.base import MethodPredictor, robot_distribution
+from sandbox.methods.base import MethodPredictor, robot_from_members
 from sandbox.validation import FloatArray, check_integer
 
 #: Most reference samples the alignment advances per observation.
@@ -72,6 +73,8 @@ def dtw_distance(query: FloatArray, reference: FloatArray, noise: FloatArray) ->
         ok = np.isfinite(y)
         c = (((reference[:, ok] - y[ok]) ** 2) / noise[ok]).sum(axis=1)[None]
         rows = dtw_rows(c, rows)
+    if rows is None:
+        raise ValueError("query: expected at least one observation, got none")
     return float(rows[0].min()), int(np.argmin(rows[0]))
 
 
@@ -118,6 +121,7 @@ class DTWPredictor(MethodPredictor):
         t_last = float(times[-1])
         ll, durations, picks = [], [], []
         for k, rows in enumerate(self._rows):
+            assert rows is not None             # an update follows a valid observation
             d, j = rows.min(axis=1), rows.argmin(axis=1)
             order = np.argsort(d)[:self.k]
             w = 1.0 / np.maximum(d[order] / times.size, 1e-12)
@@ -132,13 +136,13 @@ class DTWPredictor(MethodPredictor):
                                      lambda k: _weighted_robot(self.library, k, *picks[k]))
 
 
-def _weighted_robot(library, k: int, order: FloatArray, w: FloatArray):
+def _weighted_robot(library, k: int, order: NDArray[np.intp], w: FloatArray):
     """Robot distribution of task k's demos ``order`` weighted by ``w`` (sum 1)."""
     model = library.model
     robots = library.robot_weights(k)[order]
     mean = w @ robots
     reg = model.task_models[k].weights.reg[model.n_human:]
     if order.size == 1:
-        return robot_distribution(mean, robots, reg, model.basis.n_basis)
+        return robot_from_members(mean, robots, reg, model.basis.n_basis)
     members = mean + (robots - mean) * np.sqrt(w * (order.size - 1))[:, None]
-    return robot_distribution(mean, members, reg, model.basis.n_basis)
+    return robot_from_members(mean, members, reg, model.basis.n_basis)

@@ -41,8 +41,9 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.linalg
+from numpy.typing import NDArray
 
-from sandbox.methods.base import MIN_RATE, MethodPredictor, end_time, robot_distribution
+from sandbox.methods.base import MIN_RATE, MethodPredictor, end_time, robot_from_members
 from sandbox.methods.bip import rate_prior
 from sandbox.validation import FloatArray, check_integer, check_positive
 
@@ -89,7 +90,7 @@ class EnsembleFilter:
                                                           method="eigh")
         self._clip()
 
-    def project(self, obs: FloatArray) -> FloatArray:
+    def project(self, obs: NDArray[np.intp]) -> FloatArray:
         """:math:`h_j`: every member's observed dims ``obs`` at its phase, shape (E, m)."""
         psi = self.basis.evaluate(np.clip(self.X[:, 0], 0.0, 1.0))          # (E, N)
         W = self.X[:, 2:].reshape(self.size, -1, self.N)[:, obs, :]         # (E, m, N)
@@ -196,7 +197,7 @@ class EBIPPredictor(MethodPredictor):
 
         def robot(k: int):
             X, reg = self.filters[k].X, model.task_models[k].weights.reg[model.n_human:]
-            return robot_distribution(X[:, 2 + PN:].mean(axis=0), X[:, 2 + PN:], reg, N)
+            return robot_from_members(X[:, 2 + PN:].mean(axis=0), X[:, 2 + PN:], reg, N)
 
         means = [f.X[:, :2].mean(axis=0) for f in self.filters]
         durations = [end_time(m[0], m[1], t) for m in means]

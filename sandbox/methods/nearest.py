@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sandbox.methods.base import MethodPredictor, robot_distribution
+from sandbox.methods.base import MethodPredictor, robot_from_members
 from sandbox.validation import FloatArray
 
 
@@ -64,6 +64,6 @@ class NearestPredictor(MethodPredictor):
         def robot(k: int):
             members = lib.robot_weights(k)[best[k]:best[k] + 1]
             reg = model.task_models[k].weights.reg[model.n_human:]
-            return robot_distribution(members[0], members, reg, model.basis.n_basis)
+            return robot_from_members(members[0], members, reg, model.basis.n_basis)
 
         return self._make_prediction(np.array(ll), durations, robot)
