@@ -173,8 +173,9 @@ def plot_methods(comparison: dict, path) -> Path:
     ax.set_ylim(0, 1.02)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="lower right")
+    observed = comparison["config"]["evaluation"].get("observe") or ["all"]
     fig.suptitle(f"Recognition over the recording: {comparison['n_trials']} trials, "
-                 f"{comparison['split']}")
+                 f"{comparison['split']}, observing {','.join(observed)}", fontsize=10)
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     return _save(fig, Path(path))
 
