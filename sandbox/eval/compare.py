@@ -132,7 +132,7 @@ def evaluate_method_trial(predictor, test, truth, model, fk, curve=CURVE,
         spent = 0.0
         at.append(upd.time / t[-1])
         errors.append(float(np.linalg.norm(fk(predictor.plan()[1][-1]) - goal)))
-        believed.append(predictor.task == test.task)
+        believed.append(upd.task == test.task)       # the update's choice, as loocv
     res = _score(predictor.commands(t), q, goal, fk, abs(predictor.duration - T))
     res.update(task=test.task, source=test.source, duration=T,
                recognition=float(predictor.task == test.task),
