@@ -48,7 +48,7 @@ def _stages(args) -> list:
 
     stages = [("predictor update",
                lambda: run_core_benchmarks(repeats=args.repeats, seed=args.seed))]
-    if args.methods:
+    if getattr(args, "methods", False):
         from sandbox.bench.methods import run_method_benchmarks
 
         stages.append(("methods", lambda: run_method_benchmarks(seed=args.seed)))

@@ -22,6 +22,8 @@ def test_stages_follow_the_skip_options():
     assert names(skip_env=False, skip_vector=True) == ["predictor update", "environments"]
     assert names(skip_env=False, skip_vector=False) == [
         "predictor update", "environments", "vector environments"]
+    assert names(skip_env=True, skip_vector=False, methods=True) == [
+        "predictor update", "methods"]
 
 
 def test_json_bench_draws_its_bar_on_stderr_only():
