@@ -59,15 +59,22 @@ import numpy as np
 from sandbox.core.archive import ArchiveError, check_path, open_archive, read_array
 from sandbox.core.basis import GaussianBasis
 from sandbox.core.limits import (
+    MAX_ALPHA_STD,
     MAX_DIMS,
     MAX_METADATA_BYTES,
     MAX_MODEL_VALUE,
     MAX_TASKS,
     MAX_TIME_S,
+    MIN_ALPHA_STD,
+    MIN_MEDIAN_DT_S,
     MIN_NOISE_STD,
 )
 from sandbox.core.modality import Modality, check_modalities, default_modalities
-from sandbox.core.promp import WeightDistribution, check_robot_definite
+from sandbox.core.promp import (
+    WeightDistribution,
+    check_human_conditioning,
+    check_robot_definite,
+)
 from sandbox.validation import check_number
 
 if TYPE_CHECKING:
@@ -90,6 +97,8 @@ TASK_KEYS = {"name", "nominal_duration", "alpha_mean", "alpha_std", "n_demos", "
 MAX_TIME_BINS = 1000
 #: How far from 1 the stored priors may sum.
 PRIOR_TOLERANCE = 1e-6
+#: How far from 1 a stored ``alpha_mean`` may be (a fit writes exactly 1).
+ALPHA_MEAN_TOLERANCE = 1e-9
 
 
 def save_model(model: IProMP, path: str | os.PathLike) -> None:
@@ -226,9 +235,10 @@ def _read_model(path: Path) -> ModelFile:
             D = (P + Q) * N
             dist = WeightDistribution(
                 _read(archive, f"task{i}_mean", (D,)),
-                _read(archive, f"task{i}_factor", (D, None), max_rank=t["n_demos"]),
+                _factor(archive, f"task{i}_factor", D, t["n_demos"]),
                 _positive(_read(archive, f"task{i}_reg", (P + Q,)), f"task{i}_reg", 0.0), N)
             check_robot_definite(dist, P, t["name"])
+            check_human_conditioning(dist, noise, t["name"])
             weights.append(dist)
         calibration = _calibration(archive, meta.get("familiarity"), len(weights))
     return ModelFile(meta, tuple(weights), noise, scale, calibration)
@@ -256,12 +266,27 @@ def _calibration(archive, entry, n_tasks: int):
         raise ValueError(f"metadata familiarity: malformed entry {str(entry)[:80]}") from None
 
 
-def _read(archive, name: str, shape: tuple, max_rank: int | None = None) -> np.ndarray:
+def _factor(archive, name: str, rows: int, n_demos: int) -> np.ndarray:
+    """A task's covariance factor U, shape (rows, r): 1 <= r < n_demos, not all zero.
+
+    A fit centres its demos' weights, so n demos give at most n - 1 directions, and
+    refuses demos that do not differ, so at least one.
+    """
+    arr = _read(archive, name, (rows, None))
+    r = arr.shape[1]
+    if not 1 <= r <= n_demos - 1:
+        raise ValueError(f"member {name!r}: expected a covariance factor of rank 1 to "
+                         f"{n_demos - 1} (its task's {n_demos} demonstrations less one), got "
+                         f"{r} columns")
+    if not np.any(arr):
+        raise ValueError(f"member {name!r}: expected a covariance factor with a non-zero "
+                         f"entry (demos that differ), got all zeros")
+    return arr
+
+
+def _read(archive, name: str, shape: tuple) -> np.ndarray:
     """A float member of the expected shape, finite and within MAX_MODEL_VALUE."""
     arr = read_array(archive, name, "fiu", shape).astype(np.float64)
-    if max_rank is not None and arr.shape[1] > max_rank:
-        raise ValueError(f"member {name!r} has rank {arr.shape[1]}, more than its task's "
-                         f"{max_rank} demonstrations")
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"member {name!r} holds NaN or infinity")
     if arr.size and np.abs(arr).max() > MAX_MODEL_VALUE:
@@ -312,8 +337,32 @@ def _metadata(archive, path: Path) -> dict:
             "hyperparameters": _hyperparameters(meta["hyperparameters"], version),
             "n_human": P, "n_robot": Q, "modalities": _modalities(meta, P),
             "robot_names": _names(meta["robot_names"], "robot_names", (0, Q)),
-            "tasks": _tasks(meta["tasks"]), "familiarity": meta.get("familiarity"),
+            "tasks": _tasks(meta["tasks"], _min_alpha_std(meta["hyperparameters"])),
+            "familiarity": meta.get("familiarity"),
             "session": _session(meta.get("session", {}))}
+
+
+def _check_speed(where: str, nominal: float, a_mean: float, a_std: float, n_demos: int,
+                 min_alpha_std: float) -> None:
+    """The speed prior's statistics within what :meth:`IProMP.fit` can make of n demos.
+
+    A fit's nominal duration is the mean of its demos' (each at least two samples
+    ``limits.MIN_MEDIAN_DT_S`` apart), so ``alpha_mean`` is 1; ``alpha_std`` is the
+    spread of n positive durations over their mean (below sqrt(n)), floored at
+    ``min_alpha_std``, at most ``limits.MAX_ALPHA_STD``.
+    """
+    if nominal < MIN_MEDIAN_DT_S:
+        raise ValueError(f"{where} nominal_duration: expected at least {MIN_MEDIAN_DT_S:g} s "
+                         f"(limits.MIN_MEDIAN_DT_S), got {nominal:g}")
+    if abs(a_mean - 1.0) > ALPHA_MEAN_TOLERANCE:
+        raise ValueError(f"{where} alpha_mean: expected 1 (the nominal duration is the demos' "
+                         f"mean), got {a_mean:g}")
+    high = min(max(float(np.sqrt(n_demos)), min_alpha_std), MAX_ALPHA_STD)
+    if not min_alpha_std <= a_std <= high:
+        raise ValueError(f"{where} alpha_std: expected a speed-factor spread in "
+                         f"[{min_alpha_std:g}, {high:.4g}] (min_alpha_std to what {n_demos} "
+                         f"demonstrations can give, limits.MAX_ALPHA_STD {MAX_ALPHA_STD:g}), "
+                         f"got {a_std:g}")
 
 
 def _session(entry) -> dict:
@@ -357,8 +406,17 @@ def _modalities(meta: dict, P: int) -> tuple:
     return check_modalities([Modality.from_dict(m) for m in mods], P)
 
 
-def _tasks(tasks) -> list[dict[str, Any]]:
-    """Task entries: names, durations within MAX_TIME_S, speed priors, priors summing to 1."""
+def _min_alpha_std(hyper) -> float:
+    """The file's ``min_alpha_std`` (checked by the model's constructor), else the limit's."""
+    value = hyper.get("min_alpha_std") if isinstance(hyper, dict) else None
+    try:
+        return check_number(value, "", low=MIN_ALPHA_STD, high=MAX_ALPHA_STD)
+    except ValueError:
+        return MIN_ALPHA_STD
+
+
+def _tasks(tasks, min_alpha_std: float) -> list[dict[str, Any]]:
+    """Task entries: names, durations, speed priors as a fit makes them, priors summing to 1."""
     if not isinstance(tasks, list) or not 1 <= len(tasks) <= MAX_TASKS:
         raise ValueError(f"metadata tasks: expected a list of 1 to {MAX_TASKS} tasks, got "
                          f"{str(tasks)[:60]}")
@@ -380,8 +438,10 @@ def _tasks(tasks) -> list[dict[str, Any]]:
                              f"> 0 and a mean duration within {MAX_TIME_S:g} s, got "
                              f"{nominal:g}, {a_mean:g}, {a_std:g}")
         n_demos = t["n_demos"]
-        if type(n_demos) is not int or n_demos < 1:
-            raise ValueError(f"{where} n_demos: expected an integer >= 1, got {n_demos!r}")
+        if type(n_demos) is not int or n_demos < 2:
+            raise ValueError(f"{where} n_demos: expected an integer >= 2 (a fit needs two "
+                             f"demonstrations per task), got {n_demos!r}")
+        _check_speed(where, nominal, a_mean, a_std, n_demos, min_alpha_std)
         prior = check_number(t["prior"], f"{where} prior", low=0.0, high=1.0)
         out.append({"name": name, "nominal_duration": nominal, "alpha_mean": a_mean,
                     "alpha_std": a_std, "n_demos": n_demos, "prior": prior})
