@@ -22,7 +22,6 @@ from sandbox.validation import (
     check_bool,
     check_integer,
     check_number,
-    check_positive,
 )
 
 
