@@ -133,6 +133,11 @@ MIN_BASIS_WIDTH = 1e-6
 MAX_BASIS_WIDTH = 1e6
 
 
+def check_alpha_std(value, name: str = "min_alpha_std") -> float:
+    """A speed-factor standard deviation within [MIN_ALPHA_STD, MAX_ALPHA_STD]."""
+    return check_number(value, name, low=MIN_ALPHA_STD, high=MAX_ALPHA_STD)
+
+
 def check_duration(times: ArrayLike, name: str = "times",
                    max_duration: float = MAX_DURATION_S) -> float:
     """Return the span of increasing ``times`` (s) after checking it is plausible.

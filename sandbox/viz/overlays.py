@@ -145,6 +145,12 @@ class PredictionOverlay:
         self._n_updates = 0
         self._truth, self._switch, self._n_switches = None, None, 0
 
+    def restart(self, predictor, **options) -> None:
+        """A new episode shown at once, before its first step: no paths, and the panel at
+        t = 0 with the (reset) predictor's prior belief (``options`` as :meth:`show`'s)."""
+        self.reset()
+        self.show(predictor, 0.0, **options)
+
     # -- paths -------------------------------------------------------------------------------
 
     def _extend(self, kind: str, points: ArrayLike, rgba) -> int:
