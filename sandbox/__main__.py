@@ -1,6 +1,8 @@
-"""``python -m sandbox``: the command-line entry point."""
-
-from sandbox.cli import main
+"""``python -m sandbox``: the command-line entry point (:func:`sandbox.cli.run`)."""
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    try:
+        from sandbox.cli import run
+    except KeyboardInterrupt:      # Ctrl-C while Python imports the package: quietly, 130
+        raise SystemExit(130) from None
+    run()

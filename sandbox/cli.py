@@ -10,7 +10,8 @@ Exit status: 0 on success; 2 for bad input (argparse's own errors, and a
 file cannot be read or written (``OSError``) or something unexpected fails;
 130 on Ctrl-C, with the one line ``error: interrupted``, in every command: :func:`main`
 is the only handler (forked worker processes leave silently, see
-:func:`_quiet_interrupts`). No traceback is printed unless ``--debug`` is
+:func:`_quiet_interrupts`); the program (:func:`run`) keeps that promise from its
+first import to its exit. No traceback is printed unless ``--debug`` is
 given (before or after the command name).
 
 A value that starts with a minus (``--windows -1,2``) is given to its option
@@ -21,6 +22,7 @@ saying "expected one argument".
 from __future__ import annotations
 
 import argparse
+import atexit
 import importlib
 import os
 import pkgutil
@@ -30,6 +32,7 @@ import sys
 import threading
 from collections.abc import Sequence
 from types import ModuleType
+from typing import NoReturn
 
 import sandbox
 import sandbox.commands
@@ -131,6 +134,53 @@ def _quiet_interrupts():
         raise KeyboardInterrupt
 
     return signal.signal(signal.SIGINT, interrupt)
+
+
+def run(argv: Sequence[str] | None = None) -> NoReturn:
+    """The program (``python -m sandbox``, ``handover-sandbox``): :func:`main`, then exit.
+
+    Ctrl-C is status 130 without a traceback at every moment, not only while a
+    command runs: before :func:`main` installed its handler (while it imports
+    and parses), after it restored the previous one, and while the interpreter
+    shuts down (joining worker processes), when Python would print a traceback
+    and die of the signal itself (status -2 to a parent). In the last moments,
+    after the exit handlers, it is ignored: the status is the command's.
+    """
+    atexit.register(_ignore_late_interrupts)   # the first registered runs last
+    try:
+        status = main(argv)
+    except KeyboardInterrupt:
+        print("error: interrupted", file=sys.stderr)
+        status = 130
+    _interrupts_end_the_process()
+    sys.exit(status)
+
+
+def _ignore_late_interrupts() -> None:
+    """Ignore SIGINT for the last moments of the interpreter's shutdown, after the exit
+    handlers: Python puts a handled signal back to its default action there, and a
+    Ctrl-C then would kill the process (status -2) after the work was done."""
+    if signal.getsignal(signal.SIGINT) is not signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _interrupts_end_the_process() -> None:
+    """From now on Ctrl-C ends the process at once with status 130 (output flushed first);
+    SIGINT left alone if it is not at Python's default (ignored, as under ``nohup``)."""
+    if (threading.current_thread() is not threading.main_thread()
+            or signal.getsignal(signal.SIGINT) is not signal.default_int_handler):
+        return
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):
+            pass
+
+    def leave(signum, frame):
+        os.write(2, b"error: interrupted\n")
+        os._exit(130)
+
+    signal.signal(signal.SIGINT, leave)
 
 
 def _failure(error: Exception) -> tuple[int, str]:

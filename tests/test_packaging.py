@@ -51,3 +51,53 @@ def test_changelog_names_the_current_version():
     import sandbox
 
     assert f"## {sandbox.__version__}" in (REPO / "CHANGELOG.md").read_text()
+
+
+def _lower_bounds(requirements: list[str]) -> dict[str, str]:
+    """``{"numpy": "1.24", ...}``: each requirement's ``>=`` bound (markers ignored)."""
+    import re
+
+    out = {}
+    for req in requirements:
+        found = re.match(r"^([A-Za-z0-9_.\-]+)(?:\[[^\]]*\])?\s*>=\s*([0-9.]+)", req)
+        if found:
+            out[found[1].lower()] = found[2]
+    return out
+
+
+def _pins(path: Path) -> dict[str, str]:
+    pins = {}
+    for line in path.read_text().splitlines():
+        line = line.split("#")[0].strip()
+        if line:
+            name, version = line.split("==")
+            pins[name.strip().lower()] = version.strip()
+    return pins
+
+
+def _same_version(bound: str, pin: str) -> bool:
+    """``6`` and ``6.0.0`` name the same release."""
+    def parts(v):
+        p = [int(x) for x in v.split(".")]
+        while p and p[-1] == 0:
+            p.pop()
+        return p
+    return parts(bound) == parts(pin)
+
+
+@pytest.mark.skipif(sys.version_info < (3, 11), reason="tomllib needs Python 3.11")
+def test_the_lowest_versions_ci_tests_are_the_declared_ones():
+    """issue 26 item 6: .ci/lowest installs .ci/lowest-constraints.txt; each pin there is a
+    declared lower bound (runtime, test and dask), and every declared bound is pinned."""
+    import tomllib
+
+    project = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]
+    extras = project["optional-dependencies"]
+    declared = _lower_bounds(project["dependencies"] + extras["test"] + extras["dask"])
+    declared.pop("ruff"), declared.pop("mypy")     # the gates, not the suite
+    pins = _pins(REPO / ".ci" / "lowest-constraints.txt")
+    assert declared.keys() <= pins.keys(), sorted(declared.keys() - pins.keys())
+    for name, bound in declared.items():
+        assert _same_version(bound, pins[name]), (name, bound, pins[name])
+    script = (REPO / ".ci" / "lowest").read_text()
+    assert "-c .ci/lowest-constraints.txt" in script and "python -m pytest" in script

@@ -148,10 +148,10 @@ def vector_steps_per_s(sizes: tuple[int, ...] = VECTOR_SIZES, block_s: float = 2
     figure is the median over ``blocks``. Returns ``{N: steps/s}``.
     """
     import gymnasium as gym
-    from gymnasium.utils.performance import benchmark_vector_step
 
     import sandbox.envs  # noqa: F401  (registers the environments)
 
+    benchmark_vector_step = _vector_benchmark()
     envs = {n: gym.make_vec(ENV_ID, num_envs=n) for n in sizes}
     rates: dict[int, list[float]] = {n: [] for n in sizes}
     try:
@@ -190,3 +190,34 @@ def run_vector_benchmarks() -> dict:
             "gymnasium_benchmark_step_per_s": round(single, 1),
             "cpu_count": os.cpu_count(),
             "load_average_1min": [round(load_before, 2), round(os.getloadavg()[0], 2)]}
+
+
+def _vector_benchmark():
+    """gymnasium's ``benchmark_vector_step`` (gymnasium >= 1.4), else :func:`_vector_steps`."""
+    try:
+        from gymnasium.utils.performance import benchmark_vector_step
+    except ImportError:   # gymnasium 1.1 - 1.3
+        return _vector_steps
+    return benchmark_vector_step
+
+
+def _vector_steps(env, target_duration: float = 5.0, seed: int | None = None) -> float:
+    """Sub-env steps per second of ``env`` (a vector env): gymnasium 1.4's count, where a
+    step that only autoresets a sub-env (next-step mode) is not counted."""
+    from gymnasium.vector import AutoresetMode
+
+    env.action_space.seed(seed)
+    env.reset(seed=seed)
+    env.step(env.action_space.sample())        # warm up outside the timing
+    env.reset(seed=seed)
+    next_step = env.metadata.get("autoreset_mode", AutoresetMode.NEXT_STEP) \
+        == AutoresetMode.NEXT_STEP
+    steps, done = 0, np.zeros(env.num_envs, dtype=bool)
+    start = time.perf_counter()
+    while True:
+        _, _, terminated, truncated, _ = env.step(env.action_space.sample())
+        steps += env.num_envs - (int(np.count_nonzero(done)) if next_step else 0)
+        done = np.logical_or(terminated, truncated)
+        elapsed = time.perf_counter() - start
+        if elapsed > target_duration:
+            return steps / elapsed

@@ -14,12 +14,19 @@ import argparse
 
 from sandbox.commands import _types
 
+#: ``--time-unit`` choices (the spec's TIME_UNITS; not imported: --help stays light).
+TIME_UNITS = ("s", "ms", "us", "ns")
+
 
 def add_arguments(parser: argparse.ArgumentParser, *, columns: bool = True) -> None:
     """Add ``--spec``, ``--observe`` (and ``--human-columns``, ``--robot-columns``)."""
     parser.add_argument("--spec", default=None, metavar="FILE",
                         help="YAML/JSON file naming the time, robot and modality columns of a "
                              "recorded set (default: the Baxter recordings' layout)")
+    parser.add_argument("--time-unit", default=None, choices=TIME_UNITS,
+                        metavar="UNIT",
+                        help="unit of the time column: s, ms, us or ns (default: the spec's "
+                             "time_unit, else s); converted to seconds as the files are read")
     parser.add_argument("--observe", default=None, metavar="NAMES",
                         help="comma-separated modalities to observe: hand, arm (elbow + "
                              "shoulder), emg, or the spec's own (default: hand)")
@@ -61,7 +68,8 @@ def data_spec(args: argparse.Namespace):
     from sandbox.data.spec import resolve
 
     return resolve(args.spec, human_columns=split(getattr(args, "human_columns", None)),
-                   robot_columns=split(getattr(args, "robot_columns", None)))
+                   robot_columns=split(getattr(args, "robot_columns", None)),
+                   time_unit=getattr(args, "time_unit", None))
 
 
 def observe(args: argparse.Namespace, spec=None) -> tuple[str, ...]:

@@ -24,6 +24,10 @@ _MESSAGE = re.compile(r"^skipped (?P<file>.+?\.csv|[^:]+): (?P<reason>.*)$", re.
 MAX_GROUPS = 3
 #: Words of a reason that the observation options (--observe, --spec) can fix.
 _SPEC_WORDS = ("column", "modality", "samples of")
+#: The unit a time column looks like (:func:`sandbox.core.limits.check_duration`'s hint).
+_UNIT = re.compile(r"looks like (milliseconds|microseconds|nanoseconds)")
+#: ``--time-unit`` (and the spec's ``time_unit``) of each unit the hint names.
+_UNIT_OPTION = {"milliseconds": "ms", "microseconds": "us", "nanoseconds": "ns"}
 
 
 def add_argument(parser: argparse.ArgumentParser) -> None:
@@ -40,8 +44,15 @@ def split(message: str) -> tuple[str, str]:
 
 
 def short(reason: str) -> str:
-    """The first clause of a reason (before ``;``, `` (`` or ``:``), the key it is grouped by."""
-    return re.split(r";| \(|: ", reason, maxsplit=1)[0].strip() or reason
+    """The first clause of a reason (before ``;``, `` (`` or ``:``), the key it is grouped by;
+    with the fix when the times look like another unit than seconds (issue 26: the hint
+    was only in ``--verbose``)."""
+    first = re.split(r";| \(|: ", reason, maxsplit=1)[0].strip() or reason
+    unit = _UNIT.search(reason)
+    if unit is None:
+        return first
+    return (f"{first} looks like {unit[1]} (--time-unit {_UNIT_OPTION[unit[1]]}, or "
+            f"time_unit: {_UNIT_OPTION[unit[1]]} in a spec)")
 
 
 def summary(skipped: Iterable[str]) -> str:

@@ -321,7 +321,7 @@ def _check_filter(args: argparse.Namespace) -> int:
         table = _filter_table(path, columns)
         if table is None:
             continue
-        t = table[:, 0]
+        t = table[:, 0] * spec.time_scale
         start = 1
         for cols in points:
             human = table[:, start:start + len(cols)]

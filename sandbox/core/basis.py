@@ -15,14 +15,13 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from sandbox.core.limits import MAX_N_BASIS
+from sandbox.core.limits import MAX_BASIS_WIDTH, MAX_N_BASIS, MIN_BASIS_WIDTH
 from sandbox.validation import (
     FloatArray,
     check_array,
     check_bool,
     check_integer,
     check_number,
-    check_positive,
 )
 
 
@@ -36,7 +35,9 @@ class GaussianBasis:
         Number of basis functions N, 2 to :data:`~sandbox.core.limits.MAX_N_BASIS`.
         The paper uses 31.
     width : float or None
-        Variance h of each bump (phase units squared). ``None``: the squared
+        Variance h of each bump (phase units squared), within
+        [:data:`~sandbox.core.limits.MIN_BASIS_WIDTH`,
+        :data:`~sandbox.core.limits.MAX_BASIS_WIDTH`]. ``None``: the squared
         spacing between centres, so neighbours cross at exp(-1/8) of their peak.
     margin : float
         Centres are spread evenly over ``[-margin, 1 + margin]``.
@@ -51,7 +52,8 @@ class GaussianBasis:
 
     def __post_init__(self) -> None:
         n = check_integer(self.n_basis, "n_basis", 2, MAX_N_BASIS)
-        width = None if self.width is None else check_positive(self.width, "width")
+        width = None if self.width is None else check_number(
+            self.width, "width", low=MIN_BASIS_WIDTH, high=MAX_BASIS_WIDTH)
         margin = check_number(self.margin, "margin", low=0.0)
         if margin >= 1:
             raise ValueError(f"margin: expected a number in [0, 1), got {self.margin!r}")

@@ -15,7 +15,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from sandbox.core.limits import MAX_SUBSAMPLE
+from sandbox.core.limits import MAX_SUBSAMPLE, MAX_TIME_S
 from sandbox.validation import (
     FloatArray,
     check_array,
@@ -202,8 +202,9 @@ def _against_others(full: Calibration, times, values, tasks, bins, mine) -> Floa
 def check(cal: Calibration) -> Calibration:
     """``ValueError`` unless ``cal`` is consistent (shapes, order, ranges); returns it."""
     edges = check_array(cal.edges, "calibration edges", 1)
-    if edges[0] != 0.0 or np.any(np.diff(edges) <= 0):
-        raise ValueError(f"calibration edges: expected increasing times from 0 s, got {edges}")
+    if edges[0] != 0.0 or np.any(np.diff(edges) <= 0) or edges[-1] > MAX_TIME_S:
+        raise ValueError(f"calibration edges: expected increasing times from 0 s to at most "
+                         f"{MAX_TIME_S:g} s (limits.MAX_TIME_S), got {edges}")
     q = check_array(cal.quantiles, "calibration quantiles", 3,
                     shape=(None, edges.size, LEVELS.size))
     if np.any(np.diff(q, axis=2) < 0) or np.any(q < 0):
@@ -215,7 +216,7 @@ def check(cal: Calibration) -> Calibration:
     check_fraction(cal.alpha, "calibration alpha")
     check_choice(cal.likelihood, "calibration likelihood", LIKELIHOODS)
     check_integer(cal.subsample, "calibration subsample", 1, MAX_SUBSAMPLE)
-    check_positive(cal.dow_t, "calibration dow_t")
+    check_positive(cal.dow_t, "calibration dow_t", high=MAX_TIME_S)
     check_integer(cal.n_motions, "calibration n_motions", 0)
     return cal
 

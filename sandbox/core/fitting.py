@@ -17,9 +17,9 @@ from typing import Any, Protocol
 import numpy as np
 
 from sandbox.core.basis import GaussianBasis
-from sandbox.core.limits import MAX_ABS_VALUE, MIN_NOISE_STD
+from sandbox.core.limits import MAX_ABS_VALUE, MAX_ALPHA_STD, MIN_NOISE_STD
 from sandbox.core.modality import Modality
-from sandbox.core.promp import WeightDistribution, fit_weights
+from sandbox.core.promp import WeightDistribution, check_human_conditioning, fit_weights
 from sandbox.validation import FloatArray, check_positive
 
 
@@ -275,8 +275,19 @@ def task_models(weights: Mapping[str, FloatArray], durations: Mapping[str, Float
         T = durations[k]
         t_nom = float(T.mean())
         a_std = float(np.std(T / t_nom, ddof=1)) if T.size > 1 else 0.0   # eq. 10
+        check_speed_spread(k, a_std, T)
+        check_human_conditioning(dist, sigma2, k)
         tasks.append(TaskModel(k, dist, t_nom, 1.0, max(a_std, min_alpha_std), int(T.size)))
     return tuple(tasks)
+
+
+def check_speed_spread(task: str, alpha_std: float, durations: FloatArray) -> None:
+    """Refuse demos whose durations spread more than :data:`~sandbox.core.limits.MAX_ALPHA_STD`."""
+    if alpha_std > MAX_ALPHA_STD:
+        raise ValueError(f"task {task!r}: its demos' durations spread {alpha_std:.3g} times "
+                         f"their mean (limits.MAX_ALPHA_STD {MAX_ALPHA_STD:g}): expected "
+                         f"motions of one kind, got durations from {durations.min():g} s to "
+                         f"{durations.max():g} s; check their time stamps and labels")
 
 
 def signal_scale(modalities: Sequence[Modality], moments: FloatArray) -> FloatArray:

@@ -32,11 +32,14 @@ predate it ignore it.
 
 Loading trusts nothing in the file (:mod:`sandbox.core.archive`): the file's
 size and number of members are checked first; the metadata is read and
-checked (types, ranges, the priors a probability vector, the speed priors
-positive, durations within :data:`~sandbox.core.limits.MAX_TIME_S`) before any
-array; only the members it declares are read, each after its ``.npy`` header
-declared the dtype and shape the metadata implies, within the limits; every
-array must be finite, within :data:`~sandbox.core.limits.MAX_MODEL_VALUE`, the
+checked (:mod:`sandbox.core.modelmeta`: types, ranges, the priors a probability
+vector, the speed priors as a fit makes them, durations within
+:data:`~sandbox.core.limits.MAX_TIME_S`) before any array; only the members it
+declares are read, each after its ``.npy`` header declared the dtype and shape
+the metadata implies, within the limits; every
+array must be finite, within :data:`~sandbox.core.limits.MAX_MODEL_VALUE`, each
+task's covariance factor of rank 1 to n_demos - 1, the human regularisers at most
+:data:`~sandbox.core.limits.MAX_KAPPA` times the noise, the
 noise, scale and regularisers positive (so every weight covariance
 :math:`UU^T + \\Lambda` is symmetric positive definite; the robot's regulariser
 at least half :data:`~sandbox.core.limits.MIN_REGULARIZER` of its weights'
@@ -52,23 +55,24 @@ import os
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from sandbox.core.archive import ArchiveError, check_path, open_archive, read_array
-from sandbox.core.basis import GaussianBasis
-from sandbox.core.limits import (
-    MAX_DIMS,
-    MAX_METADATA_BYTES,
-    MAX_MODEL_VALUE,
-    MAX_TASKS,
-    MAX_TIME_S,
-    MIN_NOISE_STD,
+from sandbox.core.limits import MAX_METADATA_BYTES, MAX_MODEL_VALUE, MIN_NOISE_STD
+from sandbox.core.modelmeta import (  # noqa: F401 - the format's constants, re-exported
+    FORMAT,
+    FORMAT_VERSION,
+    HYPERPARAMETERS,
+    READABLE_VERSIONS,
+    check_metadata,
 )
-from sandbox.core.modality import Modality, check_modalities, default_modalities
-from sandbox.core.promp import WeightDistribution, check_robot_definite
-from sandbox.validation import check_number
+from sandbox.core.promp import (
+    WeightDistribution,
+    check_human_conditioning,
+    check_robot_definite,
+)
 
 if TYPE_CHECKING:
     from sandbox.core.model import IProMP
@@ -76,20 +80,8 @@ if TYPE_CHECKING:
 if TYPE_CHECKING:
     from sandbox.core.calibration import Calibration
 
-FORMAT = "handover-sandbox/iprompt"
-FORMAT_VERSION = 2
-READABLE_VERSIONS = (1, 2)
-#: Hyperparameters each format version stores (the IProMP options).
-HYPERPARAMETERS = {
-    1: {"regularizer", "noise_scale", "noise_floor", "min_alpha_std", "ridge"},
-    2: {"regularizer", "noise_scale", "noise_floor", "signal_floor", "noise_floors",
-        "settle_tol", "arrive_tol", "min_alpha_std", "ridge"},
-}
-TASK_KEYS = {"name", "nominal_duration", "alpha_mean", "alpha_std", "n_demos", "prior"}
 #: Most time bins of a stored familiarity calibration.
 MAX_TIME_BINS = 1000
-#: How far from 1 the stored priors may sum.
-PRIOR_TOLERANCE = 1e-6
 
 
 def save_model(model: IProMP, path: str | os.PathLike) -> None:
@@ -226,9 +218,10 @@ def _read_model(path: Path) -> ModelFile:
             D = (P + Q) * N
             dist = WeightDistribution(
                 _read(archive, f"task{i}_mean", (D,)),
-                _read(archive, f"task{i}_factor", (D, None), max_rank=t["n_demos"]),
+                _factor(archive, f"task{i}_factor", D, t["n_demos"]),
                 _positive(_read(archive, f"task{i}_reg", (P + Q,)), f"task{i}_reg", 0.0), N)
             check_robot_definite(dist, P, t["name"])
+            check_human_conditioning(dist, noise, t["name"])
             weights.append(dist)
         calibration = _calibration(archive, meta.get("familiarity"), len(weights))
     return ModelFile(meta, tuple(weights), noise, scale, calibration)
@@ -256,12 +249,27 @@ def _calibration(archive, entry, n_tasks: int):
         raise ValueError(f"metadata familiarity: malformed entry {str(entry)[:80]}") from None
 
 
-def _read(archive, name: str, shape: tuple, max_rank: int | None = None) -> np.ndarray:
+def _factor(archive, name: str, rows: int, n_demos: int) -> np.ndarray:
+    """A task's covariance factor U, shape (rows, r): 1 <= r < n_demos, not all zero.
+
+    A fit centres its demos' weights, so n demos give at most n - 1 directions, and
+    refuses demos that do not differ, so at least one.
+    """
+    arr = _read(archive, name, (rows, None))
+    r = arr.shape[1]
+    if not 1 <= r <= n_demos - 1:
+        raise ValueError(f"member {name!r}: expected a covariance factor of rank 1 to "
+                         f"{n_demos - 1} (its task's {n_demos} demonstrations less one), got "
+                         f"{r} columns")
+    if not np.any(arr):
+        raise ValueError(f"member {name!r}: expected a covariance factor with a non-zero "
+                         f"entry (demos that differ), got all zeros")
+    return arr
+
+
+def _read(archive, name: str, shape: tuple) -> np.ndarray:
     """A float member of the expected shape, finite and within MAX_MODEL_VALUE."""
     arr = read_array(archive, name, "fiu", shape).astype(np.float64)
-    if max_rank is not None and arr.shape[1] > max_rank:
-        raise ValueError(f"member {name!r} has rank {arr.shape[1]}, more than its task's "
-                         f"{max_rank} demonstrations")
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"member {name!r} holds NaN or infinity")
     if arr.size and np.abs(arr).max() > MAX_MODEL_VALUE:
@@ -295,101 +303,4 @@ def _metadata(archive, path: Path) -> dict:
         meta = json.loads(str(text))
     except (ValueError, RecursionError):
         raise ValueError("metadata is not valid JSON") from None
-    if not isinstance(meta, dict) or meta.get("format") != FORMAT:
-        got = meta.get("format") if isinstance(meta, dict) else type(meta).__name__
-        raise ValueError(f"{str(path)!r} is not a handover-sandbox model (format {got!r})")
-    version = meta.get("format_version")
-    if type(version) is not int or version not in READABLE_VERSIONS:
-        raise ValueError(f"model file {str(path)!r} has format version {version!r}; this "
-                         f"version of the package reads versions {list(READABLE_VERSIONS)}")
-    need = ["basis", "hyperparameters", "n_human", "n_robot", "tasks", "robot_names"]
-    need += ["modalities"] if version >= 2 else []
-    for key in need:
-        if key not in meta:
-            raise ValueError(f"metadata lacks {key!r}")
-    P, Q = _count(meta["n_human"], "n_human"), _count(meta["n_robot"], "n_robot")
-    return {"format_version": version, "basis": GaussianBasis.from_dict(meta["basis"]).to_dict(),
-            "hyperparameters": _hyperparameters(meta["hyperparameters"], version),
-            "n_human": P, "n_robot": Q, "modalities": _modalities(meta, P),
-            "robot_names": _names(meta["robot_names"], "robot_names", (0, Q)),
-            "tasks": _tasks(meta["tasks"]), "familiarity": meta.get("familiarity"),
-            "session": _session(meta.get("session", {}))}
-
-
-def _session(entry) -> dict:
-    if not isinstance(entry, dict):
-        raise ValueError(f"metadata session: expected an object, got {type(entry).__name__}")
-    return entry
-
-
-def _count(value, name: str) -> int:
-    if type(value) is not int or not 1 <= value <= MAX_DIMS:
-        raise ValueError(f"metadata {name}: expected an integer in [1, {MAX_DIMS}], "
-                         f"got {value!r}")
-    return value
-
-
-def _names(value, name: str, sizes: tuple[int, ...]) -> list[str]:
-    if (not isinstance(value, list) or len(value) not in sizes
-            or not all(isinstance(v, str) for v in value)):
-        raise ValueError(f"metadata {name}: expected a list of {' or '.join(map(str, sizes))} "
-                         f"names, got {str(value)[:60]}")
-    return value
-
-
-def _hyperparameters(hyper, version: int) -> dict:
-    known = HYPERPARAMETERS[version]
-    if not isinstance(hyper, dict) or not set(hyper) <= known:
-        got = sorted(map(str, set(hyper) - known)) if isinstance(hyper, dict) else hyper
-        raise ValueError(f"metadata hyperparameters: expected keys among {sorted(known)}, "
-                         f"got {got!r}")
-    return hyper
-
-
-def _modalities(meta: dict, P: int) -> tuple:
-    if meta["format_version"] == 1:
-        names = tuple(_names(meta.get("human_names") or [], "human_names", (0, P)))
-        names = names or tuple(f"human_{i}" for i in range(P))
-        return check_modalities(default_modalities(names), P)
-    mods = meta["modalities"]
-    if not isinstance(mods, list):
-        raise ValueError(f"metadata modalities: expected a list, got {type(mods).__name__}")
-    return check_modalities([Modality.from_dict(m) for m in mods], P)
-
-
-def _tasks(tasks) -> list[dict[str, Any]]:
-    """Task entries: names, durations within MAX_TIME_S, speed priors, priors summing to 1."""
-    if not isinstance(tasks, list) or not 1 <= len(tasks) <= MAX_TASKS:
-        raise ValueError(f"metadata tasks: expected a list of 1 to {MAX_TASKS} tasks, got "
-                         f"{str(tasks)[:60]}")
-    out: list[dict[str, Any]] = []
-    for i, t in enumerate(tasks):
-        if not isinstance(t, dict) or set(t) != TASK_KEYS:
-            raise ValueError(f"metadata tasks[{i}]: expected the keys {sorted(TASK_KEYS)}, got "
-                             f"{sorted(map(str, t)) if isinstance(t, dict) else t!r}")
-        name = t["name"]
-        if not isinstance(name, str) or not name:
-            raise ValueError(f"metadata tasks[{i}].name: expected a non-empty name, got {name!r}")
-        where = f"metadata task {name!r}"
-        nominal = check_number(t["nominal_duration"], f"{where} nominal_duration",
-                               low=0.0, high=MAX_TIME_S)
-        a_mean = check_number(t["alpha_mean"], f"{where} alpha_mean", low=0.0)
-        a_std = check_number(t["alpha_std"], f"{where} alpha_std", low=0.0)
-        if nominal <= 0 or a_mean <= 0 or a_std <= 0 or a_mean * nominal > MAX_TIME_S:
-            raise ValueError(f"{where}: expected nominal_duration, alpha_mean and alpha_std "
-                             f"> 0 and a mean duration within {MAX_TIME_S:g} s, got "
-                             f"{nominal:g}, {a_mean:g}, {a_std:g}")
-        n_demos = t["n_demos"]
-        if type(n_demos) is not int or n_demos < 1:
-            raise ValueError(f"{where} n_demos: expected an integer >= 1, got {n_demos!r}")
-        prior = check_number(t["prior"], f"{where} prior", low=0.0, high=1.0)
-        out.append({"name": name, "nominal_duration": nominal, "alpha_mean": a_mean,
-                    "alpha_std": a_std, "n_demos": n_demos, "prior": prior})
-    names = [t["name"] for t in out]
-    if len(set(names)) != len(names):
-        raise ValueError(f"metadata tasks: names repeat in {names}")
-    total = sum(t["prior"] for t in out)
-    if abs(total - 1.0) > PRIOR_TOLERANCE:
-        raise ValueError(f"metadata priors: expected a probability vector (summing to 1), got "
-                         f"{[t['prior'] for t in out]} (sum {total:g})")
-    return out
+    return check_metadata(meta, path)

@@ -112,6 +112,30 @@ MAX_MEMBER_BYTES = 32 * 2**20
 MAX_METADATA_BYTES = 2**20
 MAX_MEMBERS = 1000
 MAX_TASKS = 100
+#: Speed-factor prior (:math:`\\sigma_\\alpha`, ``min_alpha_std``): a fit floors the
+#: spread of its demos' durations at ``min_alpha_std``, at least this; finer is below
+#: what sample timing can tell and makes the speed lattice needlessly fine.
+MIN_ALPHA_STD = 1e-3
+#: ... and at most this: durations spread ten times their mean are mis-stamped
+#: or mislabelled demos. n demos of positive duration give less than
+#: :math:`\\sqrt{n}` (all the time in one of them), so it takes over 100 to reach it.
+MAX_ALPHA_STD = 10.0
+#: Largest :math:`\\kappa = \\lambda_p/\\sigma_p^2` of a human dim (its weights'
+#: regulariser over its observation noise): the likelihood factors
+#: :math:`I + \\kappa\\Psi^T\\Psi` in floating point, which stays positive definite
+#: while :math:`\\kappa\\|\\Psi^T\\Psi\\|` is far below 1e16. Fits with the default
+#: options make 1e-4 to 1e-1; with ``regularizer=1e6`` and a noise floor of 1e-12, 4e7.
+MAX_KAPPA = 1e9
+#: Basis width h (phase units squared): the finest is 100 times below the
+#: squared spacing of :data:`MAX_N_BASIS` bumps; a width near the smallest float
+#: makes the basis NaN.
+MIN_BASIS_WIDTH = 1e-6
+MAX_BASIS_WIDTH = 1e6
+
+
+def check_alpha_std(value, name: str = "min_alpha_std") -> float:
+    """A speed-factor standard deviation within [MIN_ALPHA_STD, MAX_ALPHA_STD]."""
+    return check_number(value, name, low=MIN_ALPHA_STD, high=MAX_ALPHA_STD)
 
 
 def check_duration(times: ArrayLike, name: str = "times",

@@ -87,6 +87,7 @@ from sandbox.core.limits import (
     MAX_DURATION_S,
     MAX_RELATIVE,
     MIN_REGULARIZER,
+    check_alpha_std,
 )
 from sandbox.core.modality import Modality
 from sandbox.validation import FloatArray, check_mapping, check_number, check_positive
@@ -145,7 +146,7 @@ class IProMP:
         The robot's part ends once within this distance (rad) of its final pose for
         good, not before the motion's end (None: at it); not stored in model files.
     min_alpha_std : float
-        Lower bound of :math:`\\sigma_\\alpha`.
+        Lower bound of :math:`\\sigma_\\alpha`, in [limits.MIN_ALPHA_STD, limits.MAX_ALPHA_STD].
     ridge : float
         Relative ridge of the per-demo weight fit (eq. 2).
     priors : mapping of str to float, optional
@@ -205,7 +206,7 @@ class IProMP:
         self.settle_tol = None if settle_tol is None else check_positive(settle_tol, "settle_tol")
         self.arrive_tol = None if arrive_tol is None else check_positive(arrive_tol, "arrive_tol")
         self.robot_tol = None if robot_tol is None else check_positive(robot_tol, "robot_tol")
-        self.min_alpha_std = check_positive(min_alpha_std, "min_alpha_std")
+        self.min_alpha_std = check_alpha_std(min_alpha_std, "min_alpha_std")
         self.ridge = check_positive(ridge, "ridge", allow_zero=True, high=MAX_RELATIVE)
         self.max_duration = check_positive(max_duration, "max_duration")
         self._prior_spec = (None if priors is None else

@@ -23,7 +23,7 @@ import numpy as np
 import scipy.linalg
 
 from sandbox.core.basis import GaussianBasis
-from sandbox.core.limits import MIN_REGULARIZER
+from sandbox.core.limits import MAX_KAPPA, MIN_REGULARIZER
 from sandbox.validation import FloatArray, check_array, check_positive
 
 
@@ -206,3 +206,26 @@ def check_robot_definite(dist: WeightDistribution, P: int, task: str) -> None:
         raise ValueError(f"task {task!r}: robot regularisers of {ratio.min():.3g} x the weights' "
                          f"variance leave its covariance numerically singular; expected at "
                          f"least {MIN_REGULARIZER / 2:g} (limits.MIN_REGULARIZER / 2)")
+
+
+def check_human_conditioning(dist: WeightDistribution, noise: FloatArray, task: str) -> None:
+    """Each human dim's :math:`\\kappa = \\lambda_p/\\sigma_p^2` at most MAX_KAPPA.
+
+    The likelihood factors :math:`I + \\kappa\\Psi^T\\Psi` per speed candidate
+    (:mod:`sandbox.core.likelihood`); past the limit it is no longer positive
+    definite in floating point.
+
+    Parameters
+    ----------
+    dist : WeightDistribution
+        Over the P human dims first, then the robot's.
+    noise : ndarray, shape (P,)
+        Observation noise variances :math:`\\sigma_p^2` (> 0).
+    task : str
+        Named in the message.
+    """
+    kappa = dist.reg[: noise.size] / noise
+    if np.any(kappa > MAX_KAPPA):
+        raise ValueError(f"task {task!r}: human regularisers of up to {kappa.max():.3g} x the "
+                         f"observation noise; expected at most {MAX_KAPPA:g} "
+                         f"(limits.MAX_KAPPA: the likelihood's factorisation fails beyond)")

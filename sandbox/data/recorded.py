@@ -218,6 +218,7 @@ def _load_trial(path: Path, task: str, spec: DataSpec, modalities: Sequence[Moda
     columns = Columns.from_spec(spec, modalities)
     owners = {c: m.name for m in modalities for c in m.dims}
     table, notes = read_trial_table(path, columns, owners)
+    table[:, 0] *= spec.time_scale            # the time column in seconds
     n_rows = table.shape[0]
     p = len(columns.human)
     keep, dropped = _usable_rows(table, p)

@@ -18,6 +18,7 @@ own layout once in a spec file, YAML or JSON (``--spec FILE`` on every
 command)::
 
     time: stamp                      # optional, default t
+    time_unit: ms                    # optional: s (default), ms, us or ns
     robot: [j1, j2, j3, j4, j5, j6, j7]   # optional, default left_s0 ... left_w2
     observe: [wrist, grip]           # optional default choice, default [hand]
     modalities:                      # added to (or replacing) the built-ins
@@ -25,7 +26,8 @@ command)::
       grip:  {columns: [f1, f2], kind: signal}
 
 Every key is checked; a mistake is a ``ValueError`` naming the file, the key
-and what was expected.
+and what was expected. ``time_unit`` converts the time column to seconds as
+it is read (``--time-unit`` on the commands does the same without a spec).
 """
 
 from __future__ import annotations
@@ -48,7 +50,9 @@ ARM = Modality("arm", tuple(f"human_left_{joint}_{axis}" for joint in ("elbow", 
 EMG = Modality("emg", tuple(f"emg{i}" for i in range(8)), "signal", "raw")
 #: The built-in modalities, by name.
 BUILT_IN: dict[str, Modality] = {m.name: m for m in (HAND, ARM, EMG)}
-_KEYS = {"time", "robot", "observe", "modalities"}
+_KEYS = {"time", "time_unit", "robot", "observe", "modalities"}
+#: Units a time column may be in, and their length in seconds.
+TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
 _MODALITY_KEYS = {"columns", "kind", "units"}
 
 
@@ -59,7 +63,7 @@ class DataSpec:
     Parameters
     ----------
     time : str
-        Time column (s).
+        Time column.
     robot : sequence of str
         Robot columns (rad), e.g. Baxter's seven left-arm joints.
     modalities : mapping of str to Modality
@@ -67,16 +71,23 @@ class DataSpec:
     observe : sequence of str
         The modalities observed when a command or function is not told
         otherwise (default ``("hand",)``).
+    time_unit : {"s", "ms", "us", "ns"}
+        Unit of the time column (default seconds); the loaders convert it to
+        seconds (:attr:`time_scale`).
     """
 
     time: str = TIME_COLUMN
     robot: tuple[str, ...] = ROBOT_COLUMNS
     modalities: Mapping[str, Modality] = field(default_factory=lambda: dict(BUILT_IN))
     observe: tuple[str, ...] = ("hand",)
+    time_unit: str = "s"
 
     def __post_init__(self) -> None:
         if not isinstance(self.time, str) or not self.time:
             raise ValueError(f"time: expected a column name, got {self.time!r}")
+        if not isinstance(self.time_unit, str) or self.time_unit not in TIME_UNITS:
+            raise ValueError(f"time_unit: expected one of {list(TIME_UNITS)}, "
+                             f"got {self.time_unit!r}")
         robot = _names(self.robot, "robot")
         if not isinstance(self.modalities, Mapping):
             raise ValueError(f"modalities: expected a mapping name -> Modality, "
@@ -90,6 +101,11 @@ class DataSpec:
         object.__setattr__(self, "robot", robot)
         object.__setattr__(self, "modalities", mods)
         object.__setattr__(self, "observe", observe)
+
+    @property
+    def time_scale(self) -> float:
+        """Seconds per unit of the time column (1e-3 for ``time_unit="ms"``)."""
+        return TIME_UNITS[self.time_unit]
 
     def observed(self, observe: Sequence[str] | str | None = None) -> tuple[Modality, ...]:
         """The modalities named by ``observe`` (default :attr:`observe`), in that order.
@@ -105,9 +121,11 @@ class DataSpec:
         return mods
 
     def with_columns(self, *, human: Sequence[str] | None = None,
-                     robot: Sequence[str] | None = None, time: str | None = None) -> DataSpec:
-        """A copy with other columns: ``human`` replaces the hand's columns (position, m)."""
-        spec = self
+                     robot: Sequence[str] | None = None, time: str | None = None,
+                     time_unit: str | None = None) -> DataSpec:
+        """A copy with other columns: ``human`` replaces the hand's columns (position, m);
+        ``time_unit`` the time column's unit."""
+        spec = self if time_unit is None else replace(self, time_unit=time_unit)
         if human is not None:
             hand = Modality("hand", _names(human, "human columns"), "position", "m")
             spec = replace(spec, modalities={**spec.modalities, "hand": hand})
@@ -163,11 +181,13 @@ class DataSpec:
         if isinstance(observe, str):
             observe = [n.strip() for n in observe.split(",") if n.strip()]
         return cls(time=data.get("time", TIME_COLUMN), robot=data.get("robot", ROBOT_COLUMNS),
-                   modalities=mods, observe=tuple(_names(observe, "observe")))
+                   modalities=mods, observe=tuple(_names(observe, "observe")),
+                   time_unit=data.get("time_unit", "s"))
 
     def to_dict(self) -> dict:
         """JSON-ready form (inverse of :meth:`from_dict`)."""
-        return {"time": self.time, "robot": list(self.robot), "observe": list(self.observe),
+        return {"time": self.time, "time_unit": self.time_unit, "robot": list(self.robot),
+                "observe": list(self.observe),
                 "modalities": {n: {"columns": list(m.dims), "kind": m.kind, "units": m.units}
                                for n, m in self.modalities.items()}}
 
@@ -207,11 +227,11 @@ def _modality(name: str, entry: Any) -> Modality:
 
 
 def resolve(spec: str | Path | DataSpec | None = None, *, human_columns=None,
-            robot_columns=None) -> DataSpec:
-    """The spec a command uses: ``--spec FILE`` (or the default), then ``--human-columns``
-    and ``--robot-columns`` on top."""
+            robot_columns=None, time_unit: str | None = None) -> DataSpec:
+    """The spec a command uses: ``--spec FILE`` (or the default), then ``--human-columns``,
+    ``--robot-columns`` and ``--time-unit`` on top."""
     if isinstance(spec, DataSpec):
         base = spec
     else:
         base = DataSpec() if spec is None else DataSpec.load(spec)
-    return base.with_columns(human=human_columns, robot=robot_columns)
+    return base.with_columns(human=human_columns, robot=robot_columns, time_unit=time_unit)

@@ -248,10 +248,9 @@ class _Loop:
 
     def started(self, step: Step) -> None:
         """A new episode (the rollout's reset): the hand at the start, the viewer's overlay."""
-        self.obs = step.obs
+        self.obs, self.episodes = step.obs, self.episodes + 1
         self.state.direction[:] = 0.0
-        self.episodes += 1
-        self.n_updates, self.frame, self.ending = 0, -1, ""
+        self.n_updates, self.frame, self.ending = 0, 0, ""
         if self.recorder is not None:
             self.recorder.start()
             self._record(0.0)
@@ -265,6 +264,7 @@ class _Loop:
                 beliefs_of(self.policy).tasks, rng=np.random.default_rng(self.seed),
                 title="teleop: keys in the terminal (h: help)")
             self.out("keys:\n" + HELP_TEXT)
+        self.overlay.restart(beliefs_of(self.policy), truth=self.env.unwrapped.human_intent(0.0))
 
     def wait(self, step: Step) -> bool:
         """Before a step: apply the keys, wait while the clock is stopped; True on ``n``/``q``."""

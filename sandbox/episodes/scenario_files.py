@@ -33,7 +33,8 @@ A scenario file is one mapping (YAML needs PyYAML; paths are relative to the fil
       seed: 0
       options: {n_basis: 15}        # IProMP options of the model fitted here (optional)
       file: model.npz               # or a saved model (IProMP.save, python -m sandbox fit);
-                                    # then observe defaults to the model's modalities
+                                    # then observe defaults to the model's modalities; it
+                                    # must know the human's tasks (named, or the family's)
 
 With a recorded human and no model file, the model is fitted on all the
 other trials of the recorded set (leave-one-out). :func:`load_scenario`
@@ -174,7 +175,7 @@ def load_scenario(path: str | Path, *, observe: list[str] | str | None = None,
     spec = _model(check, data.get("model"), path.parent)
     names = _observe(check, data.get("observe", _default_observe(spec)))
     if "file" in spec:
-        _check_file_observes(check, spec["file"], names)
+        _check_file(check, spec["file"], names, _human_tasks(kind, human, family))
     if kind != "recorded" and "file" not in spec and not set(names) <= set(SYNTHETIC_MODALITIES):
         check.fail("observe", f"modalities of the synthetic model {list(SYNTHETIC_MODALITIES)} "
                               "(EMG is not simulated: use a recorded human or a model file)",
@@ -217,7 +218,26 @@ def _default_observe(model: dict) -> list[str]:
     return names or ["hand"]
 
 
-def _check_file_observes(check: _Checker, file: str, observe: tuple[str, ...]) -> None:
+def _human_tasks(kind: str, human: dict, family: str) -> tuple[str, list[str]]:
+    """Where the human's tasks come from and which they are: the synthetic human's named
+    tasks (every family task if none is named), the recorded trial's; none for waypoints
+    (a scripted path is no task of any model: its label is free)."""
+    if kind == "waypoints":
+        return "human", []
+    if kind == "recorded":
+        return "human.task", [human["task"]]
+    named = [human[k] for k in ("task", "switch_to") if human.get(k) is not None]
+    if named:
+        return "human.task/switch_to", named
+    from sandbox.envs.sources import family_tasks
+
+    return f"family {family!r}", list(family_tasks(family))
+
+
+def _check_file(check: _Checker, file: str, observe: tuple[str, ...],
+                tasks: tuple[str, list[str]]) -> None:
+    """The model file observes ``observe``, drives Baxter's arm and knows the human's tasks
+    (as ``demo --model`` and ``evaluate --model`` require)."""
     from sandbox.core import IProMP
 
     model = IProMP.load(file)
@@ -227,6 +247,11 @@ def _check_file_observes(check: _Checker, file: str, observe: tuple[str, ...]) -
     if model.n_robot != 7:
         check.fail("model.file", "a model of Baxter's 7 left-arm joints",
                    f"{model.n_robot} robot dims")
+    source, wanted = tasks
+    if any(t not in model.tasks for t in wanted):
+        raise ValueError(f"scenario {check.path}: model.file: expected a model that knows the "
+                         f"human's tasks {wanted} ({source}), got one of {list(model.tasks)} "
+                         f"({file})")
 
 
 def _observe(check: _Checker, data: Any) -> tuple[str, ...]:

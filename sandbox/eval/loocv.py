@@ -23,6 +23,7 @@ from __future__ import annotations
 import signal
 import time
 from concurrent.futures import ProcessPoolExecutor
+from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field
 from multiprocessing import get_context
 
@@ -227,9 +228,23 @@ def _init_worker(init, initargs: tuple) -> None:
     # Ctrl-C reaches the whole process group: only the parent handles it. It cancels the
     # trials not started and the pool ends with the running ones; a worker killed by the
     # signal would break the pool, whose thread then fails on the cancelled trials
-    # (InvalidStateError, printed as a traceback by Python 3.11).
+    # (InvalidStateError, printed as a traceback by Python 3.11). The worker was forked
+    # with SIGINT blocked (_sigint_blocked): one sent before this line stays pending and
+    # is discarded here, instead of reaching the parent's handler copied into the worker.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
     init(*initargs)
+
+
+@contextmanager
+def _sigint_blocked():
+    """SIGINT held pending in this thread (and in processes forked in the block) until
+    the block ends; then it is delivered here as usual."""
+    before = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, before)
     _STATE["blas"] = one_blas_thread()     # kept for the worker's lifetime
 
 
@@ -330,7 +345,9 @@ def map_trials(run_one, n: int, init, initargs: tuple, *, workers: int = 1,
             return results
         with ProcessPoolExecutor(workers, mp_context=get_context("fork"),
                                  initializer=_init_worker, initargs=(init, initargs)) as pool:
-            for res in pool.map(run_one, range(n), chunksize=max(1, n // (8 * workers))):
+            with _sigint_blocked():      # the workers are forked here, by the first submit
+                answers = pool.map(run_one, range(n), chunksize=max(1, n // (8 * workers)))
+            for res in answers:
                 results.append(res)
                 shown.update()
     return results

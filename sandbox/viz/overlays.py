@@ -128,6 +128,7 @@ class PredictionOverlay:
         self._executed: list[FloatArray] = []
         self._truth: str | None = None
         self._switch: tuple[str, float] | None = None
+        self._fresh = False
         self._n_switches = 0
         self.panel = vis["panel"] if panel is None else panel
         pose = facing([0.25, -0.75, 0.35], [2.0, 1.0, 0.5]) if panel_pose is None else panel_pose
@@ -135,7 +136,9 @@ class PredictionOverlay:
         self.board = Panel(self.panel, self.tasks, self.colors, pose, style, title=str(title))
 
     def reset(self) -> None:
-        """Remove the paths, predictions and markers (a new episode); the panel stays."""
+        """Remove the paths, predictions and markers (a new episode); the panel stays, and
+        the next :meth:`show` redraws its bars (the prior's) even without an update."""
+        self._fresh = True
         for kind in ("human", "executed", "prediction", "updates", "switch"):
             self.vis[kind].delete()
         self._drawn = {"human": 0, "executed": 0}
@@ -144,6 +147,12 @@ class PredictionOverlay:
         self._prediction = -1
         self._n_updates = 0
         self._truth, self._switch, self._n_switches = None, None, 0
+
+    def restart(self, predictor, **options) -> None:
+        """A new episode shown at once, before its first step: no paths, and the panel at
+        t = 0 with the (reset) predictor's prior belief (``options`` as :meth:`show`'s)."""
+        self.reset()
+        self.show(predictor, 0.0, **options)
 
     # -- paths -------------------------------------------------------------------------------
 
@@ -341,7 +350,8 @@ class PredictionOverlay:
             hand = human[np.flatnonzero(seen)[-1]] if seen.any() else None
             command = self.kinematics.fk(predictor.command(update.time)[0], link=self.link)
             self.mark_update(hand, command, update.task)
-        if new or self.board.version < 0:
+        if new or self._fresh or self.board.version < 0:
+            self._fresh = False
             plan_t, means, covs = predictor.plan()
             start = new[-1].time if new else t
             future = plan_t >= start

@@ -248,9 +248,61 @@ def _bridge(host: str, zmq_url: str | None):
             app.listen = lambda port, **kw: listen(port, address=host, **kw)
             return app
 
+        def send_scene(self, websocket):
+            for message in scene_messages(self.tree):
+                websocket.write_message(message, binary=True)
+
     bridge = Bridge(zmq_url=zmq_url, host=DEFAULT_HOST)
     bridge.web_url = web_url(host, bridge.fileserver_port)
     return bridge
+
+
+#: Scene nodes a browser tab gets first: the camera (and the panel hung on it).
+FIRST = ("Cameras",)
+
+
+def scene_messages(tree) -> list[bytes]:
+    """What a newly opened (or reloaded) tab is sent: the scene as it is now.
+
+    meshcat sends its tree in the order the nodes were made: the robot's meshes
+    (megabytes) before the camera, so a tab showed meshcat's default far camera,
+    and no panel, for seconds. Here the nodes of :data:`FIRST` come first, then
+    the rest; and of the values a property was set to, only the last is sent (a
+    bar's height is set at every belief update).
+    """
+    from meshcat.servers.tree import walk
+
+    first = [tree[name] for name in FIRST if name in tree]
+    rest = [node for name, node in tree.items() if name not in FIRST]
+    out = _node_messages(tree)
+    for top in [*first, *rest]:
+        for node in walk(top):
+            out.extend(_node_messages(node))
+    return out
+
+
+def _node_messages(node) -> list[bytes]:
+    """One node's own messages, as meshcat sends them: object, properties, transform,
+    animation."""
+    out = [] if node.object is None else [node.object]
+    out.extend(_last_values(node.properties))
+    out.extend(m for m in (node.transform, node.animation) if m is not None)
+    return out
+
+
+def _last_values(properties: list[bytes]) -> list[bytes]:
+    """The last ``set_property`` message of each property, in the order they were last set."""
+    import umsgpack
+
+    last: dict = {}
+    for packed in properties:
+        try:
+            name = umsgpack.unpackb(packed).get("property")
+        except Exception:  # noqa: BLE001 - not ours to judge: send it as it came
+            name = object()
+        last.pop(name, None)
+        last[name] = packed
+    return list(last.values())
 
 
 def main(argv: list[str] | None = None) -> int:

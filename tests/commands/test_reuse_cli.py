@@ -119,6 +119,38 @@ def test_demo_and_play_check_the_model_before_any_work(model_file, tmp_path, cap
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize(("scenario", "tasks"), [
+    ("intent_switch", "['up', 'right'] (human.task/switch_to)"),
+    ("human: {}\npolicy: {type: dynamic}\n", "['left', 'right', 'up', 'down', 'straight'] "
+                                              "(family 'diverging')"),
+    ("human: {task: box}\npolicy: {type: dynamic}\nfamily: objects\n", "['box']"),
+])
+def test_a_scenario_refuses_a_model_of_other_tasks(model_file, tmp_path, capsys, scenario,
+                                                   tasks):
+    """issue 26 item 4: `play --scenario intent_switch --model birl.npz` ran to the end
+    (exit 0, "no handover") with a model of other tasks; `demo --model` and `evaluate
+    --model` refused. two_task's model knows left and right only."""
+    if "\n" in scenario:
+        (tmp_path / "mine.yaml").write_text(scenario)
+        scenario = str(tmp_path / "mine.yaml")
+    before = sorted(tmp_path.iterdir())
+    assert main(["play", "--scenario", scenario, "--model", str(model_file),
+                 "--out", str(tmp_path / "s.html")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"expected a model that knows the human's tasks {tasks}" \
+        in err and "got one of ['left', 'right']" in err
+    assert sorted(tmp_path.iterdir()) == before
+
+
+def test_a_recorded_scenario_refuses_a_model_of_other_tasks(model_file, recorded_dir, tmp_path,
+                                                            capsys):
+    (tmp_path / "rec.yaml").write_text(f"human: {{recorded: {recorded_dir}, task: pencil_box}}\n"
+                                       "policy: {type: dynamic}\n")
+    assert main(["play", "--scenario", str(tmp_path / "rec.yaml"), "--model", str(model_file),
+                 "--out", str(tmp_path / "s.html")]) == 2
+    assert "knows the human's tasks ['pencil_box'] (human.task)" in capsys.readouterr().err
+
+
 def test_a_scenario_runs_with_the_saved_model(model_file, tmp_path, capsys):
     """play --scenario --model: the robot uses the saved model's tasks (left, right)."""
     summary = tmp_path / "s.json"

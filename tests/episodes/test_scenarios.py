@@ -107,7 +107,7 @@ def test_recorded_robot_replays_the_trials_own_robot(recorded_dir):
     (result,) = run_scenario("recorded", "recorded_robot", n_episodes=1, seed=0,
                              data=recorded_dir)
     dynamic = run_scenario("recorded", "dynamic", n_episodes=1, seed=0, data=recorded_dir)[0]
-    assert result.options == dynamic.options           # the same held-out trial
+    _same_options(result.options, dynamic.options)     # the same held-out trial
     assert {task for _, task in result.recognised} == {result.task}
     assert np.isfinite(result.min_distance) and result.steps > 0
 
@@ -168,7 +168,7 @@ def test_recorded_model_is_fitted_on_the_observed_modalities(recorded_dir):
     assert [m.name for m in hand_model.modalities] == ["hand"]
     (result,) = run_scenario("recorded", "static", n_episodes=1, seed=0, data=recorded_dir,
                              observe="hand,arm,emg")
-    assert result.options == {**opts}
+    _same_options(result.options, opts)
 
 
 @pytest.mark.parametrize("kwargs, match", [
@@ -180,3 +180,13 @@ def test_recorded_model_is_fitted_on_the_observed_modalities(recorded_dir):
 def test_bad_observe_is_refused(kwargs, match):
     with pytest.raises(ValueError, match=match):
         run_scenario(**{"n_episodes": 1, **kwargs})
+
+
+def _same_options(a: dict, b: dict) -> None:
+    """The same episode options; the meeting geometry to round-off (numpy 1.24 sums the
+    same trials in another order from one fit to the next: .ci/lowest, issue 26)."""
+    assert {k: v for k, v in a.items() if k != "grasp_offset"} == \
+        {k: v for k, v in b.items() if k != "grasp_offset"}
+    assert a.get("grasp_offset", {}).keys() == b.get("grasp_offset", {}).keys()
+    for task, offset in a.get("grasp_offset", {}).items():
+        np.testing.assert_allclose(offset, b["grasp_offset"][task], rtol=0, atol=1e-12)

@@ -87,6 +87,77 @@ async def _shoot(port: int, url: str, size: tuple[int, int], settle: float,
     return base64.b64decode(shot)
 
 
+async def _probe(port: int, url: str, hook: str, expression: str, settle: float,
+                 timeout: float, reloads: int):
+    """Open ``url`` (then reload it ``reloads`` times) with ``hook`` run before the page's
+    own scripts; each time the scene has come and stopped growing, the value of
+    ``expression``."""
+    from tornado.websocket import websocket_connect
+
+    with urllib.request.urlopen(f"http://127.0.0.1:{port}/json/list", timeout=10) as reply:
+        pages = [t for t in json.load(reply) if t["type"] == "page"]
+    socket = await websocket_connect(pages[0]["webSocketDebuggerUrl"], max_message_size=1 << 28)
+    session = _Session(socket)
+    await session.call("Page.enable")
+    await session.call("Page.addScriptToEvaluateOnNewDocument", source=hook)
+    values = []
+    for load in range(1 + reloads):
+        if load == 0:
+            await session.call("Page.navigate", url=url)
+        else:
+            await session.call("Page.reload", ignoreCache=True)
+        await asyncio.sleep(0.5)
+        deadline, last, stable_since = time.monotonic() + timeout, None, time.monotonic()
+        while time.monotonic() < deadline:
+            await asyncio.sleep(0.25)
+            result = await session.call("Runtime.evaluate", expression=MESHES,
+                                        returnByValue=True)
+            count = result["result"].get("value")
+            if count != last:
+                last, stable_since = count, time.monotonic()
+            elif count and time.monotonic() - stable_since >= settle:
+                break
+        result = await session.call("Runtime.evaluate", expression=expression,
+                                    returnByValue=True)
+        values.append(result["result"].get("value"))
+    socket.close()
+    return values
+
+
+def _chromium(chromium: str, profile: Path, size: tuple[int, int], run):
+    """Start headless Chromium with a DevTools port; ``run(port)`` (a coroutine); stop it."""
+    command = [chromium, "--headless", "--no-sandbox", "--disable-gpu",
+               "--enable-unsafe-swiftshader", "--disable-background-networking",
+               "--disable-component-update", "--disable-sync", "--no-first-run",
+               "--hide-scrollbars", "--remote-debugging-port=0", f"--user-data-dir={profile}",
+               f"--window-size={size[0]},{size[1]}", "about:blank"]
+    proc = subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE)
+    try:
+        port = _devtools_port(proc, 60.0)
+        threading.Thread(target=proc.stderr.read, daemon=True).start()  # never a full pipe
+        return asyncio.run(run(port))
+    finally:
+        proc.terminate()
+        try:
+            proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+
+
+def live_probe(chromium: str, url: str, profile: Path, *, hook: str, expression: str,
+               reloads: int = 0, size: tuple[int, int] = (640, 480), settle: float = 1.5,
+               timeout: float = 120.0) -> list:
+    """The values (JSON) of the JavaScript ``expression`` on the live page ``url`` once its
+    scene has arrived, after opening it and after each of ``reloads`` reloads; ``hook``
+    runs in the page before its own scripts (e.g. to log what the WebSocket delivers).
+    Other arguments as :func:`live_screenshot`'s."""
+    return _chromium(chromium, profile, size,
+                     lambda port: _probe(port, url, hook, expression, settle, timeout,
+                                         reloads))
+
+
 def live_screenshot(chromium: str, url: str, profile: Path, size: tuple[int, int] = (640, 480),
                     settle: float = 1.5, timeout: float = 120.0) -> np.ndarray:
     """RGB pixels (h, w, 3) of the live page ``url`` once its scene has arrived.
@@ -108,22 +179,6 @@ def live_screenshot(chromium: str, url: str, profile: Path, size: tuple[int, int
     """
     from PIL import Image
 
-    command = [chromium, "--headless", "--no-sandbox", "--disable-gpu",
-               "--enable-unsafe-swiftshader", "--disable-background-networking",
-               "--disable-component-update", "--disable-sync", "--no-first-run",
-               "--hide-scrollbars", "--remote-debugging-port=0", f"--user-data-dir={profile}",
-               f"--window-size={size[0]},{size[1]}", "about:blank"]
-    proc = subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                            stderr=subprocess.PIPE)
-    try:
-        port = _devtools_port(proc, 60.0)
-        threading.Thread(target=proc.stderr.read, daemon=True).start()  # never a full pipe
-        png = asyncio.run(_shoot(port, url, size, settle, timeout))
-    finally:
-        proc.terminate()
-        try:
-            proc.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
+    png = _chromium(chromium, profile, size,
+                    lambda port: _shoot(port, url, size, settle, timeout))
     return np.asarray(Image.open(io.BytesIO(png)).convert("RGB"), dtype=np.int16)
