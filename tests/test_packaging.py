@@ -20,8 +20,15 @@ def test_every_package_is_listed_in_pyproject():
         for init in root.rglob("__init__.py"):
             rel = init.parent.relative_to(root)
             found.add(".".join([root_name, *rel.parts]))
+    # Data-only folders (no __init__.py) ship as packages of their files, so that setuptools
+    # does not warn that they would be ignored (its "Package would be ignored" warning).
+    data = {name for name, files in config["package-data"].items() if name not in found}
+    for name in data:
+        folder = mapped["sandbox"].joinpath(*name.split(".")[1:])
+        assert folder.is_dir() and not (folder / "__init__.py").exists(), name
+        assert any(any(folder.glob(pattern)) for pattern in config["package-data"][name]), name
     assert found - listed == set(), "package directories missing from pyproject.toml"
-    assert listed - found == set(), "pyproject.toml lists packages that do not exist"
+    assert listed - found - data == set(), "pyproject.toml lists packages that do not exist"
 
 
 @pytest.mark.skipif(sys.version_info < (3, 11), reason="tomllib needs Python 3.11")
