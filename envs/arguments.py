@@ -22,6 +22,7 @@ MAX_SUBSTEPS = 100
 
 
 def check_control_hz(value: Any) -> float:
+    """``control_hz``: positive and at most :data:`MAX_CONTROL_HZ` (Hz), as a float."""
     hz = check_positive(value, "control_hz")
     if hz > MAX_CONTROL_HZ:
         raise ValueError(f"control_hz: expected at most {MAX_CONTROL_HZ:g} Hz, got {value!r}")
@@ -29,6 +30,7 @@ def check_control_hz(value: Any) -> float:
 
 
 def check_substeps(value: Any) -> int:
+    """``substeps``: an integer from 1 to :data:`MAX_SUBSTEPS`."""
     return check_integer(value, "substeps", 1, MAX_SUBSTEPS)
 
 

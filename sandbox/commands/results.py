@@ -28,6 +28,7 @@ START, END = "<!-- results:start -->", "<!-- results:end -->"
 
 
 def add_arguments(parser) -> None:
+    """Add the ``results`` command's options to ``parser``."""
     parser.add_argument("--data", default=None,
                         help="recorded set folder (e.g. ../shared/data/birl-handover-20180329)")
     parser.add_argument("--out", "--figures", dest="out", type=_types.output_folder,
@@ -49,6 +50,7 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
+    """Run ``python -m sandbox results`` with the parsed ``args``; return the exit status."""
     from pathlib import Path
 
     out = _out_folder(args)
