@@ -38,7 +38,8 @@ extensions = [
 ]
 
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
-exclude_patterns = ["_build", "README.md"]
+# Included by results.md and method.md, not pages of their own:
+exclude_patterns = ["_build", "_generated/results.md", "_generated/equations.md"]
 root_doc = "index"
 
 # Strict: -n (nitpicky) reports every reference that does not resolve. References to this
@@ -58,7 +59,7 @@ autodoc_member_order = "bysource"
 autodoc_typehints = "description"
 autodoc_typehints_format = "short"
 autodoc_inherit_docstrings = True
-napoleon_google_docstring = False
+napoleon_google_docstring = True  # for docstrings inherited from Gymnasium (reset, step)
 napoleon_numpy_docstring = True
 napoleon_use_rtype = False
 napoleon_use_ivar = True  # Attributes as fields: a dataclass field is described once, by autodoc
@@ -69,3 +70,5 @@ myst_heading_anchors = 3
 html_theme = "furo"
 html_title = f"handover-sandbox {release}"
 html_static_path: list[str] = []
+# The environment's Gymnasium-style "Arguments" section is prose, not a parameter list.
+napoleon_custom_sections = [("Arguments", "Notes")]

@@ -61,6 +61,9 @@ def write_api() -> None:
              ".. toctree::", "   :maxdepth: 1", ""]
     lines += [f"   {name}" for name in modules]
     _write(OUT / "api" / "index.rst", "\n".join(lines) + "\n")
+    for stale in (OUT / "api").glob("sandbox*.rst"):  # a module renamed or removed since
+        if stale.stem not in modules:
+            stale.unlink()
     for name in modules:
         title = f"``{name}``"
         _write(OUT / "api" / f"{name}.rst",
@@ -214,7 +217,30 @@ def write_results() -> None:
     _write(OUT / "results.md", _shift_headings(text))
 
 
+def write_equations() -> None:
+    """Each of the paper's equations, its number, what it states and the code implementing
+    it (:data:`sandbox.core.EQUATIONS`); a private function is named, not linked."""
+    from equations import LATEX
+
+    from sandbox.core import EQUATIONS
+
+    if sorted(LATEX) != sorted(EQUATIONS):
+        raise ValueError(f"docs/_ext/equations.py has equations {sorted(LATEX)}, "
+                         f"sandbox.core.EQUATIONS {sorted(EQUATIONS)}")
+    lines = []
+    for number, (statement, functions) in sorted(EQUATIONS.items()):
+        links = [f"`{f}`" if any(p.startswith("_") for p in f.split(".")) else
+                 f"{{py:obj}}`~{f}`" for f in functions]
+        modules = sorted({f.rsplit(".", 2)[0] if f.split(".")[-2][:1].isupper() else
+                          f.rsplit(".", 1)[0] for f in functions})
+        lines += [f"$$", LATEX[number], f"$$ ({number})", "",
+                  f"**Eq. {number}**: {statement}. Implemented by {', '.join(links)} "
+                  f"(in {', '.join(f'`{m}`' for m in modules)}).", ""]
+    _write(OUT / "equations.md", "\n".join(lines))
+
+
 def generate(app=None, config=None) -> None:
+    write_equations()
     write_api()
     write_cli()
     write_environments()
