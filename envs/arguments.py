@@ -16,8 +16,9 @@ from sandbox.validation import check_array, check_integer, check_number, check_p
 #: Arguments of :class:`sandbox.viz.Viewer` accepted in ``viewer_options`` ("human" mode).
 VIEWER_KEYS = ("fps", "record", "resolution", "camera", "target", "fov", "floor_z", "realtime",
                "open_browser", "host")
-#: Highest control rate (Hz) and most physics steps per control step accepted.
+#: Highest control rate (Hz) accepted.
 MAX_CONTROL_HZ = 1000.0
+#: Most physics steps per control step.
 MAX_SUBSTEPS = 100
 
 

@@ -260,6 +260,7 @@ class BaxterHandoverEnv(gym.Env):
     # ------------------------------------------------------------------ API
     def reset(self, *, seed: int | None = None,
               options: Mapping[str, Any] | None = None) -> tuple[dict, dict]:
+        """Start an episode: Gymnasium's ``reset``; the options are listed under Arguments."""
         self._check_open("reset")
         if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer))
                                  or seed < 0):
@@ -285,6 +286,8 @@ class BaxterHandoverEnv(gym.Env):
         return self._observation(), info
 
     def step(self, action) -> tuple[dict, float, bool, bool, dict]:
+        """One control step: Gymnasium's ``step`` (observation, reward, terminated,
+        truncated, info); the reward's terms are in ``info``."""
         self._check_open("step")
         if self.motion is None:
             raise RuntimeError("step: call reset() before step()")

@@ -58,3 +58,33 @@ def test_changelog_names_the_current_version():
     import sandbox
 
     assert f"## {sandbox.__version__}" in (REPO / "CHANGELOG.md").read_text()
+
+
+def test_the_citation_names_this_version_and_the_paper():
+    """CITATION.cff (validated against the CFF schema by cffconvert in .ci/run) cites the
+    software at the version of sandbox/__init__.py, and the paper it implements."""
+    import yaml
+
+    import sandbox
+
+    citation = yaml.safe_load((REPO / "CITATION.cff").read_text())
+    assert citation["cff-version"] == "1.2.0" and citation["type"] == "software"
+    assert citation["version"] == sandbox.__version__
+    assert citation["license"] == "BSD-3-Clause"
+    paper = citation["preferred-citation"]
+    assert paper["title"] == "Dynamic Interaction Probabilistic Movement Primitives"
+    assert "1809.04215" in paper["url"]
+
+
+@pytest.mark.skipif(sys.version_info < (3, 11), reason="tomllib needs Python 3.11")
+def test_the_license_is_an_spdx_expression_without_a_classifier():
+    """setuptools >= 77 deprecates a license table and license classifiers (deadline
+    February 2027): the license is an SPDX expression, its file in license-files."""
+    import tomllib
+
+    config = tomllib.loads((REPO / "pyproject.toml").read_text())
+    project = config["project"]
+    assert project["license"] == "BSD-3-Clause" and project["license-files"] == ["LICENSE"]
+    assert not [c for c in project["classifiers"] if c.startswith("License ::")]
+    assert any(r.startswith("setuptools>=77") for r in config["build-system"]["requires"])
+    assert "docs" in project["optional-dependencies"]

@@ -157,7 +157,7 @@ def _env_page(env_id: str) -> str:
     title = f"``{env_id}``"
     kwargs = ", ".join(f"{k}={v!r}" for k, v in spec.kwargs.items())
     out = [title, "=" * len(title), "",
-           f".. list-table::", "   :stub-columns: 1", "",
+           ".. list-table::", "   :stub-columns: 1", "",
            "   * - Action space", f"     - ``Box({act_space.shape[0]},)`` {act_space.dtype}",
            "   * - Observation space", f"     - ``Dict`` of {len(obs_space.spaces)} entries",
            "   * - Import", f"     - ``import sandbox.envs; gym.make(\"{env_id}\")``",
@@ -233,7 +233,7 @@ def write_equations() -> None:
                  f"{{py:obj}}`~{f}`" for f in functions]
         modules = sorted({f.rsplit(".", 2)[0] if f.split(".")[-2][:1].isupper() else
                           f.rsplit(".", 1)[0] for f in functions})
-        lines += [f"$$", LATEX[number], f"$$ ({number})", "",
+        lines += ["$$", LATEX[number], f"$$ ({number})", "",
                   f"**Eq. {number}**: {statement}. Implemented by {', '.join(links)} "
                   f"(in {', '.join(f'`{m}`' for m in modules)}).", ""]
     _write(OUT / "equations.md", "\n".join(lines))
@@ -247,8 +247,8 @@ def generate(app=None, config=None) -> None:
     write_results()
 
 
-def _definition(target: str) -> str | None:
-    """Where ``target`` (``package.Name[.member]``, through a re-export) is defined, or None."""
+def _definitions(target: str) -> list[str]:
+    """Where ``target`` (``package.Name[.member]``, through a re-export) may be defined."""
     import sys
 
     parts = target.split(".")
@@ -259,10 +259,8 @@ def _definition(target: str) -> str | None:
         except ImportError:
             continue
     else:
-        return None
-    module_name, rest = ".".join(parts[:cut]), parts[cut:]
-    if len(rest) == 1 and not hasattr(obj, rest[0]):
-        return None
+        return []
+    rest = parts[cut:]
     holder, walked = obj, 0
     for name in rest:  # walk to the deepest class or function that exists
         member = getattr(holder, name, None)
@@ -271,15 +269,13 @@ def _definition(target: str) -> str | None:
         holder, walked = member, walked + 1
     qualname = getattr(holder, "__qualname__", None)
     if walked and qualname and str(getattr(holder, "__module__", "")).startswith("sandbox."):
-        real = ".".join([holder.__module__, qualname, *rest[walked:]])
-        return real if real != target else None
-    if len(rest) == 1:  # data: the public module that holds it
+        return [".".join([holder.__module__, qualname, *rest[walked:]])]
+    if len(rest) == 1 and hasattr(obj, rest[0]):  # data: any public module holding it
         value = getattr(obj, rest[0])
-        for name, module in sorted(sys.modules.items()):
-            if name.startswith(module_name + ".") and getattr(module, rest[0], None) is value:
-                if not any(part.startswith("_") for part in name.split(".")):
-                    return f"{name}.{rest[0]}"
-    return None
+        return [f"{name}.{rest[0]}" for name, module in sorted(sys.modules.items())
+                if name.startswith("sandbox.") and getattr(module, rest[0], None) is value
+                and not any(part.startswith("_") for part in name.split("."))]
+    return []
 
 
 def resolve_alias(app, env, node, contnode):
@@ -287,13 +283,16 @@ def resolve_alias(app, env, node, contnode):
     target = node.get("reftarget", "")
     if node.get("refdomain") != "py" or not target.startswith("sandbox."):
         return None
-    real = _definition(target)
-    if real is None:
-        return None
-    node = node.deepcopy()
-    node["reftarget"] = real
-    return env.get_domain("py").resolve_xref(env, node.get("refdoc"), app.builder,
-                                             node["reftype"], real, node, contnode)
+    for real in _definitions(target):
+        if real == target:
+            continue
+        found = node.deepcopy()
+        found["reftarget"] = real
+        resolved = env.get_domain("py").resolve_xref(env, node.get("refdoc"), app.builder,
+                                                     node["reftype"], real, found, contnode)
+        if resolved is not None:
+            return resolved
+    return None
 
 
 def setup(app):

@@ -7,7 +7,8 @@ comparison of observation modalities on it (hand vs hand + arm vs hand + arm +
 EMG, dynamic at 0.2 s, on the trials usable by all three); writes each
 ``report.json``, ``report.md``, the figures and ``results.md`` (the documentation's
 results page, ``docs/results.md``, includes it from ``notebooks/figures``) to
-``--out DIR`` (default: a fresh ``results-<date>-<time>`` folder; an existing folder that is not empty needs ``--force``). Only with
+``--out DIR`` (default: a fresh ``results-<date>-<time>`` folder; an existing folder that
+is not empty needs ``--force``). Only with
 ``--update-readme`` does it replace the text of a README (``--readme``) between
 ``<!-- results:start -->`` and ``<!-- results:end -->`` (the figures linked
 from there are those in ``--out``). Nothing in those tables is typed by hand.

@@ -268,6 +268,8 @@ def run_teleop(env: Any, policy: Policy, keyboard: Keyboard, *, seed: int = 0,
     recorder : DemoRecorder, optional
         Saves each episode as a demonstration when it ends (and says where).
 
+    Notes
+    -----
     One :func:`~sandbox.episodes.rollout.rollout` per episode: the keys are read before
     each step (waited for while the clock is stopped); ``n`` and ``q`` end it. The loop
     ends on ``q``, or when the input is closed and the episode is over.

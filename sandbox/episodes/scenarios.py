@@ -153,7 +153,10 @@ def run_scenario(scenario: str = "diverging", policy: str | Callable = "dynamic"
         same) and ``recorded_robot`` replays each motion's own robot
         (:mod:`sandbox.episodes.sessions`).
 
-    Returns a list of :class:`EpisodeResult`.
+    Returns
+    -------
+    list of EpisodeResult
+        One per episode, in order.
     """
     sessions = (session, train_session)
     observe = _check_run(scenario, policy, n_episodes, data, observe, test, sessions)
