@@ -32,6 +32,7 @@ extensions = [
     "sphinx.ext.autodoc",
     "sphinx.ext.napoleon",
     "sphinx.ext.mathjax",
+    "sphinx-mathjax-offline",  # MathJax shipped with the site: the pages render offline
     "myst_parser",
     "generate",   # docs/_ext/generate.py: the generated pages
     "docscheck",  # docs/_ext/docscheck.py: a public name without a docstring is a warning

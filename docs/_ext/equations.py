@@ -23,11 +23,12 @@ LATEX: dict[int, str] = {
        r"(\boldsymbol\omega_1^R)^T, \dots, (\boldsymbol\omega_q^R)^T]",
     7: r"\mathbf H_t = \operatorname{diag}((\boldsymbol\psi_t^T)_1, \dots, "
        r"(\boldsymbol\psi_t^T)_p, (\boldsymbol\psi_t^T)_1, \dots, (\boldsymbol\psi_t^T)_q)",
-    8: r"\boldsymbol\mu_\omega^{new} = \boldsymbol\mu_\omega + \mathbf K (\mathbf y^o_{t-t'} - "
-       r"\mathbf H_{t-t'} \boldsymbol\mu_\omega), \quad \boldsymbol\Sigma_\omega^{new} = "
-       r"\boldsymbol\Sigma_\omega - \mathbf K \mathbf H_{t-t'} \boldsymbol\Sigma_\omega, \quad "
-       r"\mathbf K = \boldsymbol\Sigma_\omega \mathbf H^T_{t-t'} (\boldsymbol\Sigma^o_y + "
-       r"\mathbf H_{t-t'} \boldsymbol\Sigma_\omega \mathbf H^T_{t-t'})^{-1}",
+    8: r"\begin{aligned} \boldsymbol\mu_\omega^{new} &= \boldsymbol\mu_\omega + \mathbf K "
+       r"(\mathbf y^o_{t-t'} - \mathbf H_{t-t'} \boldsymbol\mu_\omega), \quad "
+       r"\boldsymbol\Sigma_\omega^{new} = \boldsymbol\Sigma_\omega - \mathbf K \mathbf H_{t-t'} "
+       r"\boldsymbol\Sigma_\omega, \\ \mathbf K &= \boldsymbol\Sigma_\omega \mathbf H^T_{t-t'} "
+       r"(\boldsymbol\Sigma^o_y + \mathbf H_{t-t'} \boldsymbol\Sigma_\omega "
+       r"\mathbf H^T_{t-t'})^{-1} \end{aligned}",
     9: r"\mathbf H_{t-t'} = \begin{bmatrix} (\boldsymbol\psi_t^T)_1 & & & & \\ & \ddots & & & "
        r"\\ & & (\boldsymbol\psi_t^T)_p & & \\ & & & 0_1 & \\ & & & & \ddots \\ "
        r"& & & & 0_q \end{bmatrix}",
