@@ -120,9 +120,8 @@ class BaxterHandoverEnv(gym.Env):
 
     Starting state
     --------------
-    The arm at the recorded home configuration, gripper open, the hand at the
-    motion's first sample holding the object. Reset restores a saved
-    simulator state (nothing is reloaded).
+    The arm at the recorded home configuration, gripper open, the hand at the motion's first
+    sample holding the object. Reset restores a saved simulator state (nothing is reloaded).
 
     Episode end
     -----------
@@ -150,10 +149,9 @@ class BaxterHandoverEnv(gym.Env):
       "human" mode (default ``{"realtime": True}``; e.g. ``open_browser=True``,
       ``host="0.0.0.0"`` to serve the viewer beyond this machine).
 
-    Every argument is checked when the environment is made: a wrong type or
-    value is a ``ValueError`` naming it. ``reset``, ``step`` and ``render``
-    after :meth:`close` raise :class:`ClosedEnvironmentError` (a
-    ``RuntimeError``).
+    Every argument is checked when the environment is made: a wrong type or value is a
+    ``ValueError`` naming it. ``reset``, ``step`` and ``render`` after :meth:`close` raise
+    :class:`ClosedEnvironmentError` (a ``RuntimeError``).
 
     ``reset(seed=..., options=...)`` options (all optional, validated):
     ``task``; ``object`` (box, glasses_case, tape, measuring_tape, screwdriver;
@@ -286,8 +284,7 @@ class BaxterHandoverEnv(gym.Env):
         return self._observation(), info
 
     def step(self, action) -> tuple[dict, float, bool, bool, dict]:
-        """One control step: Gymnasium's ``step`` (observation, reward, terminated,
-        truncated, info); the reward's terms are in ``info``."""
+        """One control step (Gymnasium's ``step``); the reward's terms are in ``info``."""
         self._check_open("step")
         if self.motion is None:
             raise RuntimeError("step: call reset() before step()")
