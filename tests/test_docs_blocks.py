@@ -46,6 +46,8 @@ SHORTER = [
      r"\1 --n-per-task 4", "the recorded set: 4 trials per task (174 in all)"),
     (r"^(python -m sandbox evaluate .*--data \.\./shared/.*)$",
      r"\1 --windows 0.2 --ratios 0.5", "leave-one-out at one window and one ratio"),
+    (r"^(python -m sandbox tune .*--data \.\./shared/.*)$",
+     r"\1 --tasks gummed_paper,pencil_box --n-per-task 3", "tune: 2 tasks, 3 trials each"),
     (r"--episodes \d+", "--episodes 2", "2 episodes per policy instead of 20"),
 ]
 NOT_RUN = {
