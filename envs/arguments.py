@@ -16,12 +16,14 @@ from sandbox.validation import check_array, check_integer, check_number, check_p
 #: Arguments of :class:`sandbox.viz.Viewer` accepted in ``viewer_options`` ("human" mode).
 VIEWER_KEYS = ("fps", "record", "resolution", "camera", "target", "fov", "floor_z", "realtime",
                "open_browser", "host")
-#: Highest control rate (Hz) and most physics steps per control step accepted.
+#: Highest control rate (Hz) accepted.
 MAX_CONTROL_HZ = 1000.0
+#: Most physics steps per control step.
 MAX_SUBSTEPS = 100
 
 
 def check_control_hz(value: Any) -> float:
+    """``control_hz``: positive and at most :data:`MAX_CONTROL_HZ` (Hz), as a float."""
     hz = check_positive(value, "control_hz")
     if hz > MAX_CONTROL_HZ:
         raise ValueError(f"control_hz: expected at most {MAX_CONTROL_HZ:g} Hz, got {value!r}")
@@ -29,6 +31,7 @@ def check_control_hz(value: Any) -> float:
 
 
 def check_substeps(value: Any) -> int:
+    """``substeps``: an integer from 1 to :data:`MAX_SUBSTEPS`."""
     return check_integer(value, "substeps", 1, MAX_SUBSTEPS)
 
 

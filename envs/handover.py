@@ -70,36 +70,36 @@ class BaxterHandoverEnv(gym.Env):
     -----------------
     ``Dict``, float64 entries (the ``*_valid`` flags int8), Baxter's base frame:
 
-    =============  =====  =======================================================
-    key            shape  meaning
-    =============  =====  =======================================================
-    ``hand``       (3,)   latest tracker measurement of the human hand (m)
-    ``hand_valid`` (1,)   1 if ``hand`` is a tracker frame not observed
-                          before, 0 if the tracker has sent no new frame since
-                          the last step (its frames are slower than the
-                          steps: 30 Hz); ``hand`` then holds the last frame (v1)
-    ``hand_time``  (1,)   time (s, episode clock) of the frame in ``hand``:
-                          the tracker sample's own time, not the step's (v1)
-    ``arm``        (6,)   latest tracker measurement of the same-side elbow,
-                          then shoulder, x/y/z each (m); 0 where ``arm_valid``
-                          is 0 (v1)
-    ``arm_valid``  (1,)   1 if ``arm`` holds a measurement, 0 if the tracker
-                          has not seen the arm yet or the source has no arm:
-                          teleop, scripted motions, synthetic motions without
-                          an ``arm`` modality (v1)
-    ``emg``        (8,)   latest EMG envelope of a recorded replay (8 Myo
-                          channels, rectified and low-pass filtered, raw
-                          units, 0 .. ``EMG_MAX`` of
-                          :mod:`~sandbox.envs.observations`); 0 where
-                          ``emg_valid`` is 0 (v1)
-    ``emg_valid``  (1,)   1 if ``emg`` holds a measurement: recorded trials
-                          with EMG only, it is not simulated (v1)
-    ``object``     (3,)   the object's grasp point (m)
-    ``q``          (7,)   left-arm joint positions (rad)
-    ``dq``         (7,)   left-arm joint velocities (rad/s)
-    ``gripper``    (1,)   finger opening, 0 closed .. 1 open
-    ``time``       (1,)   time since the episode started (s)
-    =============  =====  =======================================================
+    ==============  =====  =======================================================
+    key             shape  meaning
+    ==============  =====  =======================================================
+    ``hand``        (3,)   latest tracker measurement of the human hand (m)
+    ``hand_valid``  (1,)   1 if ``hand`` is a tracker frame not observed
+                           before, 0 if the tracker has sent no new frame since
+                           the last step (its frames are slower than the
+                           steps: 30 Hz); ``hand`` then holds the last frame (v1)
+    ``hand_time``   (1,)   time (s, episode clock) of the frame in ``hand``:
+                           the tracker sample's own time, not the step's (v1)
+    ``arm``         (6,)   latest tracker measurement of the same-side elbow,
+                           then shoulder, x/y/z each (m); 0 where ``arm_valid``
+                           is 0 (v1)
+    ``arm_valid``   (1,)   1 if ``arm`` holds a measurement, 0 if the tracker
+                           has not seen the arm yet or the source has no arm:
+                           teleop, scripted motions, synthetic motions without
+                           an ``arm`` modality (v1)
+    ``emg``         (8,)   latest EMG envelope of a recorded replay (8 Myo
+                           channels, rectified and low-pass filtered, raw
+                           units, 0 .. ``EMG_MAX`` of
+                           :mod:`~sandbox.envs.observations`); 0 where
+                           ``emg_valid`` is 0 (v1)
+    ``emg_valid``   (1,)   1 if ``emg`` holds a measurement: recorded trials
+                           with EMG only, it is not simulated (v1)
+    ``object``      (3,)   the object's grasp point (m)
+    ``q``           (7,)   left-arm joint positions (rad)
+    ``dq``          (7,)   left-arm joint velocities (rad/s)
+    ``gripper``     (1,)   finger opening, 0 closed .. 1 open
+    ``time``        (1,)   time since the episode started (s)
+    ==============  =====  =======================================================
 
     A missing measurement is a held or 0 value with its ``*_valid`` flag 0, not
     NaN: Gymnasium's checker rejects NaN (a NaN is outside any ``Box`` and
@@ -120,9 +120,8 @@ class BaxterHandoverEnv(gym.Env):
 
     Starting state
     --------------
-    The arm at the recorded home configuration, gripper open, the hand at the
-    motion's first sample holding the object. Reset restores a saved
-    simulator state (nothing is reloaded).
+    The arm at the recorded home configuration, gripper open, the hand at the motion's first
+    sample holding the object. Reset restores a saved simulator state (nothing is reloaded).
 
     Episode end
     -----------
@@ -150,17 +149,16 @@ class BaxterHandoverEnv(gym.Env):
       "human" mode (default ``{"realtime": True}``; e.g. ``open_browser=True``,
       ``host="0.0.0.0"`` to serve the viewer beyond this machine).
 
-    Every argument is checked when the environment is made: a wrong type or
-    value is a ``ValueError`` naming it. ``reset``, ``step`` and ``render``
-    after :meth:`close` raise :class:`ClosedEnvironmentError` (a
-    ``RuntimeError``).
+    Every argument is checked when the environment is made: a wrong type or value is a
+    ``ValueError`` naming it. ``reset``, ``step`` and ``render`` after :meth:`close` raise
+    :class:`ClosedEnvironmentError` (a ``RuntimeError``).
 
     ``reset(seed=..., options=...)`` options (all optional, validated):
     ``task``; ``object`` (box, glasses_case, tape, measuring_tape, screwdriver;
     default from the task: pencil_box -> box, gummed_paper -> tape,
     measurement_tape -> measuring_tape, screw_driver -> screwdriver);
-    ``source`` ("synthetic" or a folder ``<root>/<task>/<trial>.csv``);
-    ``trial`` (recorded: index or file name); ``speed`` (human speed factor,
+    ``source``      ("synthetic" or a folder ``<root>/<task>/<trial>.csv``);
+    ``trial``       (recorded: index or file name); ``speed`` (human speed factor,
     0.25-4); ``switch_to``, ``switch_phase`` (synthetic intent switch); ``session`` (its seed);
     ``source="teleop"``: the hand follows velocity commands given to
     ``env.unwrapped.motion`` (a :class:`~sandbox.envs.teleop.TeleopMotion`);
@@ -260,6 +258,7 @@ class BaxterHandoverEnv(gym.Env):
     # ------------------------------------------------------------------ API
     def reset(self, *, seed: int | None = None,
               options: Mapping[str, Any] | None = None) -> tuple[dict, dict]:
+        """Start an episode: Gymnasium's ``reset``; the options are listed under Arguments."""
         self._check_open("reset")
         if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer))
                                  or seed < 0):
@@ -285,6 +284,7 @@ class BaxterHandoverEnv(gym.Env):
         return self._observation(), info
 
     def step(self, action) -> tuple[dict, float, bool, bool, dict]:
+        """One control step (Gymnasium's ``step``); the reward's terms are in ``info``."""
         self._check_open("step")
         if self.motion is None:
             raise RuntimeError("step: call reset() before step()")

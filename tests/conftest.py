@@ -38,9 +38,17 @@ def _missing(what: str, flag: str) -> None:
 
 
 def recorded_root() -> Path:
-    """Folder holding the shared recordings: ``$SANDBOX_DATA`` or ``../shared/data``."""
+    """Folder holding the shared recordings: ``$SANDBOX_DATA`` or ``../shared/data``.
+
+    ``SANDBOX_DATA`` may name either the folder that holds ``birl-handover-20180329``
+    or that set itself (issue 27 item 8: set to the set, the data tests used to skip
+    silently); the set itself gives its parent.
+    """
     env = os.environ.get("SANDBOX_DATA")
-    return Path(env) if env else REPO.parent / "shared" / "data"
+    if not env:
+        return REPO.parent / "shared" / "data"
+    path = Path(env)
+    return path.parent if path.name == RECORDED_SET else path
 
 
 @pytest.fixture(scope="session")
@@ -48,7 +56,11 @@ def recorded_dir() -> Path:
     """The recorded object-handover set (``<root>/birl-handover-20180329``)."""
     path = recorded_root() / RECORDED_SET
     if not path.is_dir():
-        _missing(f"the recorded handovers ({path})", "SANDBOX_REQUIRE_DATA")
+        where = (f"SANDBOX_DATA={os.environ['SANDBOX_DATA']} is neither the set nor the "
+                 "folder that holds it" if os.environ.get("SANDBOX_DATA") else
+                 "set SANDBOX_DATA to the set or to the folder that holds it")
+        _missing(f"the recorded handovers {RECORDED_SET} ({path}; {where})",
+                 "SANDBOX_REQUIRE_DATA")
     return path
 
 

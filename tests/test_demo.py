@@ -74,3 +74,26 @@ def test_bad_arguments_are_clear_errors(argv, match, capsys, tmp_path, monkeypat
     assert main(["demo", *argv]) == 2
     assert match in capsys.readouterr().err
     assert not (tmp_path / "demo.html").exists()
+
+
+def test_the_default_replay_is_replaced_but_no_other_file(tmp_path, monkeypatch):
+    """issue 27 item 2: the quickstart could not be run twice ("demo.html exists"). Without
+    --out the demo replaces its own previous replay; a foreign demo.html, or an explicit
+    --out, still needs --force."""
+    from sandbox.cli import build_parser
+    from sandbox.commands import demo as command
+
+    monkeypatch.chdir(tmp_path)
+    parse = build_parser().parse_args
+    (tmp_path / "demo.html").write_text(
+        "<!DOCTYPE html>\n<html>\n<head><meta charset=\"utf-8\"><title>handover-sandbox replay"
+        "</title>\n")
+    args = parse(["demo"])
+    command._check(args)
+    assert args.out == "demo.html" and args.force
+    (tmp_path / "demo.html").write_text("<html><title>my notes</title></html>")
+    with pytest.raises(ValueError, match="--force"):
+        command._check(parse(["demo"]))
+    (tmp_path / "old.html").write_text((tmp_path / "demo.html").read_text())
+    with pytest.raises(ValueError, match="--force"):
+        command._check(parse(["demo", "--out", "old.html"]))

@@ -20,8 +20,15 @@ def test_every_package_is_listed_in_pyproject():
         for init in root.rglob("__init__.py"):
             rel = init.parent.relative_to(root)
             found.add(".".join([root_name, *rel.parts]))
+    # Data-only folders (no __init__.py) ship as packages of their files, so that setuptools
+    # does not warn that they would be ignored (its "Package would be ignored" warning).
+    data = {name for name, files in config["package-data"].items() if name not in found}
+    for name in data:
+        folder = mapped["sandbox"].joinpath(*name.split(".")[1:])
+        assert folder.is_dir() and not (folder / "__init__.py").exists(), name
+        assert any(any(folder.glob(pattern)) for pattern in config["package-data"][name]), name
     assert found - listed == set(), "package directories missing from pyproject.toml"
-    assert listed - found == set(), "pyproject.toml lists packages that do not exist"
+    assert listed - found - data == set(), "pyproject.toml lists packages that do not exist"
 
 
 @pytest.mark.skipif(sys.version_info < (3, 11), reason="tomllib needs Python 3.11")
@@ -101,3 +108,33 @@ def test_the_lowest_versions_ci_tests_are_the_declared_ones():
         assert _same_version(bound, pins[name]), (name, bound, pins[name])
     script = (REPO / ".ci" / "lowest").read_text()
     assert "-c .ci/lowest-constraints.txt" in script and "python -m pytest" in script
+
+
+def test_the_citation_names_this_version_and_the_paper():
+    """CITATION.cff (validated against the CFF schema by cffconvert in .ci/run) cites the
+    software at the version of sandbox/__init__.py, and the paper it implements."""
+    import yaml
+
+    import sandbox
+
+    citation = yaml.safe_load((REPO / "CITATION.cff").read_text())
+    assert citation["cff-version"] == "1.2.0" and citation["type"] == "software"
+    assert citation["version"] == sandbox.__version__
+    assert citation["license"] == "BSD-3-Clause"
+    paper = citation["preferred-citation"]
+    assert paper["title"] == "Dynamic Interaction Probabilistic Movement Primitives"
+    assert "1809.04215" in paper["url"]
+
+
+@pytest.mark.skipif(sys.version_info < (3, 11), reason="tomllib needs Python 3.11")
+def test_the_license_is_an_spdx_expression_without_a_classifier():
+    """setuptools >= 77 deprecates a license table and license classifiers (deadline
+    February 2027): the license is an SPDX expression, its file in license-files."""
+    import tomllib
+
+    config = tomllib.loads((REPO / "pyproject.toml").read_text())
+    project = config["project"]
+    assert project["license"] == "BSD-3-Clause" and project["license-files"] == ["LICENSE"]
+    assert not [c for c in project["classifiers"] if c.startswith("License ::")]
+    assert any(r.startswith("setuptools>=77") for r in config["build-system"]["requires"])
+    assert "docs" in project["optional-dependencies"]

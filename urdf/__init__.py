@@ -4,21 +4,21 @@ Plain primitives (boxes and cylinders), no mesh files, so any URDF reader
 (PyBullet, a viewer) loads them. Sizes and masses are those of the real
 objects; each file's comment says them.
 
-=================  =====================================================================
-name               what
-=================  =====================================================================
-``box``            pencil box, 210 x 85 x 45 mm, 0.25 kg (recorded task ``pencil_box``)
-``glasses_case``   hard glasses case, 160 x 65 x 40 mm, 0.12 kg
-``tape``           roll of gummed paper tape, 100 mm diameter, 48 mm wide, 0.22 kg
-                   (recorded task ``gummed_paper``)
-``measuring_tape`` 5 m measuring tape, 75 x 40 x 75 mm, 0.30 kg
-                   (recorded task ``measurement_tape``)
-``screwdriver``    screwdriver, 200 mm, 0.09 kg (recorded task ``screw_driver``)
-``table``          table, top 600 x 1200 mm, 740 mm high (origin: top surface centre)
-``human_hand``     kinematic human hand and forearm (origin: the tracked hand point,
-                   +x along the forearm)
-``floor``          6 x 6 m floor slab (origin: top surface centre)
-=================  =====================================================================
+==================  =====================================================================
+name                what
+==================  =====================================================================
+``box``             pencil box, 210 x 85 x 45 mm, 0.25 kg (recorded task ``pencil_box``)
+``glasses_case``    hard glasses case, 160 x 65 x 40 mm, 0.12 kg
+``tape``            roll of gummed paper tape, 100 mm diameter, 48 mm wide, 0.22 kg
+                    (recorded task ``gummed_paper``)
+``measuring_tape``  5 m measuring tape, 75 x 40 x 75 mm, 0.30 kg
+                    (recorded task ``measurement_tape``)
+``screwdriver``     screwdriver, 200 mm, 0.09 kg (recorded task ``screw_driver``)
+``table``           table, top 600 x 1200 mm, 740 mm high (origin: top surface centre)
+``human_hand``      kinematic human hand and forearm (origin: the tracked hand point,
+                    +x along the forearm)
+``floor``           6 x 6 m floor slab (origin: top surface centre)
+==================  =====================================================================
 
 Objects have their origin at their grasp point, which is also their centre of
 mass (inside the handle for the screwdriver), so a simulator's base pose is the

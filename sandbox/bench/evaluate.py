@@ -109,6 +109,7 @@ def run(data: str, repeats: int = 1, workers: int = 2, n_per_task: int | None = 
 
 
 def main(argv=None) -> int:
+    """Run ``python -m sandbox.bench.evaluate`` with ``argv``; return the exit status."""
     parser = argparse.ArgumentParser(prog="python -m sandbox.bench.evaluate",
                                      description=__doc__.split("\n\n")[0])
     parser.add_argument("--data", required=True, help="a folder or synthetic:NAME")

@@ -72,6 +72,7 @@ def soak(steps: int = 10_000, reset_every: int = 45, seed: int = 0) -> dict:
 
 
 def main(argv=None) -> int:
+    """Run ``python -m sandbox.bench.soak`` with ``argv``; return the exit status."""
     parser = argparse.ArgumentParser(prog="python -m sandbox.bench.soak", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--steps", type=int, default=10_000)

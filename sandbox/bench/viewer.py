@@ -105,6 +105,7 @@ def bench_episode(resolution: float | None, folder: Path) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run ``python -m sandbox.bench.viewer`` with ``argv``; return the exit status."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default=None, help="folder for the replays (default: temp)")
     parser.add_argument("--live", action="store_true",

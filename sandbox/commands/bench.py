@@ -10,6 +10,7 @@ HELP = ("measure the speed of the predictor update (and of the environments, if 
 
 
 def add_arguments(parser) -> None:
+    """Add the ``bench`` command's options to ``parser``."""
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     parser.add_argument("--repeats", type=_types.integer(1, 1_000_000), default=200,
                         help="repetitions per timed case, 1 to 1e6 (default 200)")
@@ -26,6 +27,7 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
+    """Run ``python -m sandbox bench`` with the parsed ``args``; return the exit status."""
     from sandbox.bench import print_result, restart_single_threaded
 
     restart_single_threaded("sandbox")

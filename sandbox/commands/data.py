@@ -37,6 +37,7 @@ HELP = ("inspect a recorded dataset: summary of trials and tracker glitches, fil
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the ``data`` command's options to ``parser``."""
     sub = parser.add_subparsers(dest="data_command", metavar="ACTION", required=True)
     summary = sub.add_parser(
         "summary", help="tasks, durations, rates, glitches, skipped trials",
@@ -116,6 +117,7 @@ _split = _observation.split
 
 
 def run(args: argparse.Namespace) -> int:
+    """Run ``python -m sandbox data`` with the parsed ``args``; return the exit status."""
     if args.data_command == "summary":
         return _summary(args)
     if args.data_command == "cache":

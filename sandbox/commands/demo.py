@@ -9,7 +9,9 @@ the outcome of both episodes, and writes the dynamic episode's replay (meshcat
 scene with the predictions, a self-contained HTML file: no network needed).
 ``--model FILE`` uses a model saved by ``fit`` instead (it must know
 ``--from-task`` and ``--to-task`` and observe what the synthetic human shows:
-hand, arm). An existing replay file is replaced only with ``--force``.
+hand, arm). An existing ``--out`` file is replaced only with ``--force``; without
+``--out``, the demo replaces its own previous replay (``demo.html`` here, when it is a
+replay this package wrote), so the quickstart can be run again as it is.
 """
 
 from __future__ import annotations
@@ -21,8 +23,10 @@ HELP = "fit on synthetic diverging handovers and watch the robot anticipate an i
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("--out", type=_types.output_file_in_new_folder, default="demo.html",
-                        help="replay of the dynamic episode (HTML; default: demo.html here)")
+    """Add the ``demo`` command's options to ``parser``."""
+    parser.add_argument("--out", type=_types.output_file_in_new_folder, default=None,
+                        help="replay of the dynamic episode (HTML; default: demo.html here, "
+                             "replacing the previous demo's replay)")
     parser.add_argument("--no-html", action="store_true", help="do not write the replay")
     parser.add_argument("--seed", type=_types.SEED, default=0,
                         help="seed of the training demos and of the episode")
@@ -41,11 +45,28 @@ def add_arguments(parser) -> None:
     _outputs.add_force(parser, "the --out replay")
 
 
+DEFAULT_OUT = "demo.html"
+#: How a replay written by :meth:`sandbox.viz.Viewer.save_html` begins (its title).
+REPLAY_TITLE = b"<title>handover-sandbox replay</title>"
+
+
+def _own_replay(path) -> bool:
+    """Whether ``path`` is a replay this package wrote (its title in the first 1 KiB)."""
+    try:
+        with open(path, "rb") as file:
+            return REPLAY_TITLE in file.read(1024)
+    except OSError:
+        return False
+
+
 def _check(args) -> None:
     from pathlib import Path
 
     from sandbox.validation import check_positive
 
+    if args.out is None:  # the default: replace our own replay, never another file
+        args.out = DEFAULT_OUT
+        args.force = args.force or _own_replay(Path(DEFAULT_OUT))
     if not args.no_html and Path(args.out).suffix.lower() not in (".html", ".htm"):
         raise ValueError(f"--out: expected a file name ending in .html, got {args.out!r}")
     _outputs.check_new([] if args.no_html else [("--out", args.out)], args.force)
@@ -127,6 +148,7 @@ def _model_of(args):
 
 
 def run(args) -> int:
+    """Run ``python -m sandbox demo`` with the parsed ``args``; return the exit status."""
     _check(args)
     import time
     from pathlib import Path

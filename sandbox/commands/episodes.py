@@ -39,6 +39,7 @@ HELP = "handover success of policies side by side in seeded scenario episodes"
 
 
 def add_arguments(parser) -> None:
+    """Add the ``episodes`` command's options to ``parser``."""
     from sandbox.commands import _types
     from sandbox.episodes.scenarios import POLICIES, SCENARIOS
 
@@ -83,6 +84,7 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
+    """Run ``python -m sandbox episodes`` with the parsed ``args``; return the exit status."""
     import json
 
     from sandbox.commands._observation import split

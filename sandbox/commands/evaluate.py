@@ -46,6 +46,7 @@ RATIOS = "0.1,0.2,0.3,0.4,0.5,0.6,0.7,0.8,0.9"
 
 
 def add_arguments(parser) -> None:
+    """Add the ``evaluate`` command's options to ``parser``."""
     parser.add_argument("--data", required=True,
                         help="a folder in the shared layout or synthetic:NAME "
                              "(diverging, objects, two_task); a folder of sessions "
@@ -154,6 +155,7 @@ def _sessions(args) -> list:
 
 
 def run(args) -> int:
+    """Run ``python -m sandbox evaluate`` with the parsed ``args``; return the exit status."""
     import json
 
     from sandbox.eval.progress import status

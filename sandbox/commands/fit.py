@@ -27,6 +27,7 @@ HELP = "fit one Interaction ProMP per task on a dataset and save the model (.npz
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the ``fit`` command's options to ``parser``."""
     parser.add_argument("--data", required=True, metavar="DIR|synthetic:NAME",
                         help="dataset folder <DIR>/<task>/<trial>.csv or synthetic:NAME")
     parser.add_argument("--out", type=_types.output_file, required=True, metavar="PATH",
@@ -57,6 +58,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Run ``python -m sandbox fit`` with the parsed ``args``; return the exit status."""
     import warnings
 
     from sandbox.core import IProMP

@@ -16,7 +16,7 @@ the policy observes (and its model is fitted on) in both modes.
 a model fitted here (in a scenario it replaces the file's ``model:``);
 ``--config FILE`` (written by ``tune --out``) applies tuned settings: the
 model options when the model is fitted here, ``observe`` and the predictor
-options (see :mod:`sandbox.commands._settings`). A scenario's outputs are
+options (see ``sandbox/commands/_settings.py``). A scenario's outputs are
 replaced only with ``--force``. Ctrl-C ends either mode with status 130.
 
 ``--record-demos DIR --task NAME`` (teleop only) saves every episode as a
@@ -37,6 +37,7 @@ HELP = ("drive the human hand from the keyboard while the robot anticipates live
 
 
 def add_arguments(parser) -> None:
+    """Add the ``play`` command's options to ``parser``."""
     parser.add_argument("--scenario", metavar="FILE", default=None,
                         help="run a scenario file (.json/.yaml) or a shipped example "
                              "(intent_switch, waypoints) instead of the keyboard teleop; keys: "
@@ -136,6 +137,7 @@ def _recorder(args):
 
 
 def run(args) -> int:
+    """Run ``python -m sandbox play`` with the parsed ``args``; return the exit status."""
     recorder = _demo_recorder(args)
     args.record = _recorder(args)
     if args.scenario is not None:

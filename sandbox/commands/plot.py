@@ -12,6 +12,7 @@ HELP = "draw the evaluation figures (PNG) of one report, or compare two"
 
 
 def add_arguments(parser) -> None:
+    """Add the ``plot`` command's options to ``parser``."""
     parser.add_argument("reports", nargs="+", help="report.json (a second one to compare)")
     parser.add_argument("--out", type=_types.output_folder, required=True,
                         help="folder for the PNG files")
@@ -19,6 +20,7 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
+    """Run ``python -m sandbox plot`` with the parsed ``args``; return the exit status."""
     import json
     from pathlib import Path
 

@@ -1,20 +1,21 @@
-"""``python -m sandbox results``: regenerate the README's results (tables and figures).
+"""``python -m sandbox results``: regenerate the results (tables and figures).
 
 Runs the leave-one-out evaluation on the synthetic diverging set (the paper's
 Experiment 2), the synthetic object set, and, if ``--data`` is given, a recorded
 set (Experiment 1, observing ``--observe``, default the hand) plus the
 comparison of observation modalities on it (hand vs hand + arm vs hand + arm +
 EMG, dynamic at 0.2 s, on the trials usable by all three); writes each
-``report.json``, ``report.md``, the figures and ``results.md`` (the README's
-results section) to ``--out DIR`` (default: a fresh ``results-<date>-<time>``
-folder; an existing folder that is not empty needs ``--force``). Only with
-``--update-readme`` does it replace the README text between
+``report.json``, ``report.md``, the figures and ``results.md`` (the documentation's
+results page, ``docs/results.md``, includes it from ``notebooks/figures``) to
+``--out DIR`` (default: a fresh ``results-<date>-<time>`` folder; an existing folder that
+is not empty needs ``--force``). Only with
+``--update-readme`` does it replace the text of a README (``--readme``) between
 ``<!-- results:start -->`` and ``<!-- results:end -->`` (the figures linked
 from there are those in ``--out``). Nothing in those tables is typed by hand.
-To regenerate the README's own section::
+To regenerate the documentation's results::
 
     python -m sandbox results --data ../shared/data/birl-handover-20180329 \
-        --out notebooks/figures --force --update-readme
+        --out notebooks/figures --force
 """
 
 from __future__ import annotations
@@ -22,12 +23,13 @@ from __future__ import annotations
 from sandbox.commands import _observation, _outputs, _types
 
 NAME = "results"
-HELP = "regenerate the README's results tables and figures from fresh evaluations"
+HELP = "regenerate the results tables and figures (the docs' results page) from fresh evaluations"
 
 START, END = "<!-- results:start -->", "<!-- results:end -->"
 
 
 def add_arguments(parser) -> None:
+    """Add the ``results`` command's options to ``parser``."""
     parser.add_argument("--data", default=None,
                         help="recorded set folder (e.g. ../shared/data/birl-handover-20180329)")
     parser.add_argument("--out", "--figures", dest="out", type=_types.output_folder,
@@ -49,6 +51,7 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
+    """Run ``python -m sandbox results`` with the parsed ``args``; return the exit status."""
     from pathlib import Path
 
     out = _out_folder(args)

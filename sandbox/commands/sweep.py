@@ -16,6 +16,7 @@ HELP = ("leave-one-out of every configuration of a grid (YAML) on local processe
 
 
 def add_arguments(parser) -> None:
+    """Add the ``sweep`` command's options to ``parser``."""
     parser.add_argument("--data", required=True,
                         help="a folder in the shared layout or synthetic:NAME")
     parser.add_argument("--grid", required=True, metavar="GRID.yaml",
@@ -37,6 +38,7 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
+    """Run ``python -m sandbox sweep`` with the parsed ``args``; return the exit status."""
     from pathlib import Path
 
     from sandbox.eval.loocv import EvalConfig

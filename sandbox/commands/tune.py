@@ -2,7 +2,7 @@
 
 ``--out settings.yaml`` writes the chosen settings (and ``observe``) as a
 settings file that ``fit``, ``evaluate``, ``play`` and ``sweep`` take with
-``--config settings.yaml`` (see :mod:`sandbox.commands._settings`);
+``--config settings.yaml`` (see ``sandbox/commands/_settings.py``);
 ``--markdown`` writes the table of every run, ``--json`` the rows and the choice.
 """
 
@@ -18,6 +18,7 @@ SETTINGS_SUFFIXES = (".yaml", ".yml", ".json")
 
 
 def add_arguments(parser) -> None:
+    """Add the ``tune`` command's options to ``parser``."""
     parser.add_argument("--data", required=True, help="a folder in the shared layout or "
                                                       "synthetic:NAME")
     parser.add_argument("--window", type=_types.SECONDS, default=0.2,
@@ -53,6 +54,7 @@ def _check(args) -> None:
 
 
 def run(args) -> int:
+    """Run ``python -m sandbox tune`` with the parsed ``args``; return the exit status."""
     import json
 
     from sandbox.eval.datasets import load_pair

@@ -83,9 +83,9 @@ class Group:
         Index of that modality; its rows are present where all its dims are finite.
     kappa : float
         :math:`\\kappa = \\lambda_p/\\sigma_p^2` of the group's dims.
-    member : ndarray of bool, shape (K, |dims|)
+    member : ndarray of bool, shape (K, n_dims)
         Whether task k's dim has this kappa (all True for a fitted model).
-    blocks : ndarray, shape (K, N, |dims|, R+1)
+    blocks : ndarray, shape (K, N, n_dims, R+1)
         Every task's :math:`[U_{kp}, \\mu_{kp}]/\\sigma_p` of the group's dims, in the
         padded layout (U in the first r_k columns, zeros up to R, mean at R).
     """

@@ -11,7 +11,7 @@ its dims (for recorded data: the CSV columns), its kind and its units:
 ``"signal"``
     A non-negative activity signal such as an EMG envelope (raw units). The
     model divides it by a per-dim scale fitted on its training demonstrations
-    only (:attr:`~sandbox.core.model.IProMP.scale`), and floors its noise at
+    only (``IProMP.scale``), and floors its noise at
     ``signal_floor`` in those normalised units.
 
 The human dims of a model are the concatenation of its modalities' dims, in

@@ -43,10 +43,13 @@ from sandbox.core.modality import Modality, check_modalities, select
 
 TIME_COLUMN = "t"
 ROBOT_COLUMNS = ("left_s0", "left_s1", "left_e0", "left_e1", "left_w0", "left_w1", "left_w2")
+#: The tracked left hand (the paper's observation).
 HAND = Modality("hand", ("human_left_hand_x", "human_left_hand_y", "human_left_hand_z"),
                 "position", "m")
+#: The same side's tracked elbow and shoulder.
 ARM = Modality("arm", tuple(f"human_left_{joint}_{axis}" for joint in ("elbow", "shoulder")
                             for axis in "xyz"), "position", "m")
+#: The Myo armband's 8 EMG channels.
 EMG = Modality("emg", tuple(f"emg{i}" for i in range(8)), "signal", "raw")
 #: The built-in modalities, by name.
 BUILT_IN: dict[str, Modality] = {m.name: m for m in (HAND, ARM, EMG)}

@@ -81,6 +81,7 @@ class Columns:
 
     @property
     def all(self) -> tuple[str, ...]:
+        """Every column read: the time, the human columns, then the robot columns."""
         return (self.time, *self.human, *self.robot)
 
     @classmethod

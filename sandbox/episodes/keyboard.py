@@ -200,6 +200,10 @@ def run_teleop(env: Any, policy: Policy, keyboard: Keyboard, *, seed: int = 0,
                recorder: Any = None) -> int:
     """The teleop loop; returns the number of episodes played.
 
+    One :func:`~sandbox.episodes.rollout.rollout` per episode: the keys are read before
+    each step (waited for while the clock is stopped); ``n`` and ``q`` end it. The loop
+    ends on ``q``, or when the input is closed and the episode is over.
+
     Parameters
     ----------
     env : gymnasium.Env
@@ -218,10 +222,6 @@ def run_teleop(env: Any, policy: Policy, keyboard: Keyboard, *, seed: int = 0,
         Prints a line.
     recorder : DemoRecorder, optional
         Saves each episode as a demonstration when it ends (and says where).
-
-    One :func:`~sandbox.episodes.rollout.rollout` per episode: the keys are read before
-    each step (waited for while the clock is stopped); ``n`` and ``q`` end it. The loop
-    ends on ``q``, or when the input is closed and the episode is over.
     """
     loop = _Loop(env, policy, TeleopState(running=running), keyboard, seed, out, recorder)
     while True:

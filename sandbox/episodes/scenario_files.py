@@ -89,6 +89,7 @@ class Scenario:
 
     @property
     def env_id(self) -> str:
+        """The Gymnasium id of the scenario's family (``FAMILIES[family]``)."""
         return FAMILIES[self.family]
 
 

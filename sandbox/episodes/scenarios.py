@@ -116,7 +116,8 @@ def run_scenario(scenario: str = "diverging", policy: str | Callable = "dynamic"
                  model=None, options: Mapping[str, Any] | None = None,
                  observe: Sequence[str] | str | None = None, session: int | None = None,
                  train_session: int | None = None) -> list[EpisodeResult]:
-    """Run ``n_episodes`` seeded episodes of ``scenario`` with ``policy``.
+    """Run ``n_episodes`` seeded episodes of ``scenario`` with ``policy``; a list of
+    :class:`EpisodeResult`, one per episode.
 
     Parameters
     ----------
@@ -153,8 +154,6 @@ def run_scenario(scenario: str = "diverging", policy: str | Callable = "dynamic"
         ``session``, the model is fitted on ``train_session``'s demos (default the
         same) and ``recorded_robot`` replays each motion's own robot
         (:mod:`sandbox.episodes.sessions`).
-
-    Returns a list of :class:`EpisodeResult`.
     """
     sessions = (session, train_session)
     observe = _check_run(scenario, policy, n_episodes, data, observe, test, sessions)

@@ -96,12 +96,14 @@ class EvalConfig:
                       robot_tol=self.robot_tol)
 
     def predictor_options(self) -> dict:
+        """The keyword arguments of the predictors these settings make."""
         return {"subsample": self.subsample, "likelihood": self.likelihood,
                 "n_candidates": self.n_candidates, "refine_steps": self.refine_steps,
                 "blend_rate": self.blend_rate, "blend_delay": self.blend_delay,
                 "until_end": self.until_end, "end_prob": self.end_prob}
 
     def to_dict(self) -> dict:
+        """Every setting by name (JSON-ready: a report's ``config``)."""
         return asdict(self)
 
 

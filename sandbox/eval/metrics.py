@@ -4,7 +4,7 @@ For a test trial with true robot joints q(t) (T x Q) at times t, true duration T
 
 * :func:`joint_rms` (e_q): RMS over time steps and joints of q_hat(t) - q(t) (rad);
 * :func:`goal_error` (e_p): distance (m) between forward kinematics of q_hat(T) and q(T);
-* e_phi: |T_hat - T| (s);
+* e_phi: ``|T_hat - T|`` (s);
 * :func:`time_to_correct`: earliest fraction of the motion after which the
   predicted goal stays within ``tol`` of the true goal;
 * :func:`gaussian_nll` and :func:`coverage`: calibration of the predicted

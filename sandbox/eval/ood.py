@@ -215,6 +215,7 @@ def summarize(records: list[dict], *, alpha: float = 0.05, **about) -> dict:
 
 
 def main(argv=None) -> int:
+    """Run ``python -m sandbox.eval.ood`` with ``argv``; return the exit status."""
     parser = argparse.ArgumentParser(prog="python -m sandbox.eval.ood", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--data", default=None, help="dataset folder or synthetic:NAME")

@@ -24,6 +24,7 @@ from pathlib import Path
 from sandbox.eval.loocv import EvalConfig, fold, prepare
 from sandbox.validation import check_integer
 
+#: Environment variable of the test hook that crashes chosen sweep tasks.
 CRASH_HOOK = "SANDBOX_TEST_SWEEP_CRASH"
 
 

@@ -51,6 +51,7 @@ class IndexedMesh(g.Geometry):
         self.faces = np.asarray(faces).astype(index_type).reshape(-1, 3)
 
     def lower(self, object_data: dict) -> dict:
+        """The meshcat (three.js JSON) description of this geometry."""
         return {
             "uuid": self.uuid,
             "type": "BufferGeometry",
@@ -69,6 +70,7 @@ class TextTexture(g.Texture):
         self.text, self.font_size, self.font_face = str(text), int(font_size), str(font_face)
 
     def lower(self, object_data: dict) -> dict:
+        """The meshcat (three.js JSON) description of this geometry."""
         return {"uuid": self.uuid, "type": "_text", "text": self.text,
                 "font_size": self.font_size, "font_face": self.font_face}
 
@@ -109,12 +111,14 @@ class Plane(g.Geometry):
         self.width, self.height = float(width), float(height)
 
     def intrinsic_transform(self) -> np.ndarray:
+        """The 4x4 transform that turns the plane to face +x (transposed for meshcat)."""
         # turn it to face +x, texture right -> +y, up -> +z; meshcat flattens this matrix
         # row by row and three.js reads it column by column, hence the transpose
         rotation = np.array([[0.0, 0, 1, 0], [1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 0, 1]])
         return rotation.T
 
     def lower(self, object_data: dict) -> dict:
+        """The meshcat (three.js JSON) description of this geometry."""
         return {"uuid": self.uuid, "type": "PlaneGeometry", "width": self.width,
                 "height": self.height, "widthSegments": 1, "heightSegments": 1}
 

@@ -58,6 +58,7 @@ class Timeline:
         self.held.add(path.rstrip("/"))
 
     def is_held(self, path: str) -> bool:
+        """Whether ``path`` or one of its ancestors is held (kept when not recording)."""
         return any(path == p or path.startswith(p + "/") for p in self.held)
 
     def set(self, path: str, prop: str, frame: int, value) -> None:
@@ -65,6 +66,7 @@ class Timeline:
         self.tracks.setdefault(path, {}).setdefault(prop, {})[int(frame)] = value
 
     def has(self, path: str, prop: str) -> bool:
+        """Whether a track of ``prop`` was recorded for ``path``."""
         return prop in self.tracks.get(path, {})
 
     def drop_under(self, path: str) -> None:

@@ -103,7 +103,8 @@ def test_each_equation_is_marked_beside_its_code(n):
 
 def _documents() -> list[Path]:
     files = sorted((REPO / "sandbox").rglob("*.py")) + sorted((REPO / "envs").rglob("*.py"))
-    return files + [REPO / "README.md"] + sorted((REPO / "notebooks").glob("*.ipynb"))
+    docs = sorted(p for p in (REPO / "docs").rglob("*.md") if "_build" not in p.parts)
+    return files + [REPO / "README.md", *docs] + sorted((REPO / "notebooks").glob("*.ipynb"))
 
 
 def test_every_citation_is_in_the_table():

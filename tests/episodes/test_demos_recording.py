@@ -343,8 +343,8 @@ def test_the_readme_workflow_commands_parse():
     from sandbox.cli import build_parser
     from tests.test_readme import _section
 
-    section = _section("Recording your own handover tasks")
-    lines = [line.split("#")[0] for line in re.findall(r"```bash\n(.*?)```", section, re.S)[0]
+    section = _section("tutorials/own-demonstrations.md", "Record new tasks by teleop")
+    lines = [line.split("#")[0] for line in re.findall(r"```text\n(.*?)```", section, re.S)[0]
              .splitlines() if line.startswith("python -m sandbox ")]
     assert [shlex.split(line)[3] for line in lines] == ["play", "play", "fit", "play"]
     for line in lines:

@@ -13,7 +13,7 @@ human's anatomical right arm, which hands over to Baxter's left arm). So
 (toward the robot) is :math:`\hat f = \hat z \times \hat o = -x`.
 
 The model (one random draw per demonstration, :func:`draw_arm`)
--------------------------------------------------------------
+----------------------------------------------------------------
 1. **Body.** Height :math:`H` ~ N(1.70, 0.07) m, clipped to [1.50, 1.95] m;
    upper arm :math:`a = 0.186 H` (shoulder-elbow), forearm :math:`b = 0.146 H`
    (elbow-wrist), shoulder breadth :math:`B = 0.259 H` (Winter 2009, Fig. 4.1).
