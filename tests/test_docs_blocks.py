@@ -42,7 +42,8 @@ RUN = {"python", "bash"}
 #: (pattern, replacement, why): applied to each shell line that reads the recorded set or
 #: runs many episodes, so that a document runs in seconds instead of minutes.
 SHORTER = [
-    (r"^(python -m sandbox (?:evaluate|fit|tune|sweep|compare|data export) .*--data \.\./shared/\S*)",
+    (r"^(python -m sandbox (?:evaluate|fit|tune|sweep|compare|data export) "
+     r".*--data \.\./shared/\S*)",
      r"\1 --n-per-task 4", "the recorded set: 4 trials per task (174 in all)"),
     (r"^(python -m sandbox evaluate .*--data \.\./shared/.*)$",
      r"\1 --windows 0.2 --ratios 0.5", "leave-one-out at one window and one ratio"),

@@ -29,6 +29,7 @@ DEFAULT_METHODS = "dynamic,static,bip,ebip,dtw,nearest"
 
 
 def add_arguments(parser) -> None:
+    """Add ``compare``'s options to its subparser."""
     parser.add_argument("--data", required=True,
                         help="a folder in the shared layout or synthetic:NAME "
                              "(diverging, objects, two_task)")
@@ -86,6 +87,7 @@ def check_tasks(tasks: list[str], holdout: int) -> None:
 
 
 def run(args) -> int:
+    """Run ``python -m sandbox compare`` with the parsed ``args``; return the exit status."""
     from pathlib import Path
 
     from sandbox.eval.compare import run_compare, to_markdown, write_outputs

@@ -130,6 +130,8 @@ MAX_KAPPA = 1e9
 #: squared spacing of :data:`MAX_N_BASIS` bumps; a width near the smallest float
 #: makes the basis NaN.
 MIN_BASIS_WIDTH = 1e-6
+#: Largest basis width h (phase units squared): far wider than the phase range, every
+#: bump is flat.
 MAX_BASIS_WIDTH = 1e6
 
 

@@ -1,6 +1,6 @@
 """The training demos of the models the episodes fit, for the methods that learn from them.
 
-:class:`~sandbox.episodes.policies.MethodPolicy` drives BIP, eBIP, DTW and
+:class:`~sandbox.episodes.method_policy.MethodPolicy` drives BIP, eBIP, DTW and
 nearest-neighbour (:mod:`sandbox.methods`) from a model; those methods need the
 demos the model was fitted on (:class:`~sandbox.methods.DemoLibrary`). Where the
 episodes fit a model (synthetic families and sessions, recorded replays) they

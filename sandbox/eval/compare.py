@@ -81,6 +81,7 @@ class CompareConfig:
         return {**shared, **dict(dict(self.options).get(name, ()))}
 
     def to_dict(self) -> dict:
+        """JSON-ready form (the evaluation's options as :meth:`EvalConfig.to_dict`)."""
         out = asdict(self)
         out["evaluation"] = self.evaluation.to_dict()
         return out

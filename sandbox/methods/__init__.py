@@ -7,17 +7,17 @@ the robot command (``command(t)``) and the task posterior, exactly like
 blending it reuses. They learn from a :class:`DemoLibrary`: the IProMP model
 fitted on the training demos and those demos' weights.
 
-==========  ==============================================================
-name        method
-==========  ==============================================================
-``bip``     :mod:`~sandbox.methods.bip`: Bayesian Interaction Primitives, an
-            EKF over phase, phase velocity and all weights (Campbell & Ben
-            Amor 2017)
-``ebip``    :mod:`~sandbox.methods.ebip`: ensemble BIP, an ensemble Kalman
-            filter seeded with the demos (Campbell, Stepputtis & Ben Amor 2019)
-``dtw``     :mod:`~sandbox.methods.dtw`: open-end DTW against every demo
-``nearest`` :mod:`~sandbox.methods.nearest`: the nearest demo at its own timing
-==========  ==============================================================
+===========  ==============================================================
+name         method
+===========  ==============================================================
+``bip``      :mod:`~sandbox.methods.bip`: Bayesian Interaction Primitives, an
+             EKF over phase, phase velocity and all weights (Campbell & Ben
+             Amor 2017)
+``ebip``     :mod:`~sandbox.methods.ebip`: ensemble BIP, an ensemble Kalman
+             filter seeded with the demos (Campbell, Stepputtis & Ben Amor 2019)
+``dtw``      :mod:`~sandbox.methods.dtw`: open-end DTW against every demo
+``nearest``  :mod:`~sandbox.methods.nearest`: the nearest demo at its own timing
+===========  ==============================================================
 
 :func:`make_predictor` builds any of :data:`METHODS`, the IProMP's
 ``dynamic`` and ``static`` included. numpy/scipy only, like the core.
