@@ -46,9 +46,16 @@ def add_session_argument(parser: argparse.ArgumentParser) -> None:
                              "data); refused for a folder or minari:ID")
 
 
-def cache(args: argparse.Namespace) -> bool:
-    """Whether to use the on-disk cache of loaded trials (:mod:`sandbox.data.cache`)."""
-    return not getattr(args, "no_cache", False)
+def cache(args: argparse.Namespace):
+    """The on-disk cache of loaded trials (:mod:`sandbox.data.cache`): False with
+    ``--no-cache``; with ``--verbose``, one that names every entry it does not use."""
+    if getattr(args, "no_cache", False):
+        return False
+    if getattr(args, "verbose", False):
+        from sandbox.data.cache import TrialCache
+
+        return TrialCache(verbose=True)
+    return True
 
 
 def split(text: str | None) -> list[str] | None:
