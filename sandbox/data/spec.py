@@ -30,7 +30,6 @@ and what was expected.
 
 from __future__ import annotations
 
-import json
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from os import PathLike
@@ -78,6 +77,13 @@ class DataSpec:
         if not isinstance(self.time, str) or not self.time:
             raise ValueError(f"time: expected a column name, got {self.time!r}")
         robot = _names(self.robot, "robot")
+        repeated = sorted({c for c in robot if robot.count(c) > 1})
+        if repeated:
+            raise ValueError(f"robot: expected distinct column names, got {repeated} more than "
+                             f"once")
+        if self.time.strip() in robot:
+            raise ValueError(f"time: expected a column other than the robot columns, got "
+                             f"{self.time!r}")
         if not isinstance(self.modalities, Mapping):
             raise ValueError(f"modalities: expected a mapping name -> Modality, "
                              f"got {type(self.modalities).__name__}")
@@ -125,19 +131,10 @@ class DataSpec:
         path = Path(path)
         if not path.is_file():
             raise ValueError(f"--spec: expected an existing YAML or JSON file, got {str(path)!r}")
-        text = path.read_text(encoding="utf-8", errors="replace")
-        try:
-            if path.suffix.lower() == ".json":
-                data = json.loads(text)
-            else:
-                import yaml
+        from sandbox.validation import parse_input, read_input_text
 
-                data = yaml.safe_load(text)
-        except Exception as error:  # yaml and json raise their own types
-            kind = "JSON" if path.suffix.lower() == ".json" else "YAML"
-            first = (str(error).splitlines() or [""])[0]
-            raise ValueError(f"spec {path}: not valid {kind} ({type(error).__name__}: {first})"
-                             ) from None
+        data = parse_input(read_input_text(path, "spec"), path, "spec",
+                           as_json=path.suffix.lower() == ".json")
         try:
             return cls.from_dict(data)
         except ValueError as error:
