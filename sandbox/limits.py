@@ -28,15 +28,15 @@ name                   range               unit    why
 ``blend_rate``         (0, 1e6]            1/s     sigmoid rate of the blending
 ``blend_delay``        [0, 600]            s       the longest episode (``MAX_TIME_S``)
 ``end_prob``           (0, 1]              -       a probability
-``dow_t``              [0.01, 60]          s       a window; 60 s is the longest trial
+``dow_t``              (0, 60]             s       a window; 60 s is the longest trial
 ``ratio``              (0, 1]              -       an observed fraction
 ``demos``              2 .. 10,000         -       demonstrations per task of a fit
 ``n_per_task``         1 .. 10,000         -       trials per task used or generated
 ``seed``               0 .. 2**63 - 1      -       ``numpy.random.default_rng`` seeds
 ``workers``            1 .. 256            -       processes
 ``speed``              [0.25, 4]           -       the human's speed factor in a scenario
-``time_limit``         [0.1, 600]          s       a scenario's episode
-``episode_s``          (0, 3600]           s       ``play --seconds``
+``time_limit``         [0.1, 600]          s       an episode of ``play`` or a scenario: a
+                                                   predictor's ``MAX_TIME_S``
 ``switch_phase``       [0.01, 1]           -       a fraction of the motion
 ``waypoint_t``         [0, 600]            s       a scripted waypoint's time
 ``position``           [-3, 3]             m       a waypoint coordinate, Baxter's base frame
@@ -157,7 +157,7 @@ BOUNDS: dict[str, Bound] = {
     "blend_rate": Bound(0, 1e6, open_low=True, unit="1/s"),
     "blend_delay": Bound(0, 600.0, unit="s"),
     "end_prob": Bound(0, 1.0, open_low=True),
-    "dow_t": Bound(0.01, 60.0, unit="s"),
+    "dow_t": Bound(0, 60.0, open_low=True, unit="s"),
     "ratio": Bound(0, 1.0, open_low=True),
     "demos": Bound(2, 10_000, integer=True),
     "n_per_task": Bound(1, 10_000, integer=True),
@@ -165,7 +165,6 @@ BOUNDS: dict[str, Bound] = {
     "workers": Bound(1, 256, integer=True),
     "speed": Bound(0.25, 4.0),
     "time_limit": Bound(0.1, 600.0, unit="s"),
-    "episode_s": Bound(0, 3600.0, open_low=True, unit="s"),
     "switch_phase": Bound(0.01, 1.0),
     "waypoint_t": Bound(0, 600.0, unit="s"),
     "position": Bound(-3.0, 3.0, unit="m"),

@@ -207,7 +207,7 @@ MAPPING_SUFFIXES = (".json", ".yaml", ".yml")
 
 
 def read_mapping(path: Path, what: str = "scenario") -> Any:
-    """Parse a JSON or YAML file (by suffix) within the input limits; any problem is a ``ValueError``.
+    """Parse a JSON or YAML file (by suffix) within the input limits; a problem is a ValueError.
 
     ``what`` names the file in messages (``"scenario"``, ``"grid"``,
     ``"settings"``). The file is read by :func:`read_input_text` and parsed by

@@ -25,7 +25,6 @@ value that is not None was typed.
 from __future__ import annotations
 
 import argparse
-import math
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -115,7 +114,7 @@ def _check(path: Path, key: str, value: Any) -> Any:
 
 
 def _bounded(path: Path, label: str, key: str, value: Any) -> Any:
-    """``value`` in the range of ``key`` (:mod:`sandbox.limits`); YAML 1.1's ``1e-3`` is a number."""
+    """``value`` in the range of ``key`` (:mod:`sandbox.limits`); YAML 1.1 ``1e-3`` is a number."""
     from sandbox.limits import check
 
     if isinstance(value, str):

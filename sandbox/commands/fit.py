@@ -35,7 +35,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--n-basis", type=_types.N_BASIS, default=None,
                         help=f"basis functions per dim, 2 to {_types.MAX_N_BASIS} "
                              "(default: IProMP's, 21)")
-    parser.add_argument("--regularizer", type=_types.POSITIVE, default=None,
+    parser.add_argument("--regularizer", type=_types.REGULARIZER, default=None,
                         help="relative weight-covariance regulariser, > 0 (core default)")
     parser.add_argument("--n-per-task", type=_types.PER_TASK, default=None,
                         help="demos per task (folder: the first N; synthetic: generated, 20)")

@@ -301,9 +301,9 @@ def signal_scale(modalities: Sequence[Modality], moments: FloatArray) -> FloatAr
     return scale
 
 
-def check_floor(value, name: str) -> float:
-    """A noise floor: a number in [MIN_NOISE_STD, MAX_ABS_VALUE] (limits)."""
-    v = check_positive(value, name, high=MAX_ABS_VALUE)
+def check_floor(value, name: str, high: float = MAX_ABS_VALUE) -> float:
+    """A noise floor: a number in [MIN_NOISE_STD, ``high``] (limits)."""
+    v = check_positive(value, name, high=high)
     if v < MIN_NOISE_STD:
         raise ValueError(f"{name}: expected at least {MIN_NOISE_STD:g} (limits.MIN_NOISE_STD), "
                          f"got {value!r}")
