@@ -25,7 +25,8 @@ name                   range               unit    why
 ``noise_floors``       [1e-12, 100]        -       per modality: m or normalised units
 ``settle_tol``         (0, 10]             rad     or null
 ``arrive_tol``         (0, 10]             m       or null
-``blend_rate``         (0, 1e6]            1/s     sigmoid rate of the blending
+``blend_rate``         [0.1, 1e6]          1/s     sigmoid rate of the blending: its span
+                                                   (10 / rate + delay) fits a plan
 ``blend_delay``        [0, 600]            s       the longest episode (``MAX_TIME_S``)
 ``end_prob``           (0, 1]              -       a probability
 ``dow_t``              (0, 60]             s       a window; 60 s is the longest trial
@@ -154,7 +155,7 @@ BOUNDS: dict[str, Bound] = {
     "noise_floors": Bound(1e-12, 100.0),
     "settle_tol": Bound(0, 10.0, open_low=True, unit="rad"),
     "arrive_tol": Bound(0, 10.0, open_low=True, unit="m"),
-    "blend_rate": Bound(0, 1e6, open_low=True, unit="1/s"),
+    "blend_rate": Bound(0.1, 1e6, unit="1/s"),
     "blend_delay": Bound(0, 600.0, unit="s"),
     "end_prob": Bound(0, 1.0, open_low=True),
     "dow_t": Bound(0, 60.0, open_low=True, unit="s"),

@@ -67,8 +67,22 @@ def data_spec(args: argparse.Namespace):
     """The :class:`~sandbox.data.spec.DataSpec` the options describe."""
     from sandbox.data.spec import resolve
 
+    _columns_need_a_folder(args)
     return resolve(args.spec, human_columns=split(getattr(args, "human_columns", None)),
                    robot_columns=split(getattr(args, "robot_columns", None)))
+
+
+def _columns_need_a_folder(args: argparse.Namespace) -> None:
+    """``--human-columns``/``--robot-columns`` rename a folder's columns: refused when every
+    data source of the command is a ``synthetic:NAME`` set (its columns are its own)."""
+    sources = [s for s in (getattr(args, "data", None), getattr(args, "test", None)) if s]
+    if not sources or not all(str(s).startswith("synthetic:") for s in sources):
+        return
+    for option in ("human_columns", "robot_columns"):
+        if getattr(args, option, None) is not None:
+            raise ValueError(f"--{option.replace('_', '-')}: expected a recorded folder as "
+                             f"--data (a synthetic set has its own columns), got "
+                             f"--data {sources[0]}")
 
 
 def observe(args: argparse.Namespace, spec=None) -> tuple[str, ...]:

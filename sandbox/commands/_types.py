@@ -13,9 +13,10 @@ Every range is the entry of the one table of limits, :data:`sandbox.limits.BOUND
 option accepts what a settings, scenario or grid file accepts for the same value.
 
 Output paths are checked at parse time too: a file may not be an existing
-folder and its folder must exist (``output_file``; ``output_file_in_new_folder``
-makes missing folders, like ``output_folder``); a folder, or a folder to be
-made, may not be or lie under an existing file.
+folder; a file's or a folder's missing folders are made when it is written
+(every command alike: ``output_file`` is ``output_file_in_new_folder``), but no
+path may lie under an existing file, and the nearest existing folder must be
+writable.
 """
 
 from __future__ import annotations
@@ -120,16 +121,9 @@ def _inside(value: float, low: float, high: float, open_low: bool, open_high: bo
 
 
 def output_file(text: str) -> str:
-    """A type for a file to write: not an existing folder, in an existing folder."""
-    path = Path(text)
-    if not text.strip():
-        raise _fail(text, "a file name")
-    if path.is_dir():
-        raise _fail(text, "a file to write, not a folder")
-    parent = path.parent if str(path.parent) else Path(".")
-    if not parent.is_dir():
-        raise _fail(text, f"a file in an existing folder ({str(parent)!r} is not one)")
-    return _writable(text, parent)
+    """A type for a file to write: not an existing folder, under no file; its missing
+    folders are made when it is written (one rule for every command, issue 29)."""
+    return output_file_in_new_folder(text)
 
 
 def output_file_in_new_folder(text: str) -> str:

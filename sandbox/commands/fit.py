@@ -67,8 +67,6 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if out.exists() and not args.force:
         raise ValueError(f"--out: {out} exists; pass --force to overwrite it")
-    if not out.parent.is_dir():
-        raise ValueError(f"--out: expected a file in an existing folder, got {str(out)!r}")
     if args.calibrate and args.preprocess != "smooth":
         raise ValueError("--calibrate: expected --preprocess smooth (the demos the streams are "
                          f"paired with), got {args.preprocess!r}")
@@ -93,6 +91,7 @@ def run(args: argparse.Namespace) -> int:
     if args.calibrate:
         _calibrate(model, demos, args, spec, observe)
     attach_geometry(model, demos)
+    out.parent.mkdir(parents=True, exist_ok=True)       # missing folders are made, as by play
     model.save(out)
     summary = _summary(model, args, out, len(demos), skipped)
     print(json.dumps(summary, indent=2) if args.json else _format(summary))

@@ -116,9 +116,8 @@ class PredictorBase:
         self.width = check_positive(width, "width")
         self.refine_steps = check_integer(refine_steps, "refine_steps", 0, MAX_REFINE_STEPS)
         self.dt = check_positive(dt, "dt")
-        self.blend_rate = check_positive(blend_rate, "blend_rate", high=BOUNDS["blend_rate"].high)
-        self.blend_delay = check_positive(blend_delay, "blend_delay", allow_zero=True,
-                                          high=BOUNDS["blend_delay"].high)
+        self.blend_rate = float(BOUNDS["blend_rate"].check(blend_rate, "blend_rate"))
+        self.blend_delay = float(BOUNDS["blend_delay"].check(blend_delay, "blend_delay"))
         self.blend = check_bool(blend, "blend")
         self.horizon = check_positive(horizon, "horizon", allow_zero=True)
         self.until_end = check_bool(until_end, "until_end")
