@@ -145,7 +145,7 @@ class DataSpec:
         """Build from a parsed spec file (built-in modalities stay available)."""
         if not isinstance(data, Mapping):
             raise ValueError(f"expected a mapping with keys {sorted(_KEYS)}, "
-                             f"got {type(data).__name__}")
+                             f"got {_kind(data)}")
         unknown = sorted(set(data) - _KEYS)
         if unknown:
             raise ValueError(f"unknown keys {unknown}; expected some of {sorted(_KEYS)}")
@@ -153,9 +153,12 @@ class DataSpec:
         given = data.get("modalities") or {}
         if not isinstance(given, Mapping):
             raise ValueError(f"modalities: expected a mapping name -> {{columns, kind, units}}, "
-                             f"got {type(given).__name__}")
+                             f"got {_kind(given)}")
         for name, entry in given.items():
-            mods[str(name)] = _modality(str(name), entry)
+            if not isinstance(name, str) or not name.strip() or not name.isprintable():
+                raise ValueError(f"modalities: expected names that are printable text, "
+                                 f"got {name!r}")
+            mods[name] = _modality(name, entry)
         observe = data.get("observe", ("hand",))
         if isinstance(observe, str):
             observe = [n.strip() for n in observe.split(",") if n.strip()]
@@ -167,6 +170,15 @@ class DataSpec:
         return {"time": self.time, "robot": list(self.robot), "observe": list(self.observe),
                 "modalities": {n: {"columns": list(m.dims), "kind": m.kind, "units": m.units}
                                for n, m in self.modalities.items()}}
+
+
+def _kind(value: Any) -> str:
+    """What a parsed value is, in a user's words (``nothing`` for an empty file or key)."""
+    if value is None:
+        return "nothing (an empty file or key)"
+    words = {bool: "true/false", int: "a number", float: "a number", str: "text",
+             list: "a list", dict: "a mapping"}
+    return words.get(type(value), type(value).__name__)
 
 
 def _choice(observe: Any) -> Sequence[str] | str:

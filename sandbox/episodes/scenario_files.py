@@ -133,15 +133,28 @@ class _Checker:
 def resolve(path: str | Path) -> Path:
     """The scenario file ``path``, or the shipped example of that name (``intent_switch``)."""
     path = Path(path)
-    if path.is_file():
+    if _exists(path, "is_file"):
         return path
     for suffix in ("", *SUFFIXES):
         example = EXAMPLES / f"{path.name}{suffix}"
-        if example.is_file() and not path.parent.parts:
+        if _exists(example, "is_file") and not path.parent.parts:
             return example
     names = sorted(p.stem for p in EXAMPLES.glob("*") if p.suffix in SUFFIXES)
     raise ValueError(f"scenario: expected an existing .json/.yaml file or an example name "
-                     f"({', '.join(names)}), got {str(path)!r}")
+                     f"({', '.join(names)}), got {_short(str(path))}")
+
+
+def _short(text: str) -> str:
+    return repr(text) if len(text) <= 80 else f"{text[:60]!r}... ({len(text)} characters)"
+
+
+def _exists(path: Path, kind: str) -> bool:
+    """``path.is_file()`` or ``path.is_dir()`` (``kind``); False for a name the system refuses
+    (too long, a NUL byte...)."""
+    try:
+        return bool(getattr(path, kind)())
+    except (OSError, ValueError):
+        return False
 
 
 def load_scenario(path: str | Path, *, observe: list[str] | str | None = None,
@@ -265,8 +278,8 @@ def _human(check: _Checker, data: Any, family: str, folder: Path,
         human["task"] = check.text(human.get("task", "scripted"), "human.task")
         human["tracker"] = _tracker(check, human.get("tracker"))
     else:
-        root = folder / check.text(str(human["recorded"]), "human.recorded")
-        if not root.is_dir():
+        root = folder / check.text(human["recorded"], "human.recorded")
+        if not _exists(root, "is_dir"):
             check.fail("human.recorded", "the folder of a recorded set (<root>/<task>/<trial>.csv)",
                        str(human["recorded"]))
         human["recorded"] = str(root)
@@ -386,8 +399,8 @@ def _options(check: _Checker, options: Mapping, key: str, allowed) -> dict:
 def _model(check: _Checker, data: Any, folder: Path) -> dict:
     model = check.keys({} if data is None else data, "model", MODEL_KEYS)
     if "file" in model:
-        file = folder / check.text(str(model["file"]), "model.file")
-        if not file.is_file():
+        file = folder / check.text(model["file"], "model.file")
+        if not _exists(file, "is_file"):
             check.fail("model.file", "an existing model file (.npz)", str(model["file"]))
         model["file"] = str(file)
     model["demos"] = check.bounded(model.get("demos", 20), "model.demos", "demos")

@@ -200,7 +200,7 @@ def _value(name: str, label: str, value: Any) -> Any:
 def _listed(values: Any, name: str) -> list:
     if not isinstance(values, list) or not values:
         raise ValueError(f"{_show(name)}: expected a non-empty list of values, "
-                         f"got {_show(values)}")
+                         f"got {_show(repr(values))}")
     return values
 
 
@@ -217,8 +217,9 @@ def _point(raw: Mapping, where: str) -> dict[str, Any]:
 
 
 def _show(value: Any) -> str:
-    """``value`` as text of at most 80 characters (a message never repeats a whole file)."""
-    text = value if isinstance(value, str) else repr(value)
+    """``value`` as one line of at most 80 characters: a printable name as is, anything else
+    as its repr (a message never repeats a whole file, nor breaks a line)."""
+    text = value if isinstance(value, str) and value.isprintable() and value else repr(value)
     return text if len(text) <= 80 else text[:77] + "..."
 
 
