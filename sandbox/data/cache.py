@@ -171,8 +171,8 @@ class TrialCache:
             info.update(_info(found))
             arrays = {k: np.asarray(getattr(found, k)) for k in _ARRAYS[:3]}
             arrays["modality_measured"] = np.asarray(found.meta["modality_measured"])
-        members = {"info": np.array(json.dumps(info)),
-                   "digest": np.array(_digest(key, info, arrays)), **arrays}
+        members: dict[str, Any] = {"info": np.array(json.dumps(info)),
+                                   "digest": np.array(_digest(key, info, arrays)), **arrays}
         try:
             self.folder.mkdir(parents=True, exist_ok=True)
             fd, tmp = tempfile.mkstemp(dir=self.folder, suffix=".tmp")
