@@ -223,6 +223,14 @@ def read_mapping(path: Path, what: str = "scenario") -> Any:
                        as_json=path.suffix.lower() == ".json")
 
 
+def is_file(path: Path) -> bool:
+    """``path.is_file()``, False for a name the system refuses (too long, a NUL byte)."""
+    try:
+        return Path(path).is_file()
+    except (OSError, ValueError):
+        return False
+
+
 def read_input_text(path: Path, what: str) -> str:
     """The UTF-8 text of a user's input file: a regular file of at most ``MAX_INPUT_BYTES``.
 

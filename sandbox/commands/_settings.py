@@ -60,10 +60,10 @@ def load(path: str | Path | None) -> dict[str, Any]:
     """The checked settings of ``path`` (``{}`` for None); errors name the file and key."""
     if path is None:
         return {}
-    from sandbox.validation import read_mapping
+    from sandbox.validation import is_file, read_mapping
 
     path = Path(path)
-    if not path.is_file():
+    if not is_file(path):
         raise ValueError(f"--config: expected an existing settings file (.yaml/.json), "
                          f"got {str(path)!r}")
     data = read_mapping(path, "settings")

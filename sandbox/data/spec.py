@@ -128,8 +128,10 @@ class DataSpec:
         """Read a spec file (YAML or JSON, see the module docstring)."""
         if not isinstance(path, (str, PathLike)):
             raise ValueError(f"--spec: expected the path of a YAML or JSON file, got {path!r}")
+        from sandbox.validation import is_file
+
         path = Path(path)
-        if not path.is_file():
+        if not is_file(path):
             raise ValueError(f"--spec: expected an existing YAML or JSON file, got {str(path)!r}")
         from sandbox.validation import parse_input, read_input_text
 

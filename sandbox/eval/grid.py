@@ -143,10 +143,10 @@ def read_grid(path: str | Path) -> list[dict[str, Any]]:
         The file is missing or unreadable, an option is unknown, a list is empty,
         or a value is not what its option takes; the message names the option.
     """
-    from sandbox.validation import read_mapping
+    from sandbox.validation import is_file, read_mapping
 
     path = Path(path)
-    if not path.is_file():
+    if not is_file(path):
         raise ValueError(f"--grid: expected an existing .yaml, .yml or .json file, "
                          f"got {str(path)!r}")
     try:
