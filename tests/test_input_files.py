@@ -332,3 +332,12 @@ def test_fit_makes_a_missing_output_folder_like_play(tmp_path):
     assert done.returncode == 2 and "Traceback" not in done.stderr    # argparse: usage, error
     assert "argument --out: expected a path under folders ('file' is a file)" in done.stderr
     assert (tmp_path / "file").read_text() == "keep"
+
+
+@pytest.mark.parametrize("reader", READERS)
+@pytest.mark.parametrize("name", ["y" * 5000 + ".yaml", "nul\0.yaml"])
+def test_a_name_the_system_refuses_is_one_value_error(tmp_path, reader, name):
+    """Issue 29 item 5: '[Errno 36] File name too long' (rc 1) for an over-long name."""
+    with pytest.raises(ValueError) as info:
+        READERS[reader](tmp_path / name)
+    assert "\n" not in str(info.value) and "Errno" not in str(info.value)
