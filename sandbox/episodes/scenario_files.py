@@ -49,6 +49,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from sandbox.episodes.scenario_options import checked_options, keywords, policy_options
 from sandbox.validation import MAPPING_SUFFIXES, read_mapping
 
 SUFFIXES = MAPPING_SUFFIXES
@@ -358,42 +359,8 @@ def _policy(check: _Checker, data: Any) -> dict:
     options = policy.get("options", {})
     if not isinstance(options, Mapping):
         check.fail("policy.options", "a mapping of predictor options", options)
-    policy["options"] = _options(check, options, "policy.options", policy_options(kind))
+    policy["options"] = checked_options(check, options, "policy.options", policy_options(kind))
     return policy
-
-
-def policy_options(kind: str) -> tuple[str, ...]:
-    """Names ``policy.options`` may hold for a policy of ``kind``: the keyword parameters of
-    the policy, its predictor and their base, but those the scenario sets itself."""
-    from sandbox.core.predictor import DynamicPredictor, StaticPredictor
-    from sandbox.core.updating import PredictorBase
-    from sandbox.episodes.policies import IProMPPolicy, StaticPolicy
-
-    policy, predictor = ((IProMPPolicy, DynamicPredictor) if kind == "dynamic"
-                         else (StaticPolicy, StaticPredictor))
-    names = set().union(*(_keywords(f) for f in (policy.__init__, predictor.__init__,
-                                                 PredictorBase.__init__)))
-    return tuple(sorted(names - {"model", "dow_t", "ratio", "observe", "subsample"}))
-
-
-def _keywords(function) -> set[str]:
-    """Names of the parameters of ``function`` that can be passed by keyword."""
-    import inspect
-
-    kinds = (inspect.Parameter.POSITIONAL_OR_KEYWORD, inspect.Parameter.KEYWORD_ONLY)
-    return {n for n, p in inspect.signature(function).parameters.items()
-            if p.kind in kinds and n != "self"}
-
-
-def _options(check: _Checker, options: Mapping, key: str, allowed) -> dict:
-    """``options`` after checking their names against ``allowed`` and, for a name of the
-    one table of limits, the value against its range."""
-    from sandbox.limits import BOUNDS
-
-    options = check.keys(options, key, allowed)
-    return {name: (check.bounded(value, f"{key}.{name}", name)
-                   if name in BOUNDS and value is not None else value)
-            for name, value in options.items()}
 
 
 def _model(check: _Checker, data: Any, folder: Path) -> dict:
@@ -410,8 +377,8 @@ def _model(check: _Checker, data: Any, folder: Path) -> dict:
         check.fail("model.options", "a mapping of IProMP options", options)
     from sandbox.core import IProMP
 
-    model["options"] = _options(check, options, "model.options",
-                                sorted(_keywords(IProMP.__init__)))
+    model["options"] = checked_options(check, options, "model.options",
+                                       sorted(keywords(IProMP.__init__)))
     try:
         IProMP(**model["options"])
     except ValueError as error:
