@@ -11,23 +11,22 @@ from collections.abc import Mapping
 from typing import Any
 
 from sandbox.envs.task import RewardWeights
+from sandbox.limits import BOUNDS
 from sandbox.validation import check_array, check_integer, check_number, check_positive
 
 #: Arguments of :class:`sandbox.viz.Viewer` accepted in ``viewer_options`` ("human" mode).
 VIEWER_KEYS = ("fps", "record", "resolution", "camera", "target", "fov", "floor_z", "realtime",
                "open_browser", "host")
-#: Highest control rate (Hz) accepted.
-MAX_CONTROL_HZ = 1000.0
-#: Most physics steps per control step.
+#: Lowest and highest control rate (Hz): ``control_hz`` of the one table of limits.
+MIN_CONTROL_HZ = BOUNDS["control_hz"].low
+MAX_CONTROL_HZ = BOUNDS["control_hz"].high
+#: Most physics steps per control step accepted.
 MAX_SUBSTEPS = 100
 
 
 def check_control_hz(value: Any) -> float:
-    """``control_hz``: positive and at most :data:`MAX_CONTROL_HZ` (Hz), as a float."""
-    hz = check_positive(value, "control_hz")
-    if hz > MAX_CONTROL_HZ:
-        raise ValueError(f"control_hz: expected at most {MAX_CONTROL_HZ:g} Hz, got {value!r}")
-    return hz
+    """``control_hz`` in [MIN_CONTROL_HZ, MAX_CONTROL_HZ] (:data:`sandbox.limits.BOUNDS`)."""
+    return float(BOUNDS["control_hz"].check(value, "control_hz"))
 
 
 def check_substeps(value: Any) -> int:

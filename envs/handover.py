@@ -139,7 +139,7 @@ class BaxterHandoverEnv(gym.Env):
       (``arm``, ``arm_valid``, ``emg``, ``emg_valid``);
     * ``render_mode`` (None, "human" or "rgb_array"): "human" shows the
       episode live in the browser (meshcat, see Rendering);
-    * ``control_hz`` (50, at most :data:`~sandbox.envs.arguments.MAX_CONTROL_HZ`): steps per second;
+    * ``control_hz`` (50, in [1, 1000], :data:`sandbox.limits.BOUNDS`): steps per second;
       ``substeps`` (5, an integer from 1 to :data:`~sandbox.envs.arguments.MAX_SUBSTEPS`): physics
       steps per control step (physics at 250 Hz);
     * ``grasp_radius`` (0.05 m); ``reward_weights`` (a :class:`RewardWeights`,

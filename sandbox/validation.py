@@ -207,23 +207,103 @@ MAPPING_SUFFIXES = (".json", ".yaml", ".yml")
 
 
 def read_mapping(path: Path, what: str = "scenario") -> Any:
-    """Parse a JSON or YAML file (by suffix); syntax errors become ``ValueError``.
+    """Parse a JSON or YAML file (by suffix) within the input limits; a problem is a ValueError.
 
     ``what`` names the file in messages (``"scenario"``, ``"grid"``,
-    ``"settings"``). The content is returned as parsed: the caller checks its
-    keys and values.
+    ``"settings"``). The file is read by :func:`read_input_text` and parsed by
+    :func:`parse_input` (size, encoding, nesting and number of values bounded
+    by :mod:`sandbox.limits`). The content is returned as parsed: the caller
+    checks its keys and values.
     """
     path = Path(path)
     if path.suffix.lower() not in MAPPING_SUFFIXES:
         raise ValueError(f"{what} {path}: expected a .json, .yaml or .yml file, "
                          f"got suffix {path.suffix!r}")
-    text = path.read_text(encoding="utf-8")
-    if path.suffix.lower() == ".json":
-        try:
-            return json.loads(text)
-        except json.JSONDecodeError as error:
-            raise ValueError(f"{what} {path}: invalid JSON at line {error.lineno}, column "
-                             f"{error.colno}: {error.msg}") from error
+    return parse_input(read_input_text(path, what), path, what,
+                       as_json=path.suffix.lower() == ".json")
+
+
+def is_file(path: Path) -> bool:
+    """``path.is_file()``, False for a name the system refuses (too long, a NUL byte)."""
+    try:
+        return Path(path).is_file()
+    except (OSError, ValueError):
+        return False
+
+
+def read_input_text(path: Path, what: str) -> str:
+    """The UTF-8 text of a user's input file: a regular file of at most ``MAX_INPUT_BYTES``.
+
+    The file's type is checked before it is opened (a FIFO would block) and
+    its size on the open file; no more than the limit plus one byte is read.
+
+    Raises
+    ------
+    ValueError
+        Not a regular file, too large, unreadable, or not UTF-8; the message
+        names the file (``"<what> <path>: ..."``).
+    """
+    import os
+    import stat
+
+    from sandbox.limits import MAX_INPUT_BYTES
+
+    path = Path(path)
+    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0)
+    try:
+        if not stat.S_ISREG(os.stat(path).st_mode):
+            raise ValueError(f"{what} {path}: expected a regular file, got a folder, FIFO or "
+                             f"device")
+        with os.fdopen(os.open(path, flags), "rb") as fh:
+            size = os.fstat(fh.fileno()).st_size
+            data = fh.read(MAX_INPUT_BYTES + 1) if size <= MAX_INPUT_BYTES else b""
+    except OSError as error:
+        raise ValueError(f"{what} {path}: cannot be read ({type(error).__name__}: "
+                         f"{error.strerror or error})") from None
+    if size > MAX_INPUT_BYTES or len(data) > MAX_INPUT_BYTES:
+        raise ValueError(f"{what} {path}: expected a file of at most {MAX_INPUT_BYTES} bytes "
+                         f"(sandbox.limits.MAX_INPUT_BYTES), got {max(size, len(data))}")
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as error:
+        raise ValueError(f"{what} {path}: expected UTF-8 text, got byte "
+                         f"0x{data[error.start]:02x} at offset {error.start}") from None
+
+
+def parse_input(text: str, path: Path, what: str, *, as_json: bool) -> Any:
+    """Parse the text of an input file as JSON or YAML (PyYAML's safe loader), bounded.
+
+    Nesting deeper than ``MAX_INPUT_DEPTH`` or more than ``MAX_INPUT_VALUES``
+    values (YAML aliases counted each time they are used) are refused, as is
+    every syntax error; the message names the file and, for syntax, the line.
+    """
+    kind = "JSON" if as_json else "YAML"
+    try:
+        data = json.loads(text) if as_json else _yaml(text, path, what)
+    except RecursionError:
+        data = _TOO_DEEP
+    except json.JSONDecodeError as error:
+        raise ValueError(f"{what} {path}: invalid JSON at line {error.lineno}, column "
+                         f"{error.colno}: {error.msg}") from None
+    except ValueError as error:
+        if str(error).startswith(f"{what} {path}:"):
+            raise
+        raise ValueError(f"{what} {path}: invalid {kind}: {_first_line(error)}") from None
+    except Exception as error:  # noqa: BLE001 - the parsers raise many types on bad input
+        raise ValueError(f"{what} {path}: invalid {kind} ({type(error).__name__}: "
+                         f"{_first_line(error)})") from None
+    try:
+        check_input_size(data)
+    except ValueError as error:
+        raise ValueError(f"{what} {path}: {error}") from None
+    return data
+
+
+#: What :func:`parse_input` holds when the parser itself ran out of stack.
+_TOO_DEEP = object()
+
+
+def _yaml(text: str, path: Path, what: str) -> Any:
     try:
         import yaml
     except ImportError as error:  # pragma: no cover - pyyaml is a dependency
@@ -234,5 +314,36 @@ def read_mapping(path: Path, what: str = "scenario") -> Any:
     except yaml.YAMLError as error:
         mark = getattr(error, "problem_mark", None)
         where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        problem = getattr(error, "problem", None) or str(error)
-        raise ValueError(f"{what} {path}: invalid YAML{where}: {problem}") from error
+        problem = getattr(error, "problem", None) or _first_line(error)
+        raise ValueError(f"{what} {path}: invalid YAML{where}: {problem}") from None
+
+
+def _first_line(error: BaseException) -> str:
+    text = (str(error).splitlines() or [""])[0]
+    return _show(text)[1:-1] if len(text) > 60 else text
+
+
+def check_input_size(data: Any) -> None:
+    """Refuse parsed input nested deeper than ``MAX_INPUT_DEPTH`` or with more than
+    ``MAX_INPUT_VALUES`` values (aliases counted at each use); iterative, so it cannot recurse
+    and stops as soon as a limit is passed."""
+    from sandbox.limits import MAX_INPUT_DEPTH, MAX_INPUT_VALUES
+
+    if data is _TOO_DEEP:
+        raise ValueError(f"expected nesting at most {MAX_INPUT_DEPTH} levels deep "
+                         f"(sandbox.limits.MAX_INPUT_DEPTH), got deeper than the parser goes")
+    stack, count = [(data, 1)], 1
+    while stack:
+        value, depth = stack.pop()
+        if not isinstance(value, (Mapping, list, tuple, set)):
+            continue
+        if depth > MAX_INPUT_DEPTH:
+            raise ValueError(f"expected nesting at most {MAX_INPUT_DEPTH} levels deep "
+                             f"(sandbox.limits.MAX_INPUT_DEPTH), got more")
+        count += 2 * len(value) if isinstance(value, Mapping) else len(value)
+        if count > MAX_INPUT_VALUES:          # counted before anything is pushed
+            raise ValueError(f"expected at most {MAX_INPUT_VALUES} values "
+                             f"(sandbox.limits.MAX_INPUT_VALUES; YAML aliases count at each "
+                             f"use), got more")
+        items = [*value.keys(), *value.values()] if isinstance(value, Mapping) else value
+        stack.extend((item, depth + 1) for item in items)

@@ -53,9 +53,16 @@ def add_session_argument(parser: argparse.ArgumentParser) -> None:
                              "data); refused for a folder or minari:ID")
 
 
-def cache(args: argparse.Namespace) -> bool:
-    """Whether to use the on-disk cache of loaded trials (:mod:`sandbox.data.cache`)."""
-    return not getattr(args, "no_cache", False)
+def cache(args: argparse.Namespace):
+    """The on-disk cache of loaded trials (:mod:`sandbox.data.cache`): False with
+    ``--no-cache``; with ``--verbose``, one that names every entry it does not use."""
+    if getattr(args, "no_cache", False):
+        return False
+    if getattr(args, "verbose", False):
+        from sandbox.data.cache import TrialCache
+
+        return TrialCache(verbose=True)
+    return True
 
 
 def split(text: str | None) -> list[str] | None:
@@ -67,9 +74,23 @@ def data_spec(args: argparse.Namespace):
     """The :class:`~sandbox.data.spec.DataSpec` the options describe."""
     from sandbox.data.spec import resolve
 
+    _columns_need_a_folder(args)
     return resolve(args.spec, human_columns=split(getattr(args, "human_columns", None)),
                    robot_columns=split(getattr(args, "robot_columns", None)),
                    time_unit=getattr(args, "time_unit", None))
+
+
+def _columns_need_a_folder(args: argparse.Namespace) -> None:
+    """``--human-columns``/``--robot-columns`` rename a folder's columns: refused when every
+    data source of the command is a ``synthetic:NAME`` set (its columns are its own)."""
+    sources = [s for s in (getattr(args, "data", None), getattr(args, "test", None)) if s]
+    if not sources or not all(str(s).startswith("synthetic:") for s in sources):
+        return
+    for option in ("human_columns", "robot_columns"):
+        if getattr(args, option, None) is not None:
+            raise ValueError(f"--{option.replace('_', '-')}: expected a recorded folder as "
+                             f"--data (a synthetic set has its own columns), got "
+                             f"--data {sources[0]}")
 
 
 def observe(args: argparse.Namespace, spec=None) -> tuple[str, ...]:

@@ -52,8 +52,10 @@ def check_folder(option: str, folder: str | Path, force: bool) -> None:
 
 
 def write_text(path: str | Path, text: str) -> Path:
-    """Write ``text`` to ``path`` whole: a temporary file beside it, then a rename."""
+    """Write ``text`` to ``path`` whole: a temporary file beside it, then a rename (its
+    missing folders are made first)."""
     path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
     handle, temporary = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent or ".")
     try:
         with os.fdopen(handle, "w", encoding="utf-8") as file:

@@ -25,7 +25,6 @@ value that is not None was typed.
 from __future__ import annotations
 
 import argparse
-import math
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -42,11 +41,11 @@ KEYS = ("observe", *MODEL_KEYS, *PREDICTOR_KEYS)
 PLAY_PREDICTOR_KEYS = ("likelihood", "window_mode", "n_candidates", "refine_steps",
                        "blend_rate", "blend_delay", "end_prob")
 CHOICES = {"likelihood": ("joint", "marginal"), "window_mode": ("all", "latest")}
-INTEGERS = {"n_basis": (2, 100), "n_candidates": (3, 10_000), "refine_steps": (0, 100),
-            "subsample": (1, 1000)}
-#: Positive numbers (``None`` allowed for the tolerances: "not used").
-POSITIVE = ("regularizer", "noise_scale", "noise_floor", "signal_floor", "blend_rate",
-            "settle_tol", "arrive_tol")
+#: Keys whose values are numbers, each in its range of :data:`sandbox.limits.BOUNDS`
+#: (``None`` allowed for the tolerances: "not used").
+NUMBERS = ("n_basis", "n_candidates", "refine_steps", "subsample", "regularizer", "noise_scale",
+           "noise_floor", "signal_floor", "blend_rate", "blend_delay", "end_prob",
+           "settle_tol", "arrive_tol")
 OPTIONAL = ("settle_tol", "arrive_tol")
 
 
@@ -61,29 +60,32 @@ def load(path: str | Path | None) -> dict[str, Any]:
     """The checked settings of ``path`` (``{}`` for None); errors name the file and key."""
     if path is None:
         return {}
-    from sandbox.validation import read_mapping
+    from sandbox.validation import is_file, read_mapping
 
     path = Path(path)
-    if not path.is_file():
+    if not is_file(path):
         raise ValueError(f"--config: expected an existing settings file (.yaml/.json), "
                          f"got {str(path)!r}")
     data = read_mapping(path, "settings")
     if data is None:
         return {}
     if not isinstance(data, Mapping):
-        raise ValueError(f"settings {path}: expected a mapping of options, got {data!r}")
-    unknown = sorted(str(k) for k in data if k not in KEYS)
+        raise ValueError(f"settings {path}: expected a mapping of options, got {_show(data)}")
+    unknown = sorted(_show(k) for k in data if k not in KEYS)
     if unknown:
-        raise ValueError(f"settings {path}: unknown key {unknown[0]!r}; valid keys: "
+        raise ValueError(f"settings {path}: unknown key {unknown[0]}; valid keys: "
                          f"{', '.join(KEYS)}")
     settings = {k: _check(path, k, v) for k, v in data.items()}
+    _check_floors(path, settings)
     _check_model(path, settings)
     return settings
 
 
 def _check(path: Path, key: str, value: Any) -> Any:
+    from sandbox.limits import BOUNDS
+
     def fail(expected: str):
-        return ValueError(f"settings {path}: {key}: expected {expected}, got {value!r}")
+        return ValueError(f"settings {path}: {key}: expected {expected}, got {_show(value)}")
 
     if key == "observe":
         names = value.split(",") if isinstance(value, str) else value
@@ -93,17 +95,13 @@ def _check(path: Path, key: str, value: Any) -> Any:
         return tuple(n.strip() for n in names)
     if key == "noise_floors":
         if not isinstance(value, Mapping) or not all(
-                isinstance(k, str) and _positive(v) for k, v in value.items()):
-            raise fail("a mapping of modality names to positive floors")
-        return tuple(sorted((k, float(v)) for k, v in value.items()))
+                isinstance(k, str) and k.strip() for k in value):
+            raise fail("a mapping of modality names to floors")
+        return tuple(sorted((k, _bounded(path, f"noise_floors[{k!r}]", "noise_floors", v))
+                            for k, v in value.items()))
     if key in CHOICES:
         if value not in CHOICES[key]:
             raise fail(f"one of {list(CHOICES[key])}")
-        return value
-    if key in INTEGERS:
-        low, high = INTEGERS[key]
-        if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
-            raise fail(f"an integer in [{low}, {high}]")
         return value
     if key == "until_end":
         if not isinstance(value, bool):
@@ -111,26 +109,37 @@ def _check(path: Path, key: str, value: Any) -> Any:
         return value
     if value is None and key in OPTIONAL:
         return None
-    if key == "end_prob":
-        if not _number(value) or not 0.0 < value <= 1.0:
-            raise fail("a number in (0, 1]")
-        return float(value)
-    if key == "blend_delay":
-        if not _number(value) or value < 0:
-            raise fail("a finite number >= 0")
-        return float(value)
-    if not _positive(value):
-        raise fail("a finite number > 0" + (" or null" if key in OPTIONAL else ""))
-    return float(value)
+    assert key in NUMBERS and key in BOUNDS, key
+    return _bounded(path, key, key, value)
 
 
-def _number(value: Any) -> bool:
-    return (not isinstance(value, bool) and isinstance(value, (int, float))
-            and math.isfinite(value))
+def _bounded(path: Path, label: str, key: str, value: Any) -> Any:
+    """``value`` in the range of ``key`` (:mod:`sandbox.limits`); YAML 1.1 ``1e-3`` is a number."""
+    from sandbox.limits import check
+
+    if isinstance(value, str):
+        try:
+            value = float(value)
+        except ValueError:
+            pass
+    try:
+        return check(key, value, label, or_null=key in OPTIONAL)
+    except ValueError as error:
+        raise ValueError(f"settings {path}: {error}") from None
 
 
-def _positive(value: Any) -> bool:
-    return _number(value) and value > 0
+def _show(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _check_floors(path: Path, settings: dict) -> None:
+    """Floors only for modalities the file observes (when it names them)."""
+    named = {k for k, _ in settings.get("noise_floors", ())}
+    observed = set(settings.get("observe", named))
+    if named - observed:
+        raise ValueError(f"settings {path}: noise_floors: expected floors of the observed "
+                         f"modalities {sorted(observed)}, got {sorted(named - observed)}")
 
 
 def _check_model(path: Path, settings: dict) -> None:

@@ -5,21 +5,18 @@ range, not a number) is refused by argparse before any work starts, with a
 message naming the option (``argument --workers: expected an integer in [1, 256],
 got '0'``) and exit status 2. The ranges of the shared options:
 
-==================  ====================  ==========================================
-option              range                 why
-==================  ====================  ==========================================
-``--workers``       1 .. :data:`MAX_WORKERS`   processes
-``--seed``          0 .. 2**63 - 1        ``numpy.random.default_rng`` seeds
-``--n-per-task``    1 .. :data:`MAX_PER_TASK`  demos per task (synthetic: generated)
-``--n-basis``       2 .. :data:`MAX_N_BASIS`   basis functions per dim
-``--windows`` (s)   (0, :data:`MAX_WINDOW_S`]  a window longer than a trial is no window
-``--ratios``        (0, 1]                observed fractions
-==================  ====================  ==========================================
+Every range is the entry of the one table of limits, :data:`sandbox.limits.BOUNDS`
+(``--workers``: ``workers``; ``--seed``: ``seed``; ``--n-per-task``: ``n_per_task``;
+``--demos``: ``demos``; ``--n-basis``: ``n_basis``; ``--regularizer``: ``regularizer``;
+``--windows``, ``--window`` and ``--dow``: ``dow_t``; ``--ratios`` and ``--ratio``:
+``ratio``; ``--time-limit``: ``time_limit``; ``--switch``: ``switch_phase``), so an
+option accepts what a settings, scenario or grid file accepts for the same value.
 
 Output paths are checked at parse time too: a file may not be an existing
-folder and its folder must exist (``output_file``; ``output_file_in_new_folder``
-makes missing folders, like ``output_folder``); a folder, or a folder to be
-made, may not be or lie under an existing file.
+folder; a file's or a folder's missing folders are made when it is written
+(every command alike: ``output_file`` is ``output_file_in_new_folder``), but no
+path may lie under an existing file, and the nearest existing folder must be
+writable.
 """
 
 from __future__ import annotations
@@ -29,22 +26,22 @@ import math
 import os
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
-#: Longest window or observation time of an option (s): the core's
-#: ``sandbox.core.limits.MAX_DURATION_S`` (not imported: ``--help`` stays light).
-MAX_WINDOW_S = 60.0
-#: Longest episode of ``play`` (s).
-MAX_EPISODE_S = 3600.0
+from sandbox.limits import BOUNDS
+
+#: Longest window or observation time of an option (s): ``dow_t`` of the table.
+MAX_WINDOW_S = BOUNDS["dow_t"].high
+#: Longest episode of ``play`` (s): ``time_limit`` of the table.
+MAX_EPISODE_S = BOUNDS["time_limit"].high
 #: Most worker processes of ``evaluate``, ``tune`` and ``results``.
-MAX_WORKERS = 256
+MAX_WORKERS = int(BOUNDS["workers"].high)
 #: Largest seed (numpy accepts any non-negative integer; 64 bits is plenty).
-MAX_SEED = 2**63 - 1
+MAX_SEED = int(BOUNDS["seed"].high)
 #: Most demonstrations per task (``--n-per-task``, ``--demos``).
-MAX_PER_TASK = 10_000
-#: Basis functions per dim accepted by ``fit --n-basis``: the core's
-#: ``sandbox.core.limits.MAX_N_BASIS`` (the paper uses 21; more than a few dozen over a
-#: seconds-long motion fits noise, and the fit grows as its square).
-MAX_N_BASIS = 100
+MAX_PER_TASK = int(BOUNDS["n_per_task"].high)
+#: Basis functions per dim accepted by ``fit --n-basis``.
+MAX_N_BASIS = int(BOUNDS["n_basis"].high)
 
 
 def _fail(text: str, what: str) -> argparse.ArgumentTypeError:
@@ -124,16 +121,9 @@ def _inside(value: float, low: float, high: float, open_low: bool, open_high: bo
 
 
 def output_file(text: str) -> str:
-    """A type for a file to write: not an existing folder, in an existing folder."""
-    path = Path(text)
-    if not text.strip():
-        raise _fail(text, "a file name")
-    if path.is_dir():
-        raise _fail(text, "a file to write, not a folder")
-    parent = path.parent if str(path.parent) else Path(".")
-    if not parent.is_dir():
-        raise _fail(text, f"a file in an existing folder ({str(parent)!r} is not one)")
-    return _writable(text, parent)
+    """A type for a file to write: not an existing folder, under no file; its missing
+    folders are made when it is written (one rule for every command, issue 29)."""
+    return output_file_in_new_folder(text)
 
 
 def output_file_in_new_folder(text: str) -> str:
@@ -166,14 +156,30 @@ def _writable(text: str, folder: Path) -> str:
     return text
 
 
-WORKERS = integer(1, MAX_WORKERS)
-SEED = integer(0, MAX_SEED)
-PER_TASK = integer(1, MAX_PER_TASK)
-DEMOS = integer(2, MAX_PER_TASK)
-N_BASIS = integer(2, MAX_N_BASIS)
-SECONDS = number(0.0, MAX_WINDOW_S)
-FRACTION = number(0.0, 1.0)
-WINDOWS = numbers(0.0, MAX_WINDOW_S)
-RATIOS = numbers(0.0, 1.0)
+def bounded(name: str) -> Callable[[str], Any]:
+    """The type of an option whose range is ``BOUNDS[name]`` (:mod:`sandbox.limits`)."""
+    bound = BOUNDS[name]
+    if bound.integer:
+        return integer(int(bound.low), int(bound.high))
+    return number(bound.low, bound.high, open_low=bound.open_low)
+
+
+def bounded_list(name: str) -> Callable[[str], tuple[float, ...]]:
+    """Comma-separated numbers, each in the range ``BOUNDS[name]``."""
+    bound = BOUNDS[name]
+    return numbers(bound.low, bound.high, open_low=bound.open_low)
+
+
+WORKERS = bounded("workers")
+SEED = bounded("seed")
+PER_TASK = bounded("n_per_task")
+DEMOS = bounded("demos")
+N_BASIS = bounded("n_basis")
+REGULARIZER = bounded("regularizer")
+SECONDS = bounded("dow_t")
+FRACTION = bounded("ratio")
+SWITCH = bounded("switch_phase")
+WINDOWS = bounded_list("dow_t")
+RATIOS = bounded_list("ratio")
 POSITIVE = number(0.0, math.inf)
-EPISODE = number(0.0, MAX_EPISODE_S)
+EPISODE = bounded("time_limit")

@@ -32,7 +32,7 @@ def add_arguments(parser) -> None:
                         help="seed of the training demos and of the episode")
     parser.add_argument("--from-task", default="up", help="task the human starts with")
     parser.add_argument("--to-task", default="right", help="task the human switches to")
-    parser.add_argument("--switch", type=_types.number(0.0, 1.0, open_high=True), default=0.55,
+    parser.add_argument("--switch", type=_types.SWITCH, default=0.55,
                         help="when the human switches, as a fraction of the motion")
     parser.add_argument("--dow", type=_types.SECONDS, default=0.2,
                         help="dynamic window dow_t (s), in (0, 60]")

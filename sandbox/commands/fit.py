@@ -36,7 +36,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--n-basis", type=_types.N_BASIS, default=None,
                         help=f"basis functions per dim, 2 to {_types.MAX_N_BASIS} "
                              "(default: IProMP's, 21)")
-    parser.add_argument("--regularizer", type=_types.POSITIVE, default=None,
+    parser.add_argument("--regularizer", type=_types.REGULARIZER, default=None,
                         help="relative weight-covariance regulariser, > 0 (core default)")
     parser.add_argument("--n-per-task", type=_types.PER_TASK, default=None,
                         help="demos per task (folder: the first N; synthetic: generated, 20)")
@@ -69,8 +69,6 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if out.exists() and not args.force:
         raise ValueError(f"--out: {out} exists; pass --force to overwrite it")
-    if not out.parent.is_dir():
-        raise ValueError(f"--out: expected a file in an existing folder, got {str(out)!r}")
     if args.calibrate and args.preprocess != "smooth":
         raise ValueError("--calibrate: expected --preprocess smooth (the demos the streams are "
                          f"paired with), got {args.preprocess!r}")
@@ -95,6 +93,7 @@ def run(args: argparse.Namespace) -> int:
     if args.calibrate:
         _calibrate(model, demos, args, spec, observe)
     attach_geometry(model, demos)
+    out.parent.mkdir(parents=True, exist_ok=True)       # missing folders are made, as by play
     model.save(out)
     summary = _summary(model, args, out, len(demos), skipped)
     print(json.dumps(summary, indent=2) if args.json else _format(summary))

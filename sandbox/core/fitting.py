@@ -20,6 +20,7 @@ from sandbox.core.basis import GaussianBasis
 from sandbox.core.limits import MAX_ABS_VALUE, MAX_ALPHA_STD, MIN_NOISE_STD
 from sandbox.core.modality import Modality
 from sandbox.core.promp import WeightDistribution, check_human_conditioning, fit_weights
+from sandbox.limits import BOUNDS
 from sandbox.validation import FloatArray, check_positive
 
 
@@ -312,13 +313,27 @@ def signal_scale(modalities: Sequence[Modality], moments: FloatArray) -> FloatAr
     return scale
 
 
-def check_floor(value, name: str) -> float:
-    """A noise floor: a number in [MIN_NOISE_STD, MAX_ABS_VALUE] (limits)."""
-    v = check_positive(value, name, high=MAX_ABS_VALUE)
+def check_floor(value, name: str, bound: str | None = None) -> float:
+    """A noise floor: a number in [MIN_NOISE_STD, the high end of ``BOUNDS[bound]``]
+    (:mod:`sandbox.limits`; ``MAX_ABS_VALUE`` without ``bound``)."""
+    v = check_positive(value, name, high=MAX_ABS_VALUE if bound is None else BOUNDS[bound].high)
     if v < MIN_NOISE_STD:
         raise ValueError(f"{name}: expected at least {MIN_NOISE_STD:g} (limits.MIN_NOISE_STD), "
                          f"got {value!r}")
     return v
+
+
+def check_tolerance(value, name: str) -> float | None:
+    """``settle_tol``/``arrive_tol``: None, or a number in the range ``BOUNDS[name]``."""
+    return None if value is None else check_positive(value, name, high=BOUNDS[name].high)
+
+
+def check_floor_names(floors: Mapping[str, float], modalities: Sequence[Modality]) -> None:
+    """Refuse floors of modalities the demonstrations do not have (``ValueError``)."""
+    unknown = sorted(set(floors) - {m.name for m in modalities})
+    if unknown:
+        raise ValueError(f"noise_floors: expected floors of the demonstrations' modalities "
+                         f"{[m.name for m in modalities]}, got {unknown}")
 
 
 def check_fits(fits, n_basis: int) -> None:

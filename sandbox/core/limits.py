@@ -6,6 +6,11 @@ trajectory has tens of basis functions. These limits turn a careless input
 ``ValueError`` instead of a multi-gigabyte allocation. Each message names the
 limit and, where it can be raised, how.
 
+The bounds of the options a user sets (``n_basis``, ``n_candidates``,
+``subsample``, the relative hyperparameters, the noise floors) are read from
+the one table of :mod:`sandbox.limits`, which the command line, settings,
+scenario and grid files check too.
+
 Who checks what: :meth:`~sandbox.core.model.IProMP.fit` (durations, units,
 values, dims, spread), the predictors (times, options, plan, lattice,
 observations and their range), :meth:`~sandbox.core.model.IProMP.load` (file,
@@ -18,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
+from sandbox.limits import BOUNDS
 from sandbox.validation import check_number
 
 #: Longest demonstration or trial accepted (s). Handovers last 1-10 s; a
@@ -37,10 +43,10 @@ MAX_TIME_S = 600.0
 
 #: Most basis functions per dim (N). The method uses 15-31; each likelihood
 #: factorisation is N x N per speed candidate.
-MAX_N_BASIS = 100
+MAX_N_BASIS = int(BOUNDS["n_basis"].high)
 
 #: Most speed candidates per task (``n_candidates``; default 50).
-MAX_CANDIDATES = 1000
+MAX_CANDIDATES = int(BOUNDS["n_candidates"].high)
 
 #: Most floats a predictor's speed lattice may need for its likelihood
 #: statistics: C durations x (N^2 per modality + K (R+1)^2), with K tasks of
@@ -58,7 +64,7 @@ MAX_PLAN_STEPS = 100_000
 MAX_OBSERVATIONS = 20_000
 
 #: Largest ``subsample`` (keep 1 of this many observations).
-MAX_SUBSAMPLE = 10_000
+MAX_SUBSAMPLE = int(BOUNDS["subsample"].high)
 
 #: Most human dims P and most robot dims Q of a model.
 MAX_DIMS = 64
@@ -88,16 +94,16 @@ SIGNAL_MARGIN = 1e3
 #: for positions): the floor of the fit's noise floors, and of a model file's
 #: noise (its square). Finer noise is not physical and would make the
 #: likelihood overflow.
-MIN_NOISE_STD = 1e-12
+MIN_NOISE_STD = BOUNDS["noise_floor"].low
 
 #: Largest relative hyperparameter (``regularizer``, ``noise_scale``, ``ridge``).
-MAX_RELATIVE = 1e6
+MAX_RELATIVE = BOUNDS["noise_scale"].high
 
 #: Smallest ``regularizer``. A robot dim's regulariser is at least this
 #: fraction of its weights' variance, which keeps the robot covariance positive
 #: definite in floating point (condition number ~1e9 at worst); a model file
 #: whose robot regularisers fall below half of it is refused.
-MIN_REGULARIZER = 1e-9
+MIN_REGULARIZER = BOUNDS["regularizer"].low
 
 #: Largest magnitude of any number in a model file (weights, regularisers,
 #: noise): far above what a fit of values within ``MAX_ABS_VALUE`` makes, far

@@ -74,6 +74,8 @@ from sandbox.core.fitting import (
     by_task,
     check_fits,
     check_floor,
+    check_floor_names,
+    check_tolerance,
     fit_one,
     motion_end,
     observation_noise,
@@ -86,10 +88,10 @@ from sandbox.core.io import ModelFile, read_model, save_model
 from sandbox.core.limits import (
     MAX_DURATION_S,
     MAX_RELATIVE,
-    MIN_REGULARIZER,
     check_alpha_std,
 )
 from sandbox.core.modality import Modality
+from sandbox.limits import BOUNDS
 from sandbox.validation import FloatArray, check_mapping, check_number, check_positive
 
 if TYPE_CHECKING:
@@ -136,8 +138,8 @@ class IProMP:
         (fractions of the training demos' standard deviation).
     noise_floors : mapping of str to float, optional
         Per-modality floors (in the modality's normalised units) overriding the two
-        above. Every floor is in [:data:`~sandbox.core.limits.MIN_NOISE_STD`,
-        :data:`~sandbox.core.limits.MAX_ABS_VALUE`].
+        above, for modalities of the demos; each in [:data:`~sandbox.core.limits.MIN_NOISE_STD`,
+        its entry of :data:`sandbox.limits.BOUNDS`] (``noise_floor``: 1 m; others: 100).
     settle_tol, arrive_tol : float or None
         The motion ends once the robot stays within ``settle_tol`` (rad) of its final
         configuration and the hand has come within ``arrive_tol`` (m) of its farthest
@@ -194,17 +196,14 @@ class IProMP:
         max_duration: float = MAX_DURATION_S,
     ) -> None:
         self.basis = GaussianBasis(n_basis, basis_width, basis_margin, normalized_basis)
-        self.regularizer = check_positive(regularizer, "regularizer", high=MAX_RELATIVE)
-        if self.regularizer < MIN_REGULARIZER:
-            raise ValueError(f"regularizer: expected at least {MIN_REGULARIZER:g} "
-                             f"(limits.MIN_REGULARIZER), got {regularizer!r}")
+        self.regularizer = float(BOUNDS["regularizer"].check(regularizer, "regularizer"))
         self.noise_scale = check_positive(noise_scale, "noise_scale", high=MAX_RELATIVE)
-        self.noise_floor = check_floor(noise_floor, "noise_floor")
-        self.signal_floor = check_floor(signal_floor, "signal_floor")
-        self.noise_floors = {k: check_floor(v, f"noise_floors[{k!r}]")
+        self.noise_floor = check_floor(noise_floor, "noise_floor", "noise_floor")
+        self.signal_floor = check_floor(signal_floor, "signal_floor", "signal_floor")
+        self.noise_floors = {k: check_floor(v, f"noise_floors[{k!r}]", "noise_floors")
                              for k, v in check_mapping(noise_floors, "noise_floors").items()}
-        self.settle_tol = None if settle_tol is None else check_positive(settle_tol, "settle_tol")
-        self.arrive_tol = None if arrive_tol is None else check_positive(arrive_tol, "arrive_tol")
+        self.settle_tol = check_tolerance(settle_tol, "settle_tol")
+        self.arrive_tol = check_tolerance(arrive_tol, "arrive_tol")
         self.robot_tol = None if robot_tol is None else check_positive(robot_tol, "robot_tol")
         self.min_alpha_std = check_alpha_std(min_alpha_std, "min_alpha_std")
         self.ridge = check_positive(ridge, "ridge", allow_zero=True, high=MAX_RELATIVE)
@@ -267,6 +266,7 @@ class IProMP:
         P = fits[0].residual.size
         Q = fits[0].weights.size // self.basis.n_basis - P
         modalities = modalities_of(names_from, P)
+        check_floor_names(self.noise_floors, modalities)
         scale = signal_scale(modalities, np.sum([f.moments for f in fits], axis=0))
         sigma2 = observation_noise(fits, scale, self.floors(modalities), self.noise_scale)
         divide = np.r_[scale, np.ones(Q)].repeat(self.basis.n_basis)

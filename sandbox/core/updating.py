@@ -31,6 +31,7 @@ from sandbox.core.phase import Lattice
 from sandbox.core.plan import Blending, Plan, check_steps
 from sandbox.core.statistics import StreamStatistics
 from sandbox.core.stream import ObservationStream
+from sandbox.limits import BOUNDS
 from sandbox.validation import (
     FloatArray,
     check_array,
@@ -47,7 +48,7 @@ if TYPE_CHECKING:
 
 LIKELIHOODS = ("joint", "marginal")
 #: Most parabolic refinement steps of the speed.
-MAX_REFINE_STEPS = 100
+MAX_REFINE_STEPS = int(BOUNDS["refine_steps"].high)
 
 
 @dataclass(frozen=True, eq=False)
@@ -120,8 +121,8 @@ class PredictorBase:
         self.width = check_positive(width, "width")
         self.refine_steps = check_integer(refine_steps, "refine_steps", 0, MAX_REFINE_STEPS)
         self.dt = check_positive(dt, "dt")
-        self.blend_rate = check_positive(blend_rate, "blend_rate")
-        self.blend_delay = check_positive(blend_delay, "blend_delay", allow_zero=True)
+        self.blend_rate = float(BOUNDS["blend_rate"].check(blend_rate, "blend_rate"))
+        self.blend_delay = float(BOUNDS["blend_delay"].check(blend_delay, "blend_delay"))
         self.blend = check_bool(blend, "blend")
         self.horizon = check_positive(horizon, "horizon", allow_zero=True)
         self.until_end = check_bool(until_end, "until_end")

@@ -158,14 +158,27 @@ def _load(data: str | Path, layout: DataSpec, spec_given: bool, observe, seed: i
     if isinstance(data, str) and data.startswith(MINARI_PREFIX):
         return _minari(data[len(MINARI_PREFIX):], layout, observe, tasks, n_per_task,
                        preprocess, options)
-    if isinstance(data, (str, Path)) and Path(data).is_dir():
+    if isinstance(data, (str, Path)) and _is_folder(data):
         given = {"observe": observe, **folder, **options}
         if "columns" not in options:          # columns= is shorthand for a hand-only spec
             given["spec"] = layout
         elif spec_given:
             raise ValueError("spec and columns: expected one of them, got both")
         return _recorded(Path(data), tasks, n_per_task, preprocess, given)
-    raise ValueError(f"data: expected {_spec_options()}, got {str(data)!r}")
+    raise ValueError(f"data: expected {_spec_options()}, got {_short(str(data))}")
+
+
+def _is_folder(data: str | Path) -> bool:
+    """Whether ``data`` names an existing folder (False for a name the system refuses)."""
+    try:
+        return Path(data).is_dir()
+    except (OSError, ValueError):
+        return False
+
+
+def _short(text: str) -> str:
+    """``text`` quoted, cut to 80 characters (with its length when cut)."""
+    return repr(text) if len(text) <= 80 else f"{text[:60]!r}... ({len(text)} characters)"
 
 
 def _recorded(root, tasks, n_per_task, preprocess, options) -> list[Demonstration]:
@@ -180,7 +193,12 @@ def _recorded(root, tasks, n_per_task, preprocess, options) -> list[Demonstratio
 def _minari(dataset_id, layout, observe, tasks, n_per_task, preprocess, options):
     """A Minari dataset written by ``python -m sandbox data export``."""
     from sandbox.data.minari_io import load_for_fit
+    from sandbox.limits import MAX_NAME_CHARS
 
+    if len(dataset_id) > MAX_NAME_CHARS:
+        raise ValueError(f"data: expected minari:ID with an ID of at most {MAX_NAME_CHARS} "
+                         f"characters (sandbox.limits.MAX_NAME_CHARS), got "
+                         f"{_short(dataset_id)}")
     if options:
         raise ValueError(f"{sorted(options)}: only used for recorded folders, not minari:ID")
     return load_for_fit(dataset_id, [m.name for m in layout.observed(observe)], tasks=tasks,

@@ -162,9 +162,11 @@ def load_trial(
     path = _path(path, "path")
     task = task or path.parent.name
     store = resolve_cache(cache)
-    key = "" if store is None else store.key(
+    key = None if store is None else store.key(
         path, task=task, spec=spec.to_dict(), observe=[m.name for m in modalities],
         preprocess=preprocess, max_duration=max_duration, options=options)
+    if key is None:               # no cache, or not a regular file within the limits
+        store, key = None, ""
     found = _cached(store, key, path)
     if found is not None:
         return found
@@ -174,7 +176,7 @@ def load_trial(
 
 def _cached(store: TrialCache | None, key: str, path: Path) -> Demonstration | None:
     """The trial the cache holds under ``key`` (None if none); a cached refusal is raised."""
-    found = None if store is None else store.get(key)
+    found = None if store is None else store.get(key, path)
     if isinstance(found, str):
         raise TrialError(f"{path}: {found}")
     return found
@@ -188,10 +190,10 @@ def _load_and_keep(store: TrialCache | None, key: str, path: Path, task: str, sp
         demo = _load_trial(path, task, spec, modalities, preprocess, max_duration, options)
     except TrialError as error:
         if store is not None:
-            store.put(key, str(error))
+            store.put(key, str(error), path)
         raise TrialError(f"{path}: {error}") from None
     if store is not None:
-        store.put(key, demo)
+        store.put(key, demo, path)
     return demo
 
 

@@ -32,7 +32,6 @@ it is read (``--time-unit`` on the commands does the same without a spec).
 
 from __future__ import annotations
 
-import json
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from os import PathLike
@@ -92,6 +91,13 @@ class DataSpec:
             raise ValueError(f"time_unit: expected one of {list(TIME_UNITS)}, "
                              f"got {self.time_unit!r}")
         robot = _names(self.robot, "robot")
+        repeated = sorted({c for c in robot if robot.count(c) > 1})
+        if repeated:
+            raise ValueError(f"robot: expected distinct column names, got {repeated} more than "
+                             f"once")
+        if self.time.strip() in robot:
+            raise ValueError(f"time: expected a column other than the robot columns, got "
+                             f"{self.time!r}")
         if not isinstance(self.modalities, Mapping):
             raise ValueError(f"modalities: expected a mapping name -> Modality, "
                              f"got {type(self.modalities).__name__}")
@@ -143,22 +149,15 @@ class DataSpec:
         """Read a spec file (YAML or JSON, see the module docstring)."""
         if not isinstance(path, (str, PathLike)):
             raise ValueError(f"--spec: expected the path of a YAML or JSON file, got {path!r}")
-        path = Path(path)
-        if not path.is_file():
-            raise ValueError(f"--spec: expected an existing YAML or JSON file, got {str(path)!r}")
-        text = path.read_text(encoding="utf-8", errors="replace")
-        try:
-            if path.suffix.lower() == ".json":
-                data = json.loads(text)
-            else:
-                import yaml
+        from sandbox.validation import is_file
 
-                data = yaml.safe_load(text)
-        except Exception as error:  # yaml and json raise their own types
-            kind = "JSON" if path.suffix.lower() == ".json" else "YAML"
-            first = (str(error).splitlines() or [""])[0]
-            raise ValueError(f"spec {path}: not valid {kind} ({type(error).__name__}: {first})"
-                             ) from None
+        path = Path(path)
+        if not is_file(path):
+            raise ValueError(f"--spec: expected an existing YAML or JSON file, got {str(path)!r}")
+        from sandbox.validation import parse_input, read_input_text
+
+        data = parse_input(read_input_text(path, "spec"), path, "spec",
+                           as_json=path.suffix.lower() == ".json")
         try:
             return cls.from_dict(data)
         except ValueError as error:
@@ -169,7 +168,7 @@ class DataSpec:
         """Build from a parsed spec file (built-in modalities stay available)."""
         if not isinstance(data, Mapping):
             raise ValueError(f"expected a mapping with keys {sorted(_KEYS)}, "
-                             f"got {type(data).__name__}")
+                             f"got {_kind(data)}")
         unknown = sorted(set(data) - _KEYS)
         if unknown:
             raise ValueError(f"unknown keys {unknown}; expected some of {sorted(_KEYS)}")
@@ -177,9 +176,12 @@ class DataSpec:
         given = data.get("modalities") or {}
         if not isinstance(given, Mapping):
             raise ValueError(f"modalities: expected a mapping name -> {{columns, kind, units}}, "
-                             f"got {type(given).__name__}")
+                             f"got {_kind(given)}")
         for name, entry in given.items():
-            mods[str(name)] = _modality(str(name), entry)
+            if not isinstance(name, str) or not name.strip() or not name.isprintable():
+                raise ValueError(f"modalities: expected names that are printable text, "
+                                 f"got {name!r}")
+            mods[name] = _modality(name, entry)
         observe = data.get("observe", ("hand",))
         if isinstance(observe, str):
             observe = [n.strip() for n in observe.split(",") if n.strip()]
@@ -193,6 +195,15 @@ class DataSpec:
                 "observe": list(self.observe),
                 "modalities": {n: {"columns": list(m.dims), "kind": m.kind, "units": m.units}
                                for n, m in self.modalities.items()}}
+
+
+def _kind(value: Any) -> str:
+    """What a parsed value is, in a user's words (``nothing`` for an empty file or key)."""
+    if value is None:
+        return "nothing (an empty file or key)"
+    words = {bool: "true/false", int: "a number", float: "a number", str: "text",
+             list: "a list", dict: "a mapping"}
+    return words.get(type(value), type(value).__name__)
 
 
 def _choice(observe: Any) -> Sequence[str] | str:

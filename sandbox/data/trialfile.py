@@ -168,7 +168,8 @@ def read_trial_table(path: str | Path, columns: Columns = Columns(),
     """
     path = Path(path)
     if not path.is_file():
-        raise TrialError(f"no such file: {path}")
+        raise TrialError("not a regular file (a folder, FIFO, device or dangling link)"
+                         if path.exists() or path.is_symlink() else f"no such file: {path}")
     try:
         size = path.stat().st_size
         if size > MAX_FILE_BYTES:

@@ -50,6 +50,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from sandbox.episodes.scenario_options import checked_options, keywords, policy_options
 from sandbox.validation import MAPPING_SUFFIXES, read_mapping
 
 SUFFIXES = MAPPING_SUFFIXES
@@ -100,7 +101,9 @@ class _Checker:
         self.path = path
 
     def fail(self, key: str, expected: str, got: Any) -> None:
-        raise ValueError(f"scenario {self.path}: {key}: expected {expected}, got {got!r}")
+        text = repr(got)
+        text = text if len(text) <= 80 else text[:77] + "..."
+        raise ValueError(f"scenario {self.path}: {key}: expected {expected}, got {text}")
 
     def keys(self, data: Any, key: str, allowed) -> dict:
         if not isinstance(data, Mapping):
@@ -110,15 +113,14 @@ class _Checker:
             self.fail(key, f"keys among {list(allowed)}", unknown)
         return dict(data)
 
-    def number(self, value: Any, key: str, lo: float, hi: float) -> float:
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not lo <= value <= hi:
-            self.fail(key, f"a number in [{lo:g}, {hi:g}]", value)
-        return float(value)
+    def bounded(self, value: Any, key: str, name: str) -> Any:
+        """``value`` within the range ``name`` of the one table, :data:`sandbox.limits.BOUNDS`."""
+        from sandbox.limits import BOUNDS
 
-    def integer(self, value: Any, key: str, lo: int = 0) -> int:
-        if isinstance(value, bool) or not isinstance(value, int) or value < lo:
-            self.fail(key, f"an integer >= {lo}", value)
-        return int(value)
+        try:
+            return BOUNDS[name].check(value, key)
+        except ValueError as error:
+            raise ValueError(f"scenario {self.path}: {error}") from None
 
     def choice(self, value: Any, key: str, choices) -> str:
         if value not in tuple(choices):
@@ -134,15 +136,28 @@ class _Checker:
 def resolve(path: str | Path) -> Path:
     """The scenario file ``path``, or the shipped example of that name (``intent_switch``)."""
     path = Path(path)
-    if path.is_file():
+    if _exists(path, "is_file"):
         return path
     for suffix in ("", *SUFFIXES):
         example = EXAMPLES / f"{path.name}{suffix}"
-        if example.is_file() and not path.parent.parts:
+        if _exists(example, "is_file") and not path.parent.parts:
             return example
     names = sorted(p.stem for p in EXAMPLES.glob("*") if p.suffix in SUFFIXES)
     raise ValueError(f"scenario: expected an existing .json/.yaml file or an example name "
-                     f"({', '.join(names)}), got {str(path)!r}")
+                     f"({', '.join(names)}), got {_short(str(path))}")
+
+
+def _short(text: str) -> str:
+    return repr(text) if len(text) <= 80 else f"{text[:60]!r}... ({len(text)} characters)"
+
+
+def _exists(path: Path, kind: str) -> bool:
+    """``path.is_file()`` or ``path.is_dir()`` (``kind``); False for a name the system refuses
+    (too long, a NUL byte...)."""
+    try:
+        return bool(getattr(path, kind)())
+    except (OSError, ValueError):
+        return False
 
 
 def load_scenario(path: str | Path, *, observe: list[str] | str | None = None,
@@ -171,7 +186,7 @@ def load_scenario(path: str | Path, *, observe: list[str] | str | None = None,
         import sandbox.urdf as urdf
 
         obj = check.choice(obj, "object", urdf.OBJECTS)
-    seed = check.integer(data.get("seed", 0), "seed")
+    seed = check.bounded(data.get("seed", 0), "seed", "seed")
     kind, human = _human(check, data["human"], family, path.parent, seed)
     spec = _model(check, data.get("model"), path.parent)
     names = _observe(check, data.get("observe", _default_observe(spec)))
@@ -185,8 +200,8 @@ def load_scenario(path: str | Path, *, observe: list[str] | str | None = None,
         path=path, name=str(data.get("name", path.stem)), family=family,
         seed=seed, human_kind=kind, human=human,
         policy=_policy(check, data["policy"]), model=spec,
-        object=obj, speed=check.number(data.get("speed", 1.0), "speed", 0.25, 4.0),
-        time_limit=check.number(data.get("time_limit", 6.0), "time_limit", 0.1, 600.0),
+        object=obj, speed=check.bounded(data.get("speed", 1.0), "speed", "speed"),
+        time_limit=check.bounded(data.get("time_limit", 6.0), "time_limit", "time_limit"),
         observe=names)
 
 
@@ -281,8 +296,8 @@ def _human(check: _Checker, data: Any, family: str, folder: Path,
             if human.get(key) is not None:
                 check.choice(human[key], f"human.{key}", tasks)
         if "switch_phase" in human:
-            human["switch_phase"] = check.number(human["switch_phase"], "human.switch_phase",
-                                                 0.01, 1.0)
+            human["switch_phase"] = check.bounded(human["switch_phase"], "human.switch_phase",
+                                                  "switch_phase")
         if human.get("switch_to") is not None and human.get("task") == human["switch_to"]:
             check.fail("human.switch_to", "a task other than human.task", human["switch_to"])
     elif kind == "waypoints":
@@ -290,8 +305,8 @@ def _human(check: _Checker, data: Any, family: str, folder: Path,
         human["task"] = check.text(human.get("task", "scripted"), "human.task")
         human["tracker"] = _tracker(check, human.get("tracker"))
     else:
-        root = folder / check.text(str(human["recorded"]), "human.recorded")
-        if not root.is_dir():
+        root = folder / check.text(human["recorded"], "human.recorded")
+        if not _exists(root, "is_dir"):
             check.fail("human.recorded", "the folder of a recorded set (<root>/<task>/<trial>.csv)",
                        str(human["recorded"]))
         human["recorded"] = str(root)
@@ -328,7 +343,7 @@ def _waypoints(check: _Checker, data: Any) -> tuple[list[float], list[list[float
         item = check.keys(item, key, ("t", "position"))
         if "t" not in item or "position" not in item:
             check.fail(key, "both t (s) and position [x, y, z] (m)", item)
-        t = check.number(item["t"], f"{key}.t", 0.0, 600.0)
+        t = check.bounded(item["t"], f"{key}.t", "waypoint_t")
         if times and t <= times[-1]:
             check.fail(f"{key}.t", f"a time after the previous waypoint's {times[-1]:g} s", t)
         p = item["position"]
@@ -336,7 +351,7 @@ def _waypoints(check: _Checker, data: Any) -> tuple[list[float], list[list[float
                 or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in p)):
             check.fail(f"{key}.position", "3 numbers [x, y, z] (m)", p)
         for v, axis in zip(p, "xyz"):
-            check.number(v, f"{key}.position.{axis}", -3.0, 3.0)
+            check.bounded(v, f"{key}.position.{axis}", "position")
         times.append(t)
         points.append([float(v) for v in p])
     return times, points
@@ -364,33 +379,34 @@ def _policy(check: _Checker, data: Any) -> dict:
     policy = check.keys(data, f"policy ({kind})", POLICY_KEYS[kind])
     policy["type"] = kind
     if kind == "dynamic":
-        policy["dow_t"] = check.number(policy.get("dow_t", 0.2), "policy.dow_t", 0.01, 10.0)
+        policy["dow_t"] = check.bounded(policy.get("dow_t", 0.2), "policy.dow_t", "dow_t")
     else:
-        policy["ratio"] = check.number(policy.get("ratio", 0.3), "policy.ratio", 0.01, 1.0)
+        policy["ratio"] = check.bounded(policy.get("ratio", 0.3), "policy.ratio", "ratio")
     options = policy.get("options", {})
     if not isinstance(options, Mapping):
         check.fail("policy.options", "a mapping of predictor options", options)
-    policy["options"] = dict(options)
+    policy["options"] = checked_options(check, options, "policy.options", policy_options(kind))
     return policy
 
 
 def _model(check: _Checker, data: Any, folder: Path) -> dict:
     model = check.keys({} if data is None else data, "model", MODEL_KEYS)
     if "file" in model:
-        file = folder / check.text(str(model["file"]), "model.file")
-        if not file.is_file():
+        file = folder / check.text(model["file"], "model.file")
+        if not _exists(file, "is_file"):
             check.fail("model.file", "an existing model file (.npz)", str(model["file"]))
         model["file"] = str(file)
-    model["demos"] = check.integer(model.get("demos", 20), "model.demos", 2)
-    model["seed"] = check.integer(model.get("seed", 0), "model.seed")
+    model["demos"] = check.bounded(model.get("demos", 20), "model.demos", "demos")
+    model["seed"] = check.bounded(model.get("seed", 0), "model.seed", "seed")
     options = model.get("options", {})
     if not isinstance(options, Mapping):
         check.fail("model.options", "a mapping of IProMP options", options)
-    model["options"] = dict(options)
-    try:
-        from sandbox.core import IProMP
+    from sandbox.core import IProMP
 
+    model["options"] = checked_options(check, options, "model.options",
+                                       sorted(keywords(IProMP.__init__)))
+    try:
         IProMP(**model["options"])
-    except (TypeError, ValueError) as error:
+    except ValueError as error:
         raise ValueError(f"scenario {check.path}: model.options: {error}") from None
     return model

@@ -71,8 +71,8 @@ def make_policy(scenario: Scenario, model):
         if spec["type"] == "dynamic":
             return IProMPPolicy(model, dow_t=spec["dow_t"], **options)
         return StaticPolicy(model, ratio=spec["ratio"], **options)
-    except TypeError as error:
-        raise ValueError(f"scenario {scenario.path}: policy.options: {error}") from error
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"scenario {scenario.path}: policy.options: {error}") from None
 
 
 def reset_options(scenario: Scenario, model=None) -> dict[str, Any]:

@@ -38,40 +38,38 @@ from __future__ import annotations
 import itertools
 from collections.abc import Callable, Mapping
 from dataclasses import replace
+from math import prod
 from pathlib import Path
 from typing import Any
 
 from sandbox.core.predictor import LIKELIHOODS, WINDOW_MODES
 from sandbox.eval.loocv import EvalConfig
 from sandbox.eval.tune import RATIO, WINDOW
-from sandbox.validation import check_choice, check_fraction, check_integer, check_positive
+from sandbox.limits import BOUNDS, MAX_GRID_POINTS
+from sandbox.validation import check_choice
 
 #: Grid names that are another name of an :class:`EvalConfig` field.
 ALIASES = {"window": "window_mode"}
 
 
-def _number(name: str, value: Any, *, allow_zero: bool = False) -> float:
-    if isinstance(value, bool):
-        raise ValueError(f"{name}: expected a number, got {value!r}")
-    if isinstance(value, str):  # YAML 1.1 reads 1e-3 (no dot) as a string
+def _from_yaml(value: Any) -> Any:
+    """A number YAML 1.1 left as a string (``1e-3``, ``1e2``) as a float; anything else as is."""
+    if isinstance(value, str):
         try:
-            value = float(value)
+            return float(value)
         except ValueError:
-            raise ValueError(f"{name}: expected a number, got {value!r}") from None
-    return check_positive(value, name, allow_zero=allow_zero)
+            return value
+    return value
 
 
-def _integer(name: str, value: Any, low: int = 1) -> int:
-    if isinstance(value, str):  # YAML 1.1 reads 1e2 (no dot) as a string
-        try:
-            value = float(value)
-        except ValueError:
-            raise ValueError(f"{name}: expected an integer >= {low}, got {value!r}") from None
-    return check_integer(value, name, low)
+def _bounded(key: str) -> Callable[[str, Any], Any]:
+    """The check of option ``key``: its entry of :data:`sandbox.limits.BOUNDS`."""
+    return lambda name, value: BOUNDS[key].check(_from_yaml(value), name)
 
 
-def _optional(name: str, value: Any) -> float | None:
-    return None if value is None else _number(name, value)
+def _optional(key: str) -> Callable[[str, Any], Any]:
+    return lambda name, value: (None if value is None else
+                                BOUNDS[key].check(_from_yaml(value), name, or_null=True))
 
 
 def _flag(name: str, value: Any) -> bool:
@@ -102,31 +100,25 @@ def _floors(name: str, value: Any) -> tuple[tuple[str, float], ...]:
             isinstance(p, list | tuple) and len(p) == 2 for p in value):
         raise ValueError(f"{name}: expected a mapping modality -> floor (e.g. {{arm: 0.02}}), "
                          f"got {value!r}")
-    return tuple((str(m), _number(f"{name}[{m!r}]", f)) for m, f in value)
+    if not all(isinstance(m, str) and m.strip() for m, _ in value):
+        raise ValueError(f"{name}: expected modality names as keys, got {value!r}")
+    check = _bounded("noise_floors")
+    return tuple((m, check(f"{name}[{m!r}]", f)) for m, f in value)
 
 
 #: Every option a grid may set, with the function that checks and converts a value.
 OPTIONS: dict[str, Callable[[str, Any], Any]] = {
-    "n_basis": lambda n, v: _integer(n, v, 2),
-    "regularizer": _number,
-    "noise_scale": _number,
-    "noise_floor": _number,
-    "signal_floor": _number,
+    **{key: _bounded(key) for key in ("n_basis", "regularizer", "noise_scale", "noise_floor",
+                                      "signal_floor", "n_candidates", "refine_steps",
+                                      "blend_rate", "blend_delay", "end_prob", "subsample",
+                                      "dow_t", "ratio")},
     "noise_floors": _floors,
-    "settle_tol": _optional,
-    "arrive_tol": _optional,
+    "settle_tol": _optional("settle_tol"),
+    "arrive_tol": _optional("arrive_tol"),
     "likelihood": _choice(LIKELIHOODS),
     "window_mode": _choice(WINDOW_MODES),
-    "n_candidates": lambda n, v: _integer(n, v, 3),
-    "refine_steps": lambda n, v: _integer(n, v, 0),
-    "blend_rate": _number,
-    "blend_delay": lambda n, v: _number(n, v, allow_zero=True),
     "until_end": _flag,
-    "end_prob": lambda n, v: check_fraction(_number(n, v), n),
-    "subsample": _integer,
     "observe": _modalities,
-    "dow_t": _number,
-    "ratio": lambda n, v: check_fraction(_number(n, v), n),
 }
 KNOWN = tuple(sorted(set(OPTIONS) | set(ALIASES)))
 
@@ -151,10 +143,10 @@ def read_grid(path: str | Path) -> list[dict[str, Any]]:
         The file is missing or unreadable, an option is unknown, a list is empty,
         or a value is not what its option takes; the message names the option.
     """
-    from sandbox.validation import read_mapping
+    from sandbox.validation import is_file, read_mapping
 
     path = Path(path)
-    if not path.is_file():
+    if not is_file(path):
         raise ValueError(f"--grid: expected an existing .yaml, .yml or .json file, "
                          f"got {str(path)!r}")
     try:
@@ -167,39 +159,68 @@ def parse_grid(data: Any) -> list[dict[str, Any]]:
     """The points of a parsed grid (see :func:`read_grid`)."""
     if not isinstance(data, Mapping) or not data:
         raise ValueError(f"expected a mapping of options to lists of values, or 'points:', "
-                         f"got {data!r}")
+                         f"got {_show(data)}")
     if "points" in data:
         if len(data) > 1:
             raise ValueError(f"expected 'points:' alone or lists of values, got 'points' and "
-                             f"{sorted(k for k in data if k != 'points')}")
+                             f"{sorted(str(k) for k in data if k != 'points')}")
         points = _listed(data["points"], "points")
+        _count(len(points))
         if not all(isinstance(p, Mapping) for p in points):
             raise ValueError(f"points: expected a list of mappings option -> value, "
-                             f"got {points!r}")
-    else:
-        lists = {name: _listed(values, name) for name, values in data.items()}
-        points = [dict(zip(lists, combo)) for combo in itertools.product(*lists.values())]
-    return _unique([_point(p, f"points[{i}]" if "points" in data else "")
-                    for i, p in enumerate(points)])
+                             f"got {_show(points)}")
+        return _unique([_point(p, f"points[{i}]") for i, p in enumerate(points)])
+    for name in data:
+        _known(name, str(name))
+    lists = {name: _listed(values, str(name)) for name, values in data.items()}
+    _count(prod(len(values) for values in lists.values()))
+    checked = {ALIASES.get(name, name): [_value(name, str(name), v) for v in values]
+               for name, values in lists.items()}
+    if len(checked) < len(lists):
+        raise ValueError("window: 'window_mode' is given twice (window is window_mode)")
+    return _unique([dict(zip(checked, combo)) for combo in itertools.product(*checked.values())])
+
+
+def _count(n: int) -> None:
+    """Refuse a grid of more than ``MAX_GRID_POINTS`` points (counted, not expanded)."""
+    if n > MAX_GRID_POINTS:
+        raise ValueError(f"expected at most {MAX_GRID_POINTS} points "
+                         f"(sandbox.limits.MAX_GRID_POINTS), got {n}")
+
+
+def _known(name: Any, label: str) -> None:
+    if not isinstance(name, str) or (name not in OPTIONS and name not in ALIASES):
+        raise ValueError(f"{_show(label)}: unknown option; expected one of {list(KNOWN)}")
+
+
+def _value(name: str, label: str, value: Any) -> Any:
+    return OPTIONS[ALIASES.get(name, name)](label, value)
 
 
 def _listed(values: Any, name: str) -> list:
     if not isinstance(values, list) or not values:
-        raise ValueError(f"{name}: expected a non-empty list of values, got {values!r}")
+        raise ValueError(f"{_show(name)}: expected a non-empty list of values, "
+                         f"got {_show(repr(values))}")
     return values
 
 
 def _point(raw: Mapping, where: str) -> dict[str, Any]:
-    point = {}
+    point: dict[str, Any] = {}
     for name, value in raw.items():
-        label = f"{where}.{name}" if where else str(name)
-        if name not in OPTIONS and name not in ALIASES:
-            raise ValueError(f"{label}: unknown option; expected one of {list(KNOWN)}")
+        label = f"{where}.{name}"
+        _known(name, label)
         field = ALIASES.get(name, name)
         if field in point:
             raise ValueError(f"{label}: {field!r} is given twice (window is window_mode)")
         point[field] = OPTIONS[field](label, value)
     return point
+
+
+def _show(value: Any) -> str:
+    """``value`` as one line of at most 80 characters: a printable name as is, anything else
+    as its repr (a message never repeats a whole file, nor breaks a line)."""
+    text = value if isinstance(value, str) and value.isprintable() and value else repr(value)
+    return text if len(text) <= 80 else text[:77] + "..."
 
 
 def _unique(points: list[dict]) -> list[dict]:

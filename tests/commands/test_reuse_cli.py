@@ -233,7 +233,7 @@ def test_sweep_and_play_take_the_settings(tmp_path, monkeypatch):
     ("n_basis: 9\nblend: 3\n", "unknown key 'blend'; valid keys: observe, n_basis,"),
     ("likelihood: best\n", "likelihood: expected one of ['joint', 'marginal'], got 'best'"),
     ("n_basis: 1\n", "n_basis: expected an integer in [2, 100], got 1"),
-    ("settle_tol: -1\n", "settle_tol: expected a finite number > 0 or null"),
+    ("settle_tol: -1\n", "settle_tol: expected a finite number in (0, 10] rad or null"),
     ("- 1\n- 2\n", "expected a mapping of options"),
     ("n_basis: [\n", "invalid YAML"),
 ])

@@ -72,7 +72,9 @@ def test_sizes_are_bounded_before_anything_is_allocated(model):
         IProMP(n_basis=200_000)
     with pytest.raises(ValueError, match="n_candidates"):
         DynamicPredictor(model, n_candidates=10**7)
-    for options in ({"dt": 1e-9}, {"horizon": 1e9}, {"blend_rate": 1e-9}):
+    with pytest.raises(ValueError, match=r"blend_rate: .*\(sandbox.limits\)"):   # issue 29
+        DynamicPredictor(model, blend_rate=1e-9)
+    for options in ({"dt": 1e-9}, {"horizon": 1e9}):
         with pytest.raises(ValueError, match="MAX_PLAN_STEPS"):
             DynamicPredictor(model, **options)
 

@@ -241,7 +241,7 @@ def test_a_folder_named_like_a_trial_is_skipped(dataset):
     """issue 13 item 5: a `<task>/<name>.csv` that is not a readable file is a skipped trial."""
     (dataset / "pencil_box" / "z.csv").mkdir()
     demos, skipped = _load(dataset)
-    assert len(demos) == 2 and "no such file" in skipped["z.csv"]
+    assert len(demos) == 2 and "not a regular file" in skipped["z.csv"]
 
 
 def test_evaluate_exits_non_zero_when_no_trial_is_usable(dataset, tmp_path, capsys):

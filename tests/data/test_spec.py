@@ -54,7 +54,7 @@ def test_column_shorthands_rename_the_hand_and_robot():
     ("observe: [eeg]", r"expected names among .*got \['eeg'\]"),
     ("robot: left_s0", "robot: expected a list of names"),
     ("modalities: {w: {columns: [a, a]}}", "repeat"),
-    (": : :", "not valid YAML"),
+    (": : :", "invalid YAML at line 1"),
 ])
 def test_bad_spec_files_name_the_file_and_the_key(tmp_path, text, message):
     path = tmp_path / "bad.yaml"

@@ -102,7 +102,7 @@ def test_values_are_converted_as_their_option_takes_them(tmp_path):
     ("points: []", "points: expected a non-empty list"),
     ("points: [{n_basis: 15, speed: 2}]", "points[0].speed: unknown option"),
     ("likelihood: [joint, best]", "likelihood: expected one of ['joint', 'marginal']"),
-    ("n_basis: [15.5]", "n_basis: expected an integer >= 2"),
+    ("n_basis: [15.5]", "n_basis: expected an integer in [2, 100]"),
     ("n_basis: 15", "n_basis: expected a non-empty list of values, got 15"),
     ("window: [all]\nwindow_mode: [all]", "'window_mode' is given twice"),
 ])

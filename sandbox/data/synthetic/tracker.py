@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from sandbox.limits import BOUNDS
 from sandbox.validation import FloatArray, check_positive
 
 
@@ -75,10 +76,9 @@ class TrackerModel:
     shoulder_noise: float = 0.4
 
     def __post_init__(self) -> None:
-        check_positive(self.noise_m, "noise_m", allow_zero=True)
-        if self.frame_hz is not None:
-            check_positive(self.frame_hz, "frame_hz")
-        check_positive(self.glitch_rate, "glitch_rate", allow_zero=True)
+        for name in ("noise_m", "glitch_rate", "frame_hz"):   # the one table of limits
+            if getattr(self, name) is not None or name != "frame_hz":
+                BOUNDS[name].check(getattr(self, name), name)
         check_positive(self.glitch_s, "glitch_s")
         lo, hi = self.glitch_m
         if not 0 < lo <= hi:
