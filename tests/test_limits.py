@@ -24,11 +24,7 @@ from sandbox.limits import BOUNDS, Bound, check
 
 #: Entries whose core check differs from the table, and why (each must still differ:
 #: :func:`test_known_differences_are_still_real`).
-KNOWN_DIFFERENCES = {
-    ("core", "dow_t"): "DynamicPredictor (sandbox/core/predictor.py) keeps its own floor "
-                       "MIN_MEDIAN_DT_S and has no ceiling: every other surface refuses a "
-                       "window over 60 s before a predictor is built",
-}
+KNOWN_DIFFERENCES: dict[tuple[str, str], str] = {}
 
 
 def inside(bound: Bound) -> list[float]:
@@ -303,10 +299,15 @@ def test_the_core_predictors_agree_with_the_table(fitted, name):
             make(fitted, **{name: value})
 
 
-def test_known_differences_are_still_real(fitted):
+def test_the_core_window_is_the_tables(fitted):
+    """The one difference the merge of issue 29 left (DynamicPredictor's own 1e-4 s floor and
+    no ceiling) is gone: the core reads ``BOUNDS["dow_t"]`` too."""
     from sandbox.core import DynamicPredictor
 
-    DynamicPredictor(fitted, dow_t=outside(BOUNDS["dow_t"])[1])     # the core takes it
+    assert not KNOWN_DIFFERENCES
+    with pytest.raises(ValueError, match="dow_t"):
+        DynamicPredictor(fitted, dow_t=outside(BOUNDS["dow_t"])[1])
+    assert DynamicPredictor(fitted, dow_t=BOUNDS["dow_t"].high).dow_t == 60.0
 
 
 @pytest.mark.parametrize("name", ["noise_m", "glitch_rate", "frame_hz"])

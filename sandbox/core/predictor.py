@@ -38,8 +38,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from sandbox.core.limits import MIN_MEDIAN_DT_S
 from sandbox.core.updating import LIKELIHOODS, PredictorBase, Update
+from sandbox.limits import BOUNDS
 from sandbox.validation import check_choice, check_fraction, check_positive
 
 if TYPE_CHECKING:
@@ -58,8 +58,8 @@ class DynamicPredictor(PredictorBase):
     model : IProMP
         A fitted model.
     dow_t : float
-        Dynamic observation window (s, >= 1e-4): an update every ``dow_t``
-        seconds of observation (the paper tests 1, 0.5, 0.2, 0.1).
+        Dynamic observation window (s, in (0, 60], :data:`sandbox.limits.BOUNDS`): an
+        update every ``dow_t`` seconds of observation (the paper tests 1, 0.5, 0.2, 0.1).
     observe : sequence of str or str, optional
         Modalities the incoming rows carry (default: all the model's); any
         subset predicts, the others are marginalised. A name the model was not
@@ -146,9 +146,7 @@ class DynamicPredictor(PredictorBase):
 
     def __init__(self, model: IProMP, dow_t: float = 0.2, *, window: str = "all",
                  **options) -> None:
-        self.dow_t = check_positive(dow_t, "dow_t")
-        if self.dow_t < MIN_MEDIAN_DT_S:
-            raise ValueError(f"dow_t: expected at least {MIN_MEDIAN_DT_S:g} s, got {dow_t!r}")
+        self.dow_t = float(BOUNDS["dow_t"].check(dow_t, "dow_t"))   # the one table's range
         self.window = check_choice(window, "window", WINDOW_MODES)
         super().__init__(model, **options)
 

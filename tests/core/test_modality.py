@@ -169,7 +169,7 @@ def test_a_dropout_masks_only_its_modality(multi):
 
 def test_subsampling_counts_each_modality_on_its_own(multi):
     demos, model = multi
-    pred = DynamicPredictor(model, subsample=2, dow_t=100.0)
+    pred = DynamicPredictor(model, subsample=2, dow_t=60.0)
     rows = demos[0].human[:12].copy()
     rows[1::2, 9:] = np.nan            # the signal comes every other row
     for i, row in enumerate(rows):
