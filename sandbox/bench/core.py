@@ -41,8 +41,12 @@ from sandbox.core.blending import blend_unchecked, sigmoid_activations
 from sandbox.core.interaction import condition, log_marginal_likelihood, observation_matrix
 from sandbox.core.phase import Lattice, log_alpha_prior
 from sandbox.core.recognition import task_posterior
+from sandbox.limits import BOUNDS
 
 TASKS = ("left", "right", "up", "down")
+#: The longest window the predictors take (s): no automatic update within a bench stream,
+#: the timed updates are called by hand.
+NO_UPDATE_S = BOUNDS["dow_t"].high
 
 
 def reference_case(seed: int = 0, n_per_task: int = 20, *, multimodal: bool = False,
@@ -100,7 +104,7 @@ def _median_ms(fn: Callable[[], object], repeats: int) -> float:
 
 
 def _fed_predictor(model, times, values, **options) -> DynamicPredictor:
-    pred = DynamicPredictor(model, dow_t=1e9, horizon=2.0, **options)   # no automatic update
+    pred = DynamicPredictor(model, dow_t=NO_UPDATE_S, horizon=2.0, **options)
     for t, y in zip(times, values):
         pred.observe(t, y)
     return pred
@@ -247,7 +251,7 @@ def _multimodal_figures(seed: int, repeats: int, n_cand: int, hand_ms: float) ->
 
 def _observe_ms(model, times, values, n_candidates: int) -> float:
     """Median wall time of one kept observation (statistics growth included)."""
-    pred = DynamicPredictor(model, dow_t=1e9, subsample=1, n_candidates=n_candidates)
+    pred = DynamicPredictor(model, dow_t=NO_UPDATE_S, subsample=1, n_candidates=n_candidates)
     samples = []
     for t, y in zip(times[::5], values[::5]):
         start = time.perf_counter()

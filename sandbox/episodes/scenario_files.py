@@ -50,6 +50,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from sandbox.episodes.scenario_models import check_model_file, default_observe, human_tasks
 from sandbox.episodes.scenario_options import checked_options, keywords, policy_options
 from sandbox.validation import MAPPING_SUFFIXES, read_mapping
 
@@ -189,9 +190,9 @@ def load_scenario(path: str | Path, *, observe: list[str] | str | None = None,
     seed = check.bounded(data.get("seed", 0), "seed", "seed")
     kind, human = _human(check, data["human"], family, path.parent, seed)
     spec = _model(check, data.get("model"), path.parent)
-    names = _observe(check, data.get("observe", _default_observe(spec)))
+    names = _observe(check, data.get("observe", default_observe(spec, ENV_MODALITIES)))
     if "file" in spec:
-        _check_file(check, spec["file"], names, _human_tasks(kind, human, family))
+        check_model_file(check, spec["file"], names, human_tasks(kind, human, family))
     if kind != "recorded" and "file" not in spec and not set(names) <= set(SYNTHETIC_MODALITIES):
         check.fail("observe", f"modalities of the synthetic model {list(SYNTHETIC_MODALITIES)} "
                               "(EMG is not simulated: use a recorded human or a model file)",
@@ -222,52 +223,6 @@ def _fill_in(check: _Checker, data: dict, model, options, model_options) -> dict
         if isinstance(own, Mapping):
             data["model"] = {**section, "options": {**model_options, **own}}
     return data
-
-
-def _default_observe(model: dict) -> list[str]:
-    """``hand``, or the modalities of the model file the environments observe."""
-    if "file" not in model:
-        return ["hand"]
-    from sandbox.core import IProMP
-
-    names = [n for n in IProMP.load(model["file"]).modality_names if n in ENV_MODALITIES]
-    return names or ["hand"]
-
-
-def _human_tasks(kind: str, human: dict, family: str) -> tuple[str, list[str]]:
-    """Where the human's tasks come from and which they are: the synthetic human's named
-    tasks (every family task if none is named), the recorded trial's; none for waypoints
-    (a scripted path is no task of any model: its label is free)."""
-    if kind == "waypoints":
-        return "human", []
-    if kind == "recorded":
-        return "human.task", [human["task"]]
-    named = [human[k] for k in ("task", "switch_to") if human.get(k) is not None]
-    if named:
-        return "human.task/switch_to", named
-    from sandbox.envs.sources import family_tasks
-
-    return f"family {family!r}", list(family_tasks(family))
-
-
-def _check_file(check: _Checker, file: str, observe: tuple[str, ...],
-                tasks: tuple[str, list[str]]) -> None:
-    """The model file observes ``observe``, drives Baxter's arm and knows the human's tasks
-    (as ``demo --model`` and ``evaluate --model`` require)."""
-    from sandbox.core import IProMP
-
-    model = IProMP.load(file)
-    if not set(observe) <= set(model.modality_names):
-        check.fail("observe", f"modalities of the model file {file} "
-                              f"{list(model.modality_names)}", list(observe))
-    if model.n_robot != 7:
-        check.fail("model.file", "a model of Baxter's 7 left-arm joints",
-                   f"{model.n_robot} robot dims")
-    source, wanted = tasks
-    if any(t not in model.tasks for t in wanted):
-        raise ValueError(f"scenario {check.path}: model.file: expected a model that knows the "
-                         f"human's tasks {wanted} ({source}), got one of {list(model.tasks)} "
-                         f"({file})")
 
 
 def _observe(check: _Checker, data: Any) -> tuple[str, ...]:
