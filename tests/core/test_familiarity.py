@@ -119,11 +119,11 @@ def test_familiarity_is_in_0_1_and_falls_with_the_statistic(model):
     cal = model.calibration
     values = np.geomspace(1e-4, 1e4, 200)
     for t in (0.0, 1.0, 5.0):
-        fam = np.array([cal.familiarity(t, v, 0) for v in values])
+        fam = np.array([cal.familiarity(t, [v, 0.0, 0.0, 0.0], 0) for v in values])
         assert np.all((fam > 0) & (fam <= 1))
         assert np.all(np.diff(fam) <= 0)
         assert fam[0] == 1.0 and fam[-1] < 1e-3
-    assert np.isnan(cal.familiarity(1.0, float("nan"), 1))
+    assert np.isnan(cal.familiarity(1.0, [float("nan"), 0.0, 0.0, 0.0], 1))
 
 
 def test_familiarity_of_a_bin_matches_its_quantiles():
