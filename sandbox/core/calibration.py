@@ -143,8 +143,8 @@ class Calibration:
         falls at most one e-fold per :data:`EXTRA_MIN_TAIL` of its log), except
         ``not_arrived``, already a p-value bound: it ranks as :math:`e^{-s_T}`
         (:mod:`sandbox.core.evidence`; its stored quantiles only describe it).
-        Several ranks combine by Fisher's method (module docstring). NaN when the first statistic is NaN; a later NaN
-        statistic counts as no evidence (rank 1).
+        Several ranks combine by Fisher's method (module docstring). NaN when the
+        first statistic is NaN; a later NaN statistic counts as no evidence (rank 1).
         """
         v = np.atleast_1d(np.asarray(value, dtype=np.float64))
         if v.shape != (len(self.components),):
@@ -355,9 +355,10 @@ def _check_extra(cal: Calibration, q: FloatArray) -> None:
     if names not in {("mahalanobis",), COMPONENTS}:
         raise ValueError(f"calibration components: expected {('mahalanobis',)} or "
                          f"{COMPONENTS}, got {names!r}")
-    if len(names) == 1:
-        if cal.extra is not None:
-            raise ValueError("calibration extra: expected none for one statistic")
+    if len(names) == 1 or cal.extra is None:
+        if cal.extra is not None or len(names) > 1:
+            raise ValueError(f"calibration extra: expected quantiles of {len(names) - 1} more "
+                             f"statistics, got {'none' if cal.extra is None else 'some'}")
         return
     extra = check_array(cal.extra, "calibration extra quantiles", 4,
                         shape=(len(names) - 1,) + q.shape)

@@ -40,7 +40,8 @@ read the timing, all for the chosen task :math:`k` at the update time :math:`t`
   :math:`w_j` on :math:`\\alpha_j = T_j / T_{nom}`), its expected squared
   standardised speed
 
-  .. math::  s_\\phi = \\sum_j w_j \\left(\\frac{\\alpha_j - \\mu_\\alpha}{\\sigma_\\alpha}\\right)^2
+  .. math::  s_\\phi = \\sum_j w_j
+             \\left(\\frac{\\alpha_j - \\mu_\\alpha}{\\sigma_\\alpha}\\right)^2
              = \\mathrm{Var}[z] + \\mathrm{E}[z]^2,
 
   large when the speed is uncertain late in a motion (no candidate explains
@@ -72,7 +73,7 @@ SPEED_WINDOW = 0.3
 
 
 def not_arrived(model: IProMP, prediction: Prediction, t: float, k: int) -> float:
-    """:math:`s_T = (1 - e(t))(-\\log S(t)) \\ge 0` of task ``k`` at ``t`` (s) (module docstring)."""
+    """:math:`s_T = (1 - e(t))(-\\log S(t)) \\ge 0` of task ``k`` at ``t`` (s), module docstring."""
     task = model.task_models[k]
     u = (t / task.nominal_duration - task.alpha_mean) / task.alpha_std
     log_survival = float(log_ndtr(-u))                 # log(1 - Phi(u)), exact in the tail
@@ -103,7 +104,7 @@ def speed_change(model: IProMP, prediction: Prediction, k: int, times: FloatArra
 
 
 def phase_spread(model: IProMP, prediction: Prediction, k: int) -> float:
-    """:math:`s_\\phi \\ge 0` of task ``k``: expected squared standardised speed (0 without grid)."""
+    """:math:`s_\\phi \\ge 0` of task ``k``: expected squared standard speed (0 without grid)."""
     if prediction.grid is None:
         return 0.0
     durations, weights = prediction.grid[k]

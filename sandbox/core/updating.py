@@ -366,10 +366,8 @@ class PredictorBase:
         cal = getattr(self.model, "calibration", None)
         if cal is None or prediction.factors is None:
             return None
-        if len(cal.components) == 1:
-            value = statistic(prediction)
-        else:
-            value = statistics(self.model, prediction, t, *self._window(t))
+        value: float | FloatArray = (statistic(prediction) if len(cal.components) == 1 else
+                                     statistics(self.model, prediction, t, *self._window(t)))
         return cal.familiarity(t, value, chosen(prediction))
 
     @property

@@ -1,4 +1,4 @@
-"""Timing evidence of the familiarity (sandbox.core.evidence): known answers on synthetic motions."""
+"""Timing evidence of the familiarity (sandbox.core.evidence): known answers, synthetic motions."""
 
 from __future__ import annotations
 
