@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Callable, Iterable, Sequence
+from functools import partial
 from os import PathLike
 from pathlib import Path
 from typing import Any
@@ -58,10 +59,12 @@ from sandbox.data.preprocess import (  # noqa: F401 - preprocess_rows/_demonstra
     summary_counts,
 )
 from sandbox.data.spec import HAND, ROBOT_COLUMNS, TIME_COLUMN, DataSpec  # noqa: F401
+from sandbox.data.spec_read import cut_rows, find_spec_trials, read_spec_table
 from sandbox.data.trialfile import (  # noqa: F401 - re-exported: the loader's public names
     HUMAN_COLUMNS,
     Columns,
     TrialError,
+    _fix,
     check_plausible,
     read_trial_table,
 )
@@ -217,16 +220,18 @@ def _spec(spec: DataSpec | None, columns: Columns | None) -> DataSpec:
 
 def _load_trial(path: Path, task: str, spec: DataSpec, modalities: Sequence[Modality],
                 preprocess: str, max_duration: float, options: dict[str, Any]) -> Demonstration:
-    columns = Columns.from_spec(spec, modalities)
+    columns = _named(Columns.from_spec(spec, modalities), spec)
     owners = {c: m.name for m in modalities for c in m.dims}
-    table, notes = read_trial_table(path, columns, owners)
-    table[:, 0] *= spec.time_scale            # the time column in seconds
+    fix = partial(_fix, columns=columns, owners=owners)
+    table, extra, notes = read_spec_table(path, spec, modalities, fix)
     n_rows = table.shape[0]
     p = len(columns.human)
     keep, dropped = _usable_rows(table, p)
     if notes["truncated_last_row"]:
         dropped["truncated last row"] = 1
-    table = table[keep]
+    if notes.get("unequal_files"):
+        dropped["files of unequal length"] = int(notes["unequal_files"])
+    table, cut = cut_rows(spec, table[keep], extra[keep], p)
     times, human, robot = table[:, 0], table[:, 1 : 1 + p], table[:, 1 + p :]
     last = np.flatnonzero(np.r_[np.diff(times) > 0, True]) if times.size else times.astype(int)
     if last.size < 2:
@@ -236,12 +241,15 @@ def _load_trial(path: Path, task: str, spec: DataSpec, modalities: Sequence[Moda
             + (f" ({why})" if why else "")
         )
     check_plausible(times[last], human, robot, columns, max_duration)
-    out, measured, counts = preprocess_human(times, human, modalities, preprocess, **options)
+    out, measured, counts = preprocess_human(
+        times, human, modalities, preprocess,
+        signal_filters={m.name: spec.layout.signal_filter(m.name) for m in modalities},
+        **options)
     _check_usable(modalities, measured, counts)
     report = {
         "file": str(path), "task": task, "preprocess": preprocess, "rows": n_rows,
         "rows_dropped": dropped, "repeated_timestamps": int(times.size - last.size),
-        "samples": int(last.size), "duration_s": float(times[-1] - times[0]),
+        "samples": int(last.size), "duration_s": float(times[-1] - times[0]), **cut,
         **summary_counts(counts, modalities),
     }
     return Demonstration(
@@ -249,6 +257,17 @@ def _load_trial(path: Path, task: str, spec: DataSpec, modalities: Sequence[Moda
         robot_names=columns.robot, source=str(path),
         meta={"report": report, **measured_meta(measured)},
     )
+
+
+def _named(columns: Columns, spec: DataSpec) -> Columns:
+    """With ``files``: the robot columns without their ``part.`` (the joints' own names, for
+    their limits and the model), unless two parts share a name."""
+    if not spec.layout.files:
+        return columns
+    bare = tuple(c.partition(".")[2] for c in columns.robot)
+    if len(set(bare)) < len(bare) or set(bare) & {*columns.human, columns.time}:
+        return columns
+    return Columns(columns.human, bare, columns.time)
 
 
 def _check_usable(modalities, measured, counts) -> None:
@@ -293,6 +312,18 @@ def find_trials(root: str | Path, tasks: Sequence[str] | None = None) -> list[tu
     return [(task, f) for task, files in found.items() for f in files]
 
 
+def _trials(root, tasks, spec: DataSpec) -> tuple[list[tuple[str, Path]], list[tuple[str, str]]]:
+    """The trials of ``root`` in the spec's layout, and those left out with the reason."""
+    if not spec.layout.files and spec.layout.labels is None:
+        return find_trials(root, tasks), []
+    root = _path(root, "data")
+    if not root.is_dir():
+        raise ValueError(f"data: expected a folder, got {str(root)!r}")
+    if tasks is not None and (isinstance(tasks, (str, bytes)) or not isinstance(tasks, Iterable)):
+        raise ValueError(f"tasks: expected a list of task names, got {tasks!r}")
+    return find_spec_trials(root, spec, None if tasks is None else list(tasks))
+
+
 def load_recorded(
     root: str | Path,
     *,
@@ -335,8 +366,11 @@ def load_recorded(
     spec = _spec(spec, columns)
     spec.observed(observe)
     store = resolve_cache(cache)
-    demos, skipped = [], []
-    for task, path in find_trials(root, tasks):
+    demos: list[Demonstration] = []
+    trials, skipped = _trials(root, tasks, spec)
+    for file, reason in skipped:
+        warnings.warn(f"skipped {file}: {reason}", SkippedTrialWarning, stacklevel=2)
+    for task, path in trials:
         try:
             demos.append(load_trial(path, task=task, spec=spec, observe=observe,
                                     preprocess=preprocess, max_duration=max_duration,
