@@ -29,7 +29,7 @@ import json
 import sys
 from typing import Any
 
-from sandbox.commands import _observation, _types
+from sandbox.commands import _observation, _skipped, _types
 
 NAME = "data"
 HELP = ("inspect a recorded dataset: summary of trials and tracker glitches, filter check; "
@@ -42,10 +42,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     summary = sub.add_parser(
         "summary", help="tasks, durations, rates, glitches, skipped trials",
         description="Summarise a recorded set beside a synthetic one: per task the trials, "
-                    "durations and sample rates, the tracker glitches found, and every trial "
-                    "skipped with its reason (--verbose lists them).")
+                    "durations and sample rates, the tracker glitches found, every trial "
+                    "skipped with its reason (one line each), and a frame: block placing the "
+                    "demos' meeting region in Baxter's reach. With no usable trial, one line "
+                    "per reason (--verbose: per file).")
     _common(summary)
     summary.add_argument("--json", action="store_true", help="print JSON instead of text")
+    summary.add_argument("--no-progress", action="store_true",
+                         help="no progress bar on stderr")
+    _skipped.add_argument(summary)
     summary.add_argument(
         "--synthetic", default="objects", metavar="NAME",
         help="synthetic set to compare with the recordings (default objects; 'none' to skip)",
@@ -144,23 +149,46 @@ def _summary(args: argparse.Namespace) -> int:
     import warnings
 
     from sandbox.data.datasets import summarize
-    from sandbox.data.recorded import SkippedTrialWarning, load_recorded
+    from sandbox.data.recorded import SkippedTrialWarning, count_trials, load_recorded
+    from sandbox.data.spec_frame import frame_yaml, suggest_for
+    from sandbox.eval.progress import bar
 
     spec = _observation.data_spec(args)
     observe = _observation.observe(args, spec)
-    with warnings.catch_warnings():
+    with warnings.catch_warnings(), \
+            bar(count_trials(args.data, _split(args.tasks), spec) or 0, "loading",
+                not args.no_progress) as shown:
         warnings.simplefilter("ignore", SkippedTrialWarning)  # listed in the summary instead
         demos, skipped = load_recorded(args.data, tasks=_split(args.tasks), spec=spec,
-                                       observe=observe, preprocess="causal")
+                                       observe=observe, preprocess="causal",
+                                       on_trial=shown.update)
     if not demos:
-        raise ValueError(f"data: no usable trial in {args.data} ({len(skipped)} skipped)")
+        messages = [f"skipped {f}: {r}" for f, r in skipped]
+        _skipped.report(messages, args.verbose, 0)
+        if not args.verbose:
+            for reason, n in _reasons(skipped):
+                print(f"skipped {n} trial{'s' if n > 1 else ''}: {reason}", file=sys.stderr)
+        raise _skipped.no_usable(str(args.data), messages, "trial", args.verbose)
     result = {"data": str(args.data), "observe": list(observe), **summarize(demos, skipped)}
     result["realism"] = _realism(args, spec) if "hand" in observe else None
+    frame = suggest_for(demos, spec)
+    result["frame_suggestion"] = None if frame is None else frame.to_dict()
     if args.json:
         print(json.dumps(result, indent=2))
     else:
         print(format_summary(result))
+        if frame is not None:
+            print("\nSuggested placement (the demos' mean meeting point on Baxter's demonstrated "
+                  "one, their reach turned toward the robot; paste into the spec):\n"
+                  + frame_yaml(frame))
     return 0
+
+
+def _reasons(skipped: list[tuple[str, str]]) -> list[tuple[str, int]]:
+    """Each distinct skip reason (its first line) with the number of trials, most first."""
+    from collections import Counter
+
+    return Counter(" ".join(r.split()) for _, r in skipped).most_common()
 
 
 def _export(args: argparse.Namespace) -> int:
@@ -261,7 +289,7 @@ def format_summary(result: dict[str, Any]) -> str:
     dropped = ", ".join(f"{n} ({why})" for why, n in g["rows_dropped"].items()) or "none"
     lines += [f"  rows dropped: {dropped}", ""]
     lines.append("Skipped trials: " + ("none" if not result["skipped"] else ""))
-    lines += [f"  {s['file']}: {s['reason']}" for s in result["skipped"]]
+    lines += [f"  {s['file']}: {' '.join(s['reason'].split())}" for s in result["skipped"]]
     if result.get("realism"):
         from sandbox.data.synthetic.realism import format_realism
 

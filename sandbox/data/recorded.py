@@ -231,7 +231,9 @@ def _load_trial(path: Path, task: str, spec: DataSpec, modalities: Sequence[Moda
         dropped["truncated last row"] = 1
     if notes.get("unequal_files"):
         dropped["files of unequal length"] = int(notes["unequal_files"])
+    n_kept = int(keep.sum())
     table, cut = cut_rows(spec, table[keep], extra[keep], p)
+    n_rows -= n_kept - table.shape[0]                # rows left out by segment/resample_hz
     times, human, robot = table[:, 0], table[:, 1 : 1 + p], table[:, 1 + p :]
     last = np.flatnonzero(np.r_[np.diff(times) > 0, True]) if times.size else times.astype(int)
     if last.size < 2:
@@ -322,6 +324,14 @@ def _trials(root, tasks, spec: DataSpec) -> tuple[list[tuple[str, Path]], list[t
     if tasks is not None and (isinstance(tasks, (str, bytes)) or not isinstance(tasks, Iterable)):
         raise ValueError(f"tasks: expected a list of task names, got {tasks!r}")
     return find_spec_trials(root, spec, None if tasks is None else list(tasks))
+
+
+def count_trials(root, tasks, spec: DataSpec | None = None) -> int | None:
+    """How many trials ``root`` holds in the spec's layout (None if it cannot be listed)."""
+    try:
+        return len(_trials(root, tasks, spec or DataSpec())[0])
+    except (ValueError, OSError):
+        return None
 
 
 def load_recorded(

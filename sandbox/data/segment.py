@@ -8,22 +8,25 @@ at 0)::
     segment:
       modality: hand                          # the observed hand (default hand)
       start: {rule: onset, speed: 0.15, before_s: 0.1}
-      end: {rule: approach, hold_s: 0.3}
+      end: {rule: approach, within_m: 0.02, hold_s: 0.3}
 
 ``start``
     ``{rule: onset, speed: S, before_s: B}``: the motion onset of the reach
-    that ends at the handover. Walking back in time from the end's reference
-    row (the closest approach, or the last row), past the slow final approach
-    and through the rows faster than ``S`` m/s, the first row slower than
-    ``S`` is the onset; the segment starts ``B`` s (default 0) before it. A
-    pick-up that comes to rest before the reach is left out. The speed is that
-    of the hand smoothed over 0.1 s (gaps bridged linearly).
+    that ends at the handover. The hand's motions are the stretches faster
+    than ``S`` m/s (default 0.15) before the end's reference row (the closest
+    approach, or the last row); stretches less than 0.25 s apart are one
+    motion, and a motion lasts at least 0.2 s. The row before the last motion
+    is the onset; the segment starts ``B`` s (default 0) before it. A pick-up
+    that comes to rest (0.25 s or more) before the reach is left out. The
+    speed is that of the hand smoothed over 0.1 s (gaps bridged linearly).
     ``{column: NAME}``: the first row where column NAME is non-zero.
 ``end``
-    ``{rule: approach, hold_s: H}``: the closest approach of the observed hand
-    and the robot part (the forward kinematics of Baxter's seven joints at
-    :data:`~sandbox.robot.TIP_LINK`, both in the robot's base frame: give the
-    ``frame`` first), plus ``H`` s (default 0). ``{column: NAME}``: the last row
+    ``{rule: approach, within_m: W, hold_s: H}``: the closest approach of the
+    observed hand and the robot part (the forward kinematics of Baxter's seven
+    joints at :data:`~sandbox.robot.TIP_LINK`, both in the robot's base frame:
+    give the ``frame`` first): the first row where their distance comes within
+    ``W`` m (default 0.02) of its smallest value (a held handover is a plateau
+    of distances, noisy), plus ``H`` s (default 0). ``{column: NAME}``: the last row
     where column NAME is non-zero.
 
 Either may be left out (the recording's first or last row). ``resample_hz: F``
@@ -45,8 +48,13 @@ START_RULES = ("onset",)
 END_RULES = ("approach",)
 #: Window (s) of the moving average smoothing the hand before its speed is taken.
 SPEED_WINDOW_S = 0.1
+#: Runs of fast rows less than this apart (s) are one motion (``onset``).
+MERGE_GAP_S = 0.25
+#: A motion lasts at least this long (s) above the speed threshold (``onset``).
+MIN_MOTION_S = 0.2
 _KEYS = ("modality", "start", "end")
-_RULE_KEYS = {"onset": ("rule", "speed", "before_s"), "approach": ("rule", "hold_s")}
+_RULE_KEYS = {"onset": ("rule", "speed", "before_s"),
+              "approach": ("rule", "within_m", "hold_s")}
 
 
 @dataclass(frozen=True)
@@ -64,7 +72,7 @@ class Bound:
             return {"column": self.column}
         if self.rule == "onset":
             return {"rule": "onset", "speed": self.value, "before_s": self.margin_s}
-        return {"rule": "approach", "hold_s": self.margin_s}
+        return {"rule": "approach", "within_m": self.value, "hold_s": self.margin_s}
 
 
 @dataclass(frozen=True)
@@ -116,8 +124,10 @@ def _bound(value: Any, key: str, rules: tuple[str, ...]) -> Bound:
         speed = check_positive(value.get("speed", 0.15), f"{key}.speed (m/s)")
         before = check_positive(value.get("before_s", 0.0), f"{key}.before_s", allow_zero=True)
         return Bound(rule=rule, value=speed, margin_s=before)
-    return Bound(rule=rule, margin_s=check_positive(value.get("hold_s", 0.0), f"{key}.hold_s",
-                                                    allow_zero=True))
+    within = check_positive(value.get("within_m", 0.02), f"{key}.within_m (m)", allow_zero=True)
+    return Bound(rule=rule, value=within,
+                 margin_s=check_positive(value.get("hold_s", 0.0), f"{key}.hold_s",
+                                         allow_zero=True))
 
 
 def parse_segment(value: Any, key: str = "segment") -> Segment:
@@ -198,9 +208,10 @@ def bounds(segment: Segment, times: FloatArray, hand: FloatArray, robot: FloatAr
         distance = np.linalg.norm(hand - robot, axis=1)
         if not np.isfinite(distance).any():
             raise ValueError("segment.end: no row with both the hand and the robot part")
-        reference = int(np.nanargmin(distance))
+        closest = float(np.nanmin(distance))
+        reference = int(np.flatnonzero(distance <= closest + segment.end.value)[0])
         last = int(np.searchsorted(times, times[reference] + segment.end.margin_s, "right")) - 1
-        found["closest_approach_m"] = round(float(distance[reference]), 4)
+        found["closest_approach_m"] = round(closest, 4)
     first = 0
     if segment.start is not None and segment.start.column:
         first = _marked(columns, segment.start.column, True, "segment.start")
@@ -215,13 +226,28 @@ def bounds(segment: Segment, times: FloatArray, hand: FloatArray, robot: FloatAr
 
 def _onset(times: FloatArray, hand: FloatArray, reference: int, start: Bound) -> int:
     speed = hand_speed(times, hand)[: reference + 1]
-    fast = np.flatnonzero(speed >= start.value)
-    if not fast.size:
+    fast = speed >= start.value
+    runs = _runs(fast)
+    # dips shorter than MERGE_GAP_S inside a motion do not end it
+    merged: list[list[int]] = []
+    for a, b in runs:
+        if merged and times[a] - times[merged[-1][1]] < MERGE_GAP_S:
+            merged[-1][1] = b
+        else:
+            merged.append([a, b])
+    moves = [(a, b) for a, b in merged if times[b] - times[a] >= MIN_MOTION_S]
+    if not moves:
         raise ValueError(f"segment.start: the hand never moves faster than {start.value:g} m/s "
-                         "before the end")
-    slow = np.flatnonzero(speed[: fast[-1]] < start.value)
-    onset = int(slow[-1]) if slow.size else 0
+                         f"for {MIN_MOTION_S:g} s before the end")
+    onset = max(moves[-1][0] - 1, 0)
     return int(np.searchsorted(times, times[onset] - start.margin_s, "left"))
+
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """First and last index of every run of True in ``mask``."""
+    edges = np.diff(np.r_[0, mask.astype(int), 0])
+    return list(zip(np.flatnonzero(edges == 1).tolist(),
+                    (np.flatnonzero(edges == -1) - 1).tolist(), strict=True))
 
 
 def thin(times: FloatArray, rate_hz: float) -> np.ndarray:

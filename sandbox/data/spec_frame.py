@@ -225,3 +225,37 @@ def frame_yaml(frame: Frame) -> str:
         lines.append(f"  {k}: {shown}" + ("    # degrees" if k != "quaternion" else ""))
     lines.append(f"  up: {frame.up}")
     return "\n".join(lines)
+
+
+def suggest_for(demos, spec) -> Frame | None:
+    """:func:`suggest_frame` for loaded demonstrations (None without a 3-D ``hand``).
+
+    Parameters
+    ----------
+    demos : sequence of Demonstration
+        Loaded with ``spec``; their ``hand`` modality's first and last finite
+        rows are the start and end points.
+    spec : DataSpec
+        The spec they were loaded with: its frame for the hand, if any, is undone
+        (the suggestion replaces it; its ``up`` is kept).
+    """
+    hand = spec.modalities.get("hand")
+    if hand is None or hand.kind != "position" or hand.size != 3:
+        return None
+    given = spec.layout.frame_of("hand")
+    starts, ends = [], []
+    for demo in demos:
+        names = [m.name for m in demo.modalities]
+        if "hand" not in names:
+            continue
+        j = sum(m.size for m in demo.modalities[:names.index("hand")])
+        points = np.asarray(demo.human[:, j:j + 3], dtype=float)
+        ok = np.flatnonzero(np.isfinite(points).all(axis=1))
+        if ok.size:
+            starts.append(points[ok[0]])
+            ends.append(points[ok[-1]])
+    if not starts:
+        return None
+    if given is not None:
+        starts, ends = given.levelled(np.array(starts)), given.levelled(np.array(ends))
+    return suggest_frame(np.array(starts), np.array(ends), "z" if given is None else given.up)

@@ -162,9 +162,12 @@ def _labels(root: Path, spec: DataSpec) -> dict[str, str]:
     labels = spec.layout.labels
     assert labels is not None
     path = root / labels.file
-    if not path.is_file() or path.stat().st_size > MAX_FILE_BYTES:
-        raise ValueError(f"labels: expected a CSV file of at most {MAX_FILE_BYTES} bytes, "
-                         f"got {str(path)!r}")
+    if not path.is_file():
+        raise ValueError(f"labels.file: expected a CSV file in the data folder, got no file "
+                         f"{str(path)!r}")
+    if path.stat().st_size > MAX_FILE_BYTES:
+        raise ValueError(f"labels.file: expected at most {MAX_FILE_BYTES} bytes "
+                         f"(sandbox.data.limits.MAX_FILE_BYTES), got {path.stat().st_size}")
     with path.open(newline="", encoding="utf-8", errors="replace") as fh:
         rows = csv.DictReader(fh)
         fields = [f.strip() for f in rows.fieldnames or []]

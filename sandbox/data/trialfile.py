@@ -123,7 +123,8 @@ def _fix(col: str, columns: Columns, owners: dict | None) -> str:
         return (f"; it is a column of modality {owner!r}: name the file's columns in a spec "
                 f"(--spec FILE) or leave {owner!r} out of --observe")
     if col == columns.time:
-        return "; name the time column in a spec (--spec FILE, key 'time')"
+        return ("; name the time column in a spec (--spec FILE, key 'time'), or give rate_hz "
+                "for files without one")
     if col in columns.robot:
         return "; name the robot columns with --robot-columns or a spec (--spec FILE, key 'robot')"
     return "; name the human columns with --human-columns or a spec (--spec FILE)"
