@@ -7,26 +7,28 @@ at 0)::
 
     segment:
       modality: hand                          # the observed hand (default hand)
-      start: {rule: onset, speed: 0.15, before_s: 0.1}
-      end: {rule: approach, within_m: 0.02, hold_s: 0.3}
+      start: {rule: onset, speed: 0.15, distance_m: 0.1, before_s: 0.1}
+      end: {rule: approach, within_m: 0.01, hold_s: 0.3}
 
 ``start``
-    ``{rule: onset, speed: S, before_s: B}``: the motion onset of the reach
-    that ends at the handover. The hand's motions are the stretches faster
-    than ``S`` m/s (default 0.15) before the end's reference row (the closest
-    approach, or the last row); stretches less than 0.25 s apart are one
-    motion, and a motion lasts at least 0.2 s. The row before the last motion
-    is the onset; the segment starts ``B`` s (default 0) before it. A pick-up
-    that comes to rest (0.25 s or more) before the reach is left out. The
-    speed is that of the hand smoothed over 0.1 s (gaps bridged linearly).
+    ``{rule: onset, speed: S, distance_m: D, before_s: B}``: the motion onset
+    of the reach that ends at the handover: the last row before the end's
+    reference row (the closest approach, or the last row) where the hand
+    rests (slower than ``S`` m/s, default 0.15) at least ``D`` m (default 0.1)
+    from where it is at the reference. The segment starts ``B`` s (default 0)
+    before it. A pick-up that comes to rest before the reach is left out, and
+    so is a pause of the corrective movements near the end (within ``D``).
+    The speed is that of the hand smoothed over 0.1 s (gaps bridged linearly).
     ``{column: NAME}``: the first row where column NAME is non-zero.
 ``end``
     ``{rule: approach, within_m: W, hold_s: H}``: the closest approach of the
     observed hand and the robot part (the forward kinematics of Baxter's seven
     joints at :data:`~sandbox.robot.TIP_LINK`, both in the robot's base frame:
     give the ``frame`` first): the first row where their distance comes within
-    ``W`` m (default 0.02) of its smallest value (a held handover is a plateau
-    of distances, noisy), plus ``H`` s (default 0). ``{column: NAME}``: the last row
+    ``W`` m (default 0.01) of its smallest value (a held handover is a plateau
+    of distances, noisy), plus ``H`` s (default 0). Only the first approach
+    counts: the distances after they first rise 5 cm above their running
+    minimum (the parts leave each other) are not looked at. ``{column: NAME}``: the last row
     where column NAME is non-zero.
 
 Either may be left out (the recording's first or last row). ``resample_hz: F``
@@ -48,12 +50,11 @@ START_RULES = ("onset",)
 END_RULES = ("approach",)
 #: Window (s) of the moving average smoothing the hand before its speed is taken.
 SPEED_WINDOW_S = 0.1
-#: Runs of fast rows less than this apart (s) are one motion (``onset``).
-MERGE_GAP_S = 0.25
-#: A motion lasts at least this long (s) above the speed threshold (``onset``).
-MIN_MOTION_S = 0.2
+#: The parts have left each other when their distance is this much (m) above its running
+#: minimum (``approach`` looks no further).
+LEAVE_M = 0.05
 _KEYS = ("modality", "start", "end")
-_RULE_KEYS = {"onset": ("rule", "speed", "before_s"),
+_RULE_KEYS = {"onset": ("rule", "speed", "distance_m", "before_s"),
               "approach": ("rule", "within_m", "hold_s")}
 
 
@@ -65,13 +66,15 @@ class Bound:
     column: str = ""
     value: float = 0.0
     margin_s: float = 0.0
+    distance_m: float = 0.1
 
     def to_dict(self) -> dict:
         """The spec's mapping of this bound."""
         if self.column:
             return {"column": self.column}
         if self.rule == "onset":
-            return {"rule": "onset", "speed": self.value, "before_s": self.margin_s}
+            return {"rule": "onset", "speed": self.value, "distance_m": self.distance_m,
+                    "before_s": self.margin_s}
         return {"rule": "approach", "within_m": self.value, "hold_s": self.margin_s}
 
 
@@ -123,8 +126,9 @@ def _bound(value: Any, key: str, rules: tuple[str, ...]) -> Bound:
     if rule == "onset":
         speed = check_positive(value.get("speed", 0.15), f"{key}.speed (m/s)")
         before = check_positive(value.get("before_s", 0.0), f"{key}.before_s", allow_zero=True)
-        return Bound(rule=rule, value=speed, margin_s=before)
-    within = check_positive(value.get("within_m", 0.02), f"{key}.within_m (m)", allow_zero=True)
+        distance = check_positive(value.get("distance_m", 0.1), f"{key}.distance_m (m)")
+        return Bound(rule=rule, value=speed, margin_s=before, distance_m=distance)
+    within = check_positive(value.get("within_m", 0.01), f"{key}.within_m (m)", allow_zero=True)
     return Bound(rule=rule, value=within,
                  margin_s=check_positive(value.get("hold_s", 0.0), f"{key}.hold_s",
                                          allow_zero=True))
@@ -208,6 +212,7 @@ def bounds(segment: Segment, times: FloatArray, hand: FloatArray, robot: FloatAr
         distance = np.linalg.norm(hand - robot, axis=1)
         if not np.isfinite(distance).any():
             raise ValueError("segment.end: no row with both the hand and the robot part")
+        distance = _first_approach(distance)
         closest = float(np.nanmin(distance))
         reference = int(np.flatnonzero(distance <= closest + segment.end.value)[0])
         last = int(np.searchsorted(times, times[reference] + segment.end.margin_s, "right")) - 1
@@ -224,30 +229,27 @@ def bounds(segment: Segment, times: FloatArray, hand: FloatArray, robot: FloatAr
     return first, last, found
 
 
+def _first_approach(distance: FloatArray) -> FloatArray:
+    """The distances up to where they first rise :data:`LEAVE_M` above their running minimum
+    (the two part), NaN after; a later crossing of the retreating parts is left out."""
+    running = np.fmin.accumulate(np.where(np.isfinite(distance), distance, np.inf))
+    parted = np.flatnonzero(distance > running + LEAVE_M)
+    out = np.array(distance, dtype=float)
+    if parted.size:
+        out[parted[0]:] = np.nan
+    return out
+
+
 def _onset(times: FloatArray, hand: FloatArray, reference: int, start: Bound) -> int:
-    speed = hand_speed(times, hand)[: reference + 1]
-    fast = speed >= start.value
-    runs = _runs(fast)
-    # dips shorter than MERGE_GAP_S inside a motion do not end it
-    merged: list[list[int]] = []
-    for a, b in runs:
-        if merged and times[a] - times[merged[-1][1]] < MERGE_GAP_S:
-            merged[-1][1] = b
-        else:
-            merged.append([a, b])
-    moves = [(a, b) for a, b in merged if times[b] - times[a] >= MIN_MOTION_S]
-    if not moves:
-        raise ValueError(f"segment.start: the hand never moves faster than {start.value:g} m/s "
-                         f"for {MIN_MOTION_S:g} s before the end")
-    onset = max(moves[-1][0] - 1, 0)
-    return int(np.searchsorted(times, times[onset] - start.margin_s, "left"))
-
-
-def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
-    """First and last index of every run of True in ``mask``."""
-    edges = np.diff(np.r_[0, mask.astype(int), 0])
-    return list(zip(np.flatnonzero(edges == 1).tolist(),
-                    (np.flatnonzero(edges == -1) - 1).tolist(), strict=True))
+    p = _filled(times, hand)
+    speed = hand_speed(times, hand)
+    away = np.linalg.norm(p - p[reference], axis=1) >= start.distance_m
+    rest = np.flatnonzero((speed < start.value) & away)
+    rest = rest[rest < reference]
+    if not rest.size:
+        raise ValueError(f"segment.start: the hand never rests (slower than {start.value:g} m/s) "
+                         f"{start.distance_m:g} m or more from where it ends")
+    return int(np.searchsorted(times, times[rest[-1]] - start.margin_s, "left"))
 
 
 def thin(times: FloatArray, rate_hz: float) -> np.ndarray:
