@@ -149,6 +149,8 @@ def cut_rows(spec: DataSpec, table: FloatArray, extra: FloatArray, n_human: int
             raise TrialError(str(error)) from None
         table = table[first:last + 1].copy()
         table[:, 0] -= table[0, 0]
+        if layout.rate_hz is not None:          # row i - first at exactly (i - first) / rate
+            table[:, 0] = np.round(table[:, 0] * layout.rate_hz) / layout.rate_hz
         report["segment"] = found
     if layout.resample_hz is not None and table.shape[0] > 1:
         rows = thin(table[:, 0], layout.resample_hz)

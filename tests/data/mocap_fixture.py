@@ -117,7 +117,7 @@ def _write(path: Path, header: list[str], rows: np.ndarray) -> None:
         out.writerows([f"{v:.6f}" for v in row] for row in rows)
 
 
-def write_mocap_set(root: Path, *, n_per_task: int = 5, seed: int = 0) -> dict:
+def write_mocap_set(root: Path, *, n_per_task: int = 8, seed: int = 0) -> dict:
     """Write the set into ``root``; return the truth of each trial.
 
     Returns

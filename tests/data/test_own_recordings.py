@@ -19,7 +19,6 @@ import pytest
 from sandbox.cli import main
 from sandbox.data.recorded import load_recorded
 from sandbox.data.spec import DataSpec
-from sandbox.data.writer import write_trial
 
 from .mocap_fixture import RATE_HZ, ROBOT, SPEC, TRANSLATION, YAW_DEG, write_mocap_set
 
@@ -49,7 +48,7 @@ def test_the_docs_page_reads_the_set_with_this_spec():
 def test_the_segments_are_the_reaches(mocap):
     truth = mocap[2]
     demos = _loaded(mocap)
-    assert len(demos) == 15 and sorted({d.task for d in demos}) == ["box", "glasses_case",
+    assert len(demos) == 24 and sorted({d.task for d in demos}) == ["box", "glasses_case",
                                                                       "tape"]
     for demo in demos:
         real, found = truth[Path(demo.source).name], demo.meta["report"]["segment"]
@@ -68,19 +67,19 @@ def test_summary_fit_and_evaluate_take_it_through(mocap, tmp_path, capsys):
     assert main(["data", "summary", "--data", str(data), "--spec", str(spec), "--no-progress",
                  "--synthetic", "none"]) == 0
     out = capsys.readouterr().out
-    assert f"Dataset {data}: 15 trials in 3 tasks (0 skipped)" in out
+    assert f"Dataset {data}: 24 trials in 3 tasks (0 skipped)" in out
     block = out[out.index("frame:\n"):]
     translation = [float(v) for v in re.search(r"translation: \[(.*)\]", block)[1].split(",")]
-    assert abs(float(re.search(r"yaw: (\S+)", block)[1]) - YAW_DEG) <= 3
-    assert np.linalg.norm(np.array(translation) - TRANSLATION) < 0.08
+    yaw = float(re.search(r"yaw: (\S+)", block)[1])
+    assert abs(yaw - YAW_DEG) <= 3 and np.linalg.norm(translation - TRANSLATION) < 0.15
     assert main(["fit", "--data", str(data), "--spec", str(spec), "--out",
                  str(tmp_path / "m.npz"), "--no-cache"]) == 0
     out = capsys.readouterr().out
-    assert "Fitted 3 task models" in out and "on 15 demos" in out
+    assert "Fitted 3 task models" in out and "on 24 demos" in out
     assert re.search(r"hand observation noise \(mm\): \d+\.\d", out)          # metres -> mm
     assert main(["evaluate", "--data", str(data), "--spec", str(spec), *QUICK,
                  "--out", str(tmp_path / "r.json")]) == 0
-    assert "15 trials" in capsys.readouterr().out
+    assert "24 trials" in capsys.readouterr().out
 
 
 def _by_hand(mocap, out: Path) -> Path:
@@ -97,10 +96,12 @@ def _by_hand(mocap, out: Path) -> Path:
         base = (hand[:, :3] / 1000.0) @ rotation.T + TRANSLATION
         first, last = (round(bounds[name][k] * RATE_HZ) for k in ("start_s", "end_s"))
         rows = np.arange(first, last + 1, 2)                              # 120 -> 60 Hz
-        columns = {f"human_left_hand_{a}": base[rows, j] for j, a in enumerate("xyz")}
-        columns.update({q: robot[rows, j] for j, q in enumerate(ROBOT)})
         (out / label).mkdir(parents=True, exist_ok=True)
-        write_trial(out / label / f"{name}.csv", (rows - first) / RATE_HZ, columns)
+        with open(out / label / f"{name}.csv", "w", newline="") as fh:   # full precision
+            table = csv.writer(fh)
+            table.writerow(["t", *(f"human_left_hand_{a}" for a in "xyz"), *ROBOT])
+            table.writerows(map(list, np.column_stack([(rows - first) / RATE_HZ, base[rows],
+                                                       robot[rows]]).tolist()))
     return out
 
 
@@ -123,10 +124,10 @@ def test_each_skipped_trial_is_one_line_and_nothing_usable_is_one_error(mocap, t
     assert main(["data", "summary", "--data", str(data), "--spec", str(spec),
                  "--no-progress"]) == 2
     err = capsys.readouterr().err.splitlines()
-    assert err[0] == ("skipped 15 trials: missing column 't' in files.giver; name the time "
+    assert err[0] == ("skipped 24 trials: missing column 't' in files.giver; name the time "
                       "column in a spec (--spec FILE, key 'time'), or give rate_hz for files "
                       "without one")
     assert err[1].startswith("error: no usable trial in") and len(err) == 2
     assert main(["data", "summary", "--data", str(data), "--spec", str(spec), "--verbose",
                  "--no-progress"]) == 2
-    assert len(capsys.readouterr().err.splitlines()) == 16                    # one per file
+    assert len(capsys.readouterr().err.splitlines()) == 25                    # one per file
