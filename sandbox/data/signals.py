@@ -234,6 +234,22 @@ def decimate(times: ArrayLike, keep: ArrayLike, rate_hz: float) -> np.ndarray:
     return out
 
 
+def _filtered(t: FloatArray, x: FloatArray, fresh: np.ndarray, mode: str, filter: str,
+              rate_hz: float, options: dict) -> tuple[FloatArray, np.ndarray]:
+    """The output (T, C) and measured rows (T,) of :func:`preprocess_signal`."""
+    if mode == "none":
+        return x.copy(), fresh
+    measured = decimate(t, fresh, rate_hz) if mode == "causal" else fresh
+    if filter == "none":
+        out = _held(x, fresh)
+    else:
+        source = rectify(x) if filter == "envelope" else x
+        out = envelope(t, source, causal=mode == "causal", use=fresh, **options)
+    if mode == "causal":
+        out[~measured] = np.nan
+    return out, measured
+
+
 def _held(x: FloatArray, fresh: np.ndarray) -> FloatArray:
     """Each row's last new sample (rows before the first are NaN), shape of ``x``."""
     idx = np.flatnonzero(fresh)
@@ -309,19 +325,5 @@ def preprocess_signal(
     _check_filter(cutoff_hz, stages, min_dt)
     options = {"cutoff_hz": cutoff_hz, "stages": stages, "min_dt": min_dt}
     fresh = fresh_rows(x)
-    source = rectify(x) if filter == "envelope" else x
-    if mode == "none":
-        out, measured = x.copy(), fresh
-    elif filter == "none":
-        out, measured = _held(x, fresh), fresh
-        if mode == "causal":
-            measured = decimate(t, fresh, rate_hz)
-            out[~measured] = np.nan
-    elif mode == "causal":
-        measured = decimate(t, fresh, rate_hz)
-        out = envelope(t, source, causal=True, use=fresh, **options)
-        out[~measured] = np.nan
-    else:
-        out = envelope(t, source, causal=False, use=fresh, **options)
-        measured = fresh
+    out, measured = _filtered(t, x, fresh, mode, filter, rate_hz, options)
     return out, measured, _counts(x, fresh, out)

@@ -161,7 +161,7 @@ def parse_frame(value: Any, key: str = "frame") -> Frame:
         q = _vector(value["quaternion"], f"{key}.quaternion", 4, "4 numbers [w, x, y, z]")
         rotation_quaternion(q, f"{key}.quaternion")
         rotation["quaternion"] = tuple((q / np.linalg.norm(q)).tolist())
-    return Frame(translation, rotation, up)  # type: ignore[arg-type]
+    return Frame(translation, rotation, up)
 
 
 def meeting_target() -> tuple[FloatArray, FloatArray]:
@@ -213,7 +213,7 @@ def suggest_frame(starts: FloatArray, ends: FloatArray, up: str = "z") -> Frame:
         yaw = (yaw + 180.0) % 360.0 - 180.0
     rotated = rotation_rpy(0.0, 0.0, np.radians(yaw)) @ e
     translation = np.round(meet - rotated, 2) + 0.0
-    return Frame(tuple(translation.tolist()), {"yaw": yaw}, up)  # type: ignore[arg-type]
+    return Frame(tuple(translation.tolist()), {"yaw": yaw}, up)
 
 
 def frame_yaml(frame: Frame) -> str:

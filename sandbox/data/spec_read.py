@@ -12,8 +12,10 @@ position in metres in the robot's base frame (``units``, ``frame``).
 from __future__ import annotations
 
 import csv
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from functools import partial
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -43,6 +45,11 @@ def _part_file(folder: Path, pattern: str, part: str) -> Path:
     return hits[0]
 
 
+def _part_fix(part: str, fix: Callable[[str], str], column: str) -> str:
+    """What the message of a missing column of ``files.<part>`` adds."""
+    return f" in files.{part}{fix(f'{part}.{column}')}"
+
+
 def _read_names(path: Path, spec: DataSpec, names: list[str], fix) -> tuple[FloatArray, dict]:
     """The columns ``names`` of a trial (a file, or a folder of parts), rows joined."""
     files = spec.layout.files
@@ -62,8 +69,9 @@ def _read_names(path: Path, spec: DataSpec, names: list[str], fix) -> tuple[Floa
         parts.setdefault(part, []).append(column)
     tables, notes = {}, {"truncated_last_row": False}
     for part, columns in parts.items():
-        table, note = read_columns(_part_file(path, files[part], part), list(dict.fromkeys(columns)),
-                                   lambda col, part=part: f" in files.{part}{fix(part + '.' + col)}")
+        file = _part_file(path, files[part], part)
+        table, note = read_columns(file, list(dict.fromkeys(columns)),
+                                   partial(_part_fix, part, fix))
         tables[part] = dict(zip(dict.fromkeys(columns), table.T, strict=True))
         notes["truncated_last_row"] |= note["truncated_last_row"]
     lengths = {p: next(iter(t.values())).size for p, t in tables.items()}
@@ -139,7 +147,8 @@ def cut_rows(spec: DataSpec, table: FloatArray, extra: FloatArray, n_human: int
     rows of ``table`` and a report (``segment``: the bounds found, s;
     ``resampled_rows``: rows thinned out).
     """
-    layout, segment, report = spec.layout, spec.layout.segment, {}
+    layout, segment = spec.layout, spec.layout.segment
+    report: dict[str, Any] = {}
     if segment is not None and table.shape[0] > 1:
         robot = robot_points(table[:, 1 + n_human:]) if segment.needs_robot else None
         columns = dict(zip(segment.columns, extra[:, 3:].T, strict=True))

@@ -51,7 +51,8 @@ files:                            # one file per body segment in each trial fold
   giver: giver_RHand_pose.csv
   robot: baxter_left_arm.csv
 labels: {file: labels.csv, trial: trial, task: object}
-robot: [robot.left_s0, robot.left_s1, robot.left_e0, robot.left_e1, robot.left_w0, robot.left_w1, robot.left_w2]
+robot: [robot.left_s0, robot.left_s1, robot.left_e0, robot.left_e1,
+        robot.left_w0, robot.left_w1, robot.left_w2]      # Baxter's joints (rad)
 modalities:
   hand: {columns: [giver.x, giver.y, giver.z], kind: position}
 frame: {translation: [0.35, -1.2, -0.93], yaw: 90, up: z}

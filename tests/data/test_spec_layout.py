@@ -138,7 +138,7 @@ def test_units_and_rate_hz_read_millimetres_without_time_as_metres(tmp_path):
 
 
 def test_files_and_labels_join_parts_and_give_tasks(tmp_path):
-    for k, task in enumerate(["cup", "pen", "cup"]):
+    for k in range(3):
         n = 5 + k                                           # the second part one row longer
         _write(tmp_path / f"trial{k}" / f"{k}_hand.csv", ["x", "y", "z"],
                [[i, k, 0] for i in range(5)])
@@ -165,8 +165,11 @@ def test_files_and_labels_join_parts_and_give_tasks(tmp_path):
 def _reach(rate: float = 100.0):
     """A pick-up (0.5-1 s), a rest, a reach (2-3 s) to a robot that arrives at 3 s, a hold."""
     t = np.arange(0, 5, 1 / rate)
-    s = lambda a, b: np.clip((t - a) / (b - a), 0, 1) ** 3 * (10 - 15 * np.clip(
-        (t - a) / (b - a), 0, 1) + 6 * np.clip((t - a) / (b - a), 0, 1) ** 2)  # noqa: E731
+
+    def s(a, b):                                    # minimum jerk from 0 to 1 over [a, b]
+        x = np.clip((t - a) / (b - a), 0, 1)
+        return x**3 * (10 - 15 * x + 6 * x**2)
+
     hand = np.column_stack([0.3 * s(0.5, 1.0) - 0.6 * s(2.0, 3.0), 0 * t, 0 * t])
     robot = np.column_stack([0.5 - 0.8 * s(1.8, 3.0) + 0.5 * s(4.0, 4.5), 0 * t, 0 * t])
     return t, hand, robot
