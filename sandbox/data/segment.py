@@ -46,7 +46,9 @@ import numpy as np
 
 from sandbox.validation import FloatArray, check_positive
 
+#: Rules of ``segment.start`` (or a column).
 START_RULES = ("onset",)
+#: Rules of ``segment.end`` (or a column).
 END_RULES = ("approach",)
 #: Window (s) of the moving average smoothing the hand before its speed is taken.
 SPEED_WINDOW_S = 0.1
@@ -60,7 +62,21 @@ _RULE_KEYS = {"onset": ("rule", "speed", "distance_m", "before_s"),
 
 @dataclass(frozen=True)
 class Bound:
-    """One end of a segment: a rule with its numbers, or a column."""
+    """One end of a segment: a rule with its numbers, or a column.
+
+    Parameters
+    ----------
+    rule : {"onset", "approach", ""}
+        The rule (empty with a column).
+    column : str
+        The column whose first (start) or last (end) non-zero row is the bound.
+    value : float
+        ``onset``: the speed threshold (m/s); ``approach``: ``within_m`` (m).
+    margin_s : float
+        ``onset``: ``before_s``; ``approach``: ``hold_s`` (s).
+    distance_m : float
+        ``onset``: how far from the end the hand rests (m).
+    """
 
     rule: str = ""
     column: str = ""
@@ -80,7 +96,15 @@ class Bound:
 
 @dataclass(frozen=True)
 class Segment:
-    """Where each recording starts and ends (see the module docstring)."""
+    """Where each recording starts and ends (see the module docstring).
+
+    Parameters
+    ----------
+    modality : str
+        The position modality (3 columns) the rules look at.
+    start, end : Bound or None
+        The bounds (None: the recording's first or last row).
+    """
 
     modality: str = "hand"
     start: Bound | None = None

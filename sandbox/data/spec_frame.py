@@ -40,7 +40,9 @@ import numpy as np
 
 from sandbox.validation import FloatArray, check_number
 
+#: The keys of a ``frame:`` mapping.
 FRAME_KEYS = ("translation", "yaw", "rpy", "quaternion", "up")
+#: The up axes a recording may have.
 UP_AXES = ("y", "z")
 #: Levelling of each up axis: the recording's (x, y, z) to a z-up frame.
 _LEVEL = {"z": np.eye(3), "y": np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])}

@@ -49,7 +49,15 @@ _LABEL_KEYS = ("file", "trial", "task")
 
 @dataclass(frozen=True)
 class Labels:
-    """A label file: which column names the trial and which its task."""
+    """A label file: which column names the trial and which its task.
+
+    Parameters
+    ----------
+    file : str
+        The CSV file, relative to the data folder.
+    trial, task : str
+        Its columns naming the trial (a folder or file name, ``.csv`` optional) and its task.
+    """
 
     file: str
     trial: str = "trial"
