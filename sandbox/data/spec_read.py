@@ -54,9 +54,6 @@ def _read_names(path: Path, spec: DataSpec, names: list[str], fix) -> tuple[Floa
     """The columns ``names`` of a trial (a file, or a folder of parts), rows joined."""
     files = spec.layout.files
     if not files:
-        if path.is_dir():
-            raise TrialError("a folder, expected a CSV file (give the spec's 'files' for "
-                             "trial folders)")
         return read_columns(path, names, fix)
     if not path.is_dir():
         raise TrialError("expected a trial folder holding the spec's 'files'")
