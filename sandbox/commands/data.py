@@ -305,28 +305,27 @@ def _points(dims: tuple[str, ...]) -> list[tuple[str, ...]]:
     return [dims[i:i + width] for i in range(0, len(dims), width)]
 
 
-def _filter_table(path, columns):
-    """The trial's table if ``check-filter`` can use it: readable, at least 3 rows, times
-    finite, never going backwards and plausible (:func:`sandbox.core.limits.check_duration`);
-    None otherwise."""
+def _filter_table(path, spec, modalities):
+    """The trial's table (time in s, positions in m in the spec's frame, cut as the spec
+    says) if ``check-filter`` can use it: readable, at least 3 rows, times finite, never
+    going backwards and plausible (:func:`sandbox.core.limits.check_duration`); else None."""
     import numpy as np
 
     from sandbox.data.limits import check_duration
-    from sandbox.data.recorded import TrialError, read_trial_table
+    from sandbox.data.recorded import TrialError
+    from sandbox.data.spec_read import cut_rows, read_spec_table
 
     try:
-        table, _ = read_trial_table(path, columns)
-    except TrialError:
+        table, extra, _ = read_spec_table(path, spec, modalities, lambda column: "")
+        t = table[:, 0]
+        ok = np.isfinite(t) & np.r_[True, np.diff(t) >= 0]
+        if ok.sum() < 3 or not ok.all():
+            return None
+        table, _ = cut_rows(spec, table, extra, sum(m.size for m in modalities))
+        check_duration(np.unique(table[:, 0]))
+    except (TrialError, ValueError):
         return None
-    t = table[:, 0]
-    ok = np.isfinite(t) & np.r_[True, np.diff(t) >= 0]
-    if ok.sum() < 3 or not ok.all():
-        return None
-    try:
-        check_duration(np.unique(t))
-    except ValueError:
-        return None
-    return table
+    return table if table.shape[0] >= 3 else None
 
 
 def _check_filter(args: argparse.Namespace) -> int:
@@ -335,7 +334,7 @@ def _check_filter(args: argparse.Namespace) -> int:
     from sandbox.data.filtercheck import holdout_errors
     from sandbox.data.filtering import FilterConfig
     from sandbox.data.glitches import find_glitches
-    from sandbox.data.recorded import Columns, find_trials
+    from sandbox.data.recorded import trial_list
 
     settings = {"accel_std": args.accel_std, "noise_std": args.noise_std,
                 "time_jitter_std": args.jitter_std, "gate_prob": args.gate_prob}
@@ -345,13 +344,13 @@ def _check_filter(args: argparse.Namespace) -> int:
               for cols in _points(m.dims)]
     if not points:
         raise ValueError("--observe: check-filter needs a position modality (hand, arm)")
-    columns = Columns(tuple(c for cols in points for c in cols), spec.robot, spec.time)
+    mods = [m for m in spec.observed(_split(args.observe)) if m.kind == "position"]
     smooth, causal, frames, rejected, trials = [], [], 0, 0, 0
-    for _, path in find_trials(args.data, _split(args.tasks)):
-        table = _filter_table(path, columns)
+    for _, path in trial_list(args.data, _split(args.tasks), spec):
+        table = _filter_table(path, spec, mods)
         if table is None:
             continue
-        t = table[:, 0] * spec.time_scale
+        t = table[:, 0]
         start = 1
         for cols in points:
             human = table[:, start:start + len(cols)]

@@ -37,7 +37,7 @@ rows that carry a new, accepted sample of each modality; ``meta["human_measured"
 from __future__ import annotations
 
 import warnings
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Sequence
 from functools import partial
 from os import PathLike
 from pathlib import Path
@@ -59,7 +59,14 @@ from sandbox.data.preprocess import (  # noqa: F401 - preprocess_rows/_demonstra
     summary_counts,
 )
 from sandbox.data.spec import HAND, ROBOT_COLUMNS, TIME_COLUMN, DataSpec  # noqa: F401
-from sandbox.data.spec_read import cut_rows, find_spec_trials, read_spec_table
+from sandbox.data.spec_read import (  # noqa: F401 - find_trials, count_trials re-exported
+    count_trials,
+    cut_rows,
+    find_trials,
+    layout_trials,
+    read_spec_table,
+    trial_list,
+)
 from sandbox.data.trialfile import (  # noqa: F401 - re-exported: the loader's public names
     HUMAN_COLUMNS,
     Columns,
@@ -287,53 +294,6 @@ def _check_usable(modalities, measured, counts) -> None:
             raise TrialError(f"fewer than 2 valid samples of {m.name!r}")
 
 
-def find_trials(root: str | Path, tasks: Sequence[str] | None = None) -> list[tuple[str, Path]]:
-    """List ``(task, file)`` of ``<root>/<task>/<trial>.csv``, sorted by task then file.
-
-    Raises ``ValueError`` if ``root`` is not a folder in that layout or a requested
-    task is not there (the message lists the tasks that are).
-    """
-    root = _path(root, "data")
-    if tasks is not None:
-        if isinstance(tasks, (str, bytes)) or not isinstance(tasks, Iterable):
-            raise ValueError(f"tasks: expected a list of task names, got {tasks!r}")
-        tasks = list(tasks)
-        if not all(isinstance(t, str) for t in tasks):
-            raise ValueError(f"tasks: expected a list of task names, got {tasks!r}")
-    if not root.is_dir():
-        raise ValueError(f"data: expected a folder <root>/<task>/<trial>.csv, got {str(root)!r}")
-    found = {d.name: sorted(d.glob("*.csv")) for d in sorted(root.iterdir()) if d.is_dir()}
-    found = {k: v for k, v in found.items() if v}
-    if not found:
-        raise ValueError(f"data: no <task>/<trial>.csv files under {str(root)!r}")
-    if tasks is not None:
-        unknown = [t for t in tasks if t not in found]
-        if unknown:
-            raise ValueError(f"tasks: expected some of {sorted(found)}, got unknown {unknown}")
-        found = {t: found[t] for t in dict.fromkeys(tasks)}
-    return [(task, f) for task, files in found.items() for f in files]
-
-
-def _trials(root, tasks, spec: DataSpec) -> tuple[list[tuple[str, Path]], list[tuple[str, str]]]:
-    """The trials of ``root`` in the spec's layout, and those left out with the reason."""
-    if not spec.layout.files and spec.layout.labels is None:
-        return find_trials(root, tasks), []
-    root = _path(root, "data")
-    if not root.is_dir():
-        raise ValueError(f"data: expected a folder, got {str(root)!r}")
-    if tasks is not None and (isinstance(tasks, (str, bytes)) or not isinstance(tasks, Iterable)):
-        raise ValueError(f"tasks: expected a list of task names, got {tasks!r}")
-    return find_spec_trials(root, spec, None if tasks is None else list(tasks))
-
-
-def count_trials(root, tasks, spec: DataSpec | None = None) -> int | None:
-    """How many trials ``root`` holds in the spec's layout (None if it cannot be listed)."""
-    try:
-        return len(_trials(root, tasks, spec or DataSpec())[0])
-    except (ValueError, OSError):
-        return None
-
-
 def load_recorded(
     root: str | Path,
     *,
@@ -377,7 +337,7 @@ def load_recorded(
     spec.observed(observe)
     store = resolve_cache(cache)
     demos: list[Demonstration] = []
-    trials, skipped = _trials(root, tasks, spec)
+    trials, skipped = layout_trials(root, tasks, spec)
     for file, reason in skipped:
         warnings.warn(f"skipped {file}: {reason}", SkippedTrialWarning, stacklevel=2)
     for task, path in trials:

@@ -1,7 +1,8 @@
 """Reading a trial as its spec declares it: which files, which rows, in which units and frame.
 
-:func:`find_spec_trials` lists a set's trials for a spec's ``files`` and
-``labels`` (:mod:`sandbox.data.spec_layout`); :func:`read_spec_table` reads one
+:func:`find_trials` lists the trials of the built-in layout
+``<root>/<task>/<trial>.csv``, :func:`find_spec_trials` those of a spec's
+``files`` and ``labels`` (:mod:`sandbox.data.spec_layout`); :func:`read_spec_table` reads one
 trial's columns (one CSV, or one per part of a trial folder, joined row by
 row) with the time in seconds (the time column, or ``i / rate_hz``) and every
 position in metres in the robot's base frame (``units``, ``frame``).
@@ -12,8 +13,9 @@ position in metres in the robot's base frame (``units``, ``frame``).
 from __future__ import annotations
 
 import csv
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from functools import partial
+from os import PathLike
 from pathlib import Path
 from typing import Any
 
@@ -227,3 +229,64 @@ def find_spec_trials(root: Path, spec: DataSpec, tasks: list[str] | None
             raise ValueError(f"tasks: expected some of {available}, got unknown {unknown}")
         trials = [tp for t in dict.fromkeys(tasks) for tp in trials if tp[0] == t]
     return trials, left_out
+
+
+def find_trials(root: str | Path, tasks: Sequence[str] | None = None) -> list[tuple[str, Path]]:
+    """List ``(task, file)`` of ``<root>/<task>/<trial>.csv``, sorted by task then file.
+
+    Raises ``ValueError`` if ``root`` is not a folder in that layout or a requested
+    task is not there (the message lists the tasks that are).
+    """
+    root = _folder(root)
+    if tasks is not None:
+        if isinstance(tasks, (str, bytes)) or not isinstance(tasks, Iterable):
+            raise ValueError(f"tasks: expected a list of task names, got {tasks!r}")
+        tasks = list(tasks)
+        if not all(isinstance(t, str) for t in tasks):
+            raise ValueError(f"tasks: expected a list of task names, got {tasks!r}")
+    if not root.is_dir():
+        raise ValueError(f"data: expected a folder <root>/<task>/<trial>.csv, got {str(root)!r}")
+    found = {d.name: sorted(d.glob("*.csv")) for d in sorted(root.iterdir()) if d.is_dir()}
+    found = {k: v for k, v in found.items() if v}
+    if not found:
+        raise ValueError(f"data: no <task>/<trial>.csv files under {str(root)!r}")
+    if tasks is not None:
+        unknown = [t for t in tasks if t not in found]
+        if unknown:
+            raise ValueError(f"tasks: expected some of {sorted(found)}, got unknown {unknown}")
+        found = {t: found[t] for t in dict.fromkeys(tasks)}
+    return [(task, f) for task, files in found.items() for f in files]
+
+
+def layout_trials(root, tasks, spec: DataSpec
+                  ) -> tuple[list[tuple[str, Path]], list[tuple[str, str]]]:
+    """The trials of ``root`` in the spec's layout, and those left out with the reason
+    (:func:`find_trials` without ``files`` or ``labels``, :func:`find_spec_trials` with)."""
+    if not spec.layout.files and spec.layout.labels is None:
+        return find_trials(root, tasks), []
+    root = _folder(root)
+    if not root.is_dir():
+        raise ValueError(f"data: expected a folder, got {str(root)!r}")
+    if tasks is not None and (isinstance(tasks, (str, bytes)) or not isinstance(tasks, Iterable)):
+        raise ValueError(f"tasks: expected a list of task names, got {tasks!r}")
+    return find_spec_trials(root, spec, None if tasks is None else list(tasks))
+
+
+def trial_list(root, tasks, spec: DataSpec | None = None) -> list[tuple[str, Path]]:
+    """``(task, trial)`` of ``root`` in the spec's layout (:func:`find_trials` without
+    ``files`` or ``labels``)."""
+    return layout_trials(root, tasks, spec or DataSpec())[0]
+
+
+def count_trials(root, tasks, spec: DataSpec | None = None) -> int | None:
+    """How many trials ``root`` holds in the spec's layout (None if it cannot be listed)."""
+    try:
+        return len(trial_list(root, tasks, spec))
+    except (ValueError, OSError):
+        return None
+
+
+def _folder(root: Any) -> Path:
+    if not isinstance(root, (str, PathLike)):
+        raise ValueError(f"data: expected a path, got {root!r}")
+    return Path(root)
