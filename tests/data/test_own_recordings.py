@@ -80,6 +80,9 @@ def test_summary_fit_and_evaluate_take_it_through(mocap, tmp_path, capsys):
     assert main(["evaluate", "--data", str(data), "--spec", str(spec), *QUICK,
                  "--out", str(tmp_path / "r.json")]) == 0
     assert "24 trials" in capsys.readouterr().out
+    assert main(["data", "check-filter", "--data", str(data), "--spec", str(spec)]) == 0
+    smoothed = re.search(r"RTS smoother +error median (\S+) mm", capsys.readouterr().out)
+    assert 0.5 < float(smoothed[1]) < 5               # 1 mm of jitter, read in millimetres
 
 
 def _by_hand(mocap, out: Path) -> Path:
