@@ -11,6 +11,11 @@ the paper; the built-ins add ``arm``, the same side's elbow and shoulder, and
 What the loader does with a trial (everything it does is counted in
 ``demo.meta["report"]``, see :func:`load_trial`):
 
+0. The spec's layout (:mod:`sandbox.data.spec_read`): the trial's files are
+   read and joined, the time made (``rate_hz``) or converted, positions
+   converted to metres (``units``) and moved to the robot's base frame
+   (``frame``); after step 1, the rows are cut to the handover (``segment``,
+   times restarting at 0) and thinned (``resample_hz``).
 1. Rows without a time or with a missing robot value are dropped, rows whose
    time goes backwards are dropped. Missing human values stay NaN.
 2. Rows that share their time stamp with the previous row (about 40 % of the
@@ -113,7 +118,7 @@ def load_trial(
     Parameters
     ----------
     path : str or Path
-        The CSV file.
+        The CSV file (a trial folder with the spec's ``files``).
     task : str, optional
         Task label; defaults to the name of the file's folder.
     spec : DataSpec, optional

@@ -165,7 +165,8 @@ class DataSpec:
         mods = select(self.modalities.values(),
                       self.observe if observe is None else _choice(observe), "observe")
         check_modalities(mods)
-        clash = sorted({c for m in mods for c in m.dims} & {self.time, *self.robot})
+        time = () if self.layout.rate_hz is not None else (self.time,)
+        clash = sorted({c for m in mods for c in m.dims} & {*time, *self.robot})
         if clash:
             raise ValueError(f"observe: columns {clash} are also the time or robot columns")
         return mods
