@@ -232,3 +232,15 @@ def test_the_spec_chooses_a_signal_modalitys_preprocessing(tmp_path):
     assert (got["envelope"] > 0).all() and (got["lowpass"] < 0).all()
     np.testing.assert_allclose(got["none"], -3 + np.sin(5 * t))
     assert _spec().layout.signal_filter("emg") == "envelope"     # EMG's default
+
+
+def test_a_modalitys_own_frame_and_units_override_the_global_ones(tmp_path):
+    _write(tmp_path / "a" / "1.csv", ["t", "hx", "hy", "hz", "wx", "wy", "wz", "q"],
+           [[0.1 * i, i, 100, 0, 10, i, 0, 0.1] for i in range(4)])
+    spec = _spec(time="t", units="cm", frame={"yaw": 90}, observe=["hand", "wrist"],
+                 modalities={"hand": {**HAND, "units": "mm",
+                                      "frame": {"up": "y", "translation": [1, 0, 0]}},
+                             "wrist": {"columns": ["wx", "wy", "wz"]}})
+    demo = load_trial(tmp_path / "a" / "1.csv", spec=spec, preprocess="none")
+    np.testing.assert_allclose(demo.human[0, :3], [1, 0, 0.1], atol=1e-12)   # mm, y up
+    np.testing.assert_allclose(demo.human[0, 3:], [0, 0.1, 0], atol=1e-12)   # cm, yaw 90
