@@ -113,7 +113,8 @@ def _filter(field: str, high: float = float("inf"), *, open_low: bool = True):
 
 def _common(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--data", required=True, metavar="DIR",
-                        help="dataset folder <DIR>/<task>/<trial>.csv")
+                        help="dataset folder <DIR>/<task>/<trial>.csv, or laid out as --spec "
+                             "says (files, labels)")
     parser.add_argument("--tasks", default=None, help="comma-separated subset of tasks")
     _observation.add_arguments(parser)
 
