@@ -134,3 +134,14 @@ def test_each_skipped_trial_is_one_line_and_nothing_usable_is_one_error(mocap, t
     assert main(["data", "summary", "--data", str(data), "--spec", str(spec), "--verbose",
                  "--no-progress"]) == 2
     assert len(capsys.readouterr().err.splitlines()) == 25                    # one per file
+
+
+def test_a_set_already_in_baxters_frame_is_suggested_about_the_identity(tmp_path):
+    from sandbox.data.spec_frame import suggest_for
+
+    from .folders import write_synthetic_set
+
+    root = write_synthetic_set(tmp_path / "set", "objects", n_per_task=4)
+    demos, _ = load_recorded(root, preprocess="causal")
+    frame = suggest_for(demos, DataSpec())
+    assert abs(frame.rotation["yaw"]) <= 10 and np.linalg.norm(frame.translation) < 0.15
