@@ -25,9 +25,9 @@ familiarity; ``--records`` re-reports such a file without rescoring),
 
 Cost: one causal stream per trial, about 0.5-2 s each on one core (more with
 more modalities): 20 synthetic trials per task of 5 tasks and 5 OOD sets is
-600 streams, ~10 minutes with 2 workers; the leave-task-out of the shared
-recorded set streams its 174 trials 4 times (~20 minutes, hand only; over an
-hour with hand,arm,emg on a busy 2-core machine).
+560 streams, ~7 minutes on one busy core; the leave-task-out of the shared
+recorded set streams its 174 trials 4 times (~4 minutes with 2 workers, hand only;
+20 minutes to an hour with hand,arm,emg, depending on the machine's load).
 """
 
 from __future__ import annotations
@@ -60,9 +60,10 @@ AUC, the median delay of a detection relative to the handover (negative:
 before it), and what the calibration's own threshold (--alpha) does.
 
 How long: one causal stream per trial, 0.5-2 s each on one core. 20 synthetic
-trials per task of 5 tasks against 5 OOD sets is 600 streams, about 10 minutes
-with 2 workers; the leave-task-out of the 174 recorded trials streams each 4
-times: about 20 minutes (hand), over an hour (hand,arm,emg) on 2 busy cores.
+trials per task of 5 tasks against 5 OOD sets is 560 streams, about 7 minutes
+on one busy core; the leave-task-out of the 174 recorded trials streams each 4
+times: about 4 minutes (hand, 2 workers), 20 minutes to an hour (hand,arm,emg)
+on 2 cores, depending on their load.
 """
 
 

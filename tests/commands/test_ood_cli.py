@@ -65,3 +65,23 @@ def test_the_old_module_is_a_deprecated_alias(tmp_path):
                           timeout=120)
     assert "deprecated" in done.stderr and "python -m sandbox ood" in done.stderr
     assert done.returncode == 1 and "missing.json" in done.stderr
+
+
+def test_a_spec_reads_both_sets(tmp_path, capsys):
+    """--spec works as for evaluate: the normal and the OOD folder are read with it."""
+    from tests.commands.test_observe_cli import write_set
+
+    spec = tmp_path / "spec.yaml"
+    spec.write_text("time: stamp\nrobot: [j0, j1, j2, j3, j4, j5, j6]\nobserve: [wrist]\n"
+                    "modalities:\n  wrist: {columns: [wx, wy, wz], kind: position}\n"
+                    "  grip: {columns: [g0, g1], kind: signal, units: raw}\n")
+    normal, odd = write_set(tmp_path / "normal"), write_set(tmp_path / "odd", n_per_task=1)
+    out = tmp_path / "r.json"
+    assert main(["ood", "--data", str(normal), "--ood-data", str(odd), "--spec", str(spec),
+                 "--observe", "wrist,grip", "--dow-t", "0.5", "--no-progress", "--no-cache",
+                 "--out", str(out)]) == 0
+    result = json.loads(out.read_text())
+    assert result["observe"] == "wrist,grip" and result["n_streams"] == 8 + 2
+    assert main(["ood", "--data", str(normal), "--ood-data", str(odd), "--observe", "grip",
+                 "--no-progress", "--no-cache"]) == 2
+    assert "grip" in capsys.readouterr().err
