@@ -148,7 +148,7 @@ def ood_demos(
         Grouped by base task; ``source`` is ``synthetic-ood:FAMILY[TASK#i]``.
     """
     check_choice(family, "family", OOD_FAMILIES)
-    specs, var = base_family(base)
+    base_family(base)
     n = check_integer(n_per_task, "n_per_task", 1)
     rng = child_rng(check_rng(rng))
     observe = check_observe(observe)
@@ -158,6 +158,14 @@ def ood_demos(
         demos = make(n, rng, tracker=tracker, rate_hz=rate_hz, ik_tol=ik_tol, observe=observe,
                      arm_model=arm_model)
         return [_relabel(d, family, base) for d in demos]
+    return _changed(family, base, n, rng, observe, tracker, rate_hz, ik_tol, arm_model)
+
+
+def _changed(family: str, base: str, n: int, rng: np.random.Generator,
+             observe: tuple[str, ...], tracker: TrackerModel, rate_hz: float, ik_tol: float,
+             arm_model: ArmModel | None) -> list[Demonstration]:
+    """``n`` draws per base task, each changed as ``family`` says (all but ``"other"``)."""
+    specs, var = base_family(base)
     task_of = [s for s in specs for _ in range(n)]
     draws = [draw_demo(s, var, rng) for s in task_of]
     if family == "endpoint":
