@@ -22,10 +22,13 @@ arrived), as in the evaluation.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from sandbox.core.familiarity import stream_record
 from sandbox.eval.loocv import EvalConfig, map_trials, prepare
+from sandbox.eval.progress import bar
 
 #: Group of the normal records when OOD sets are scored (they are shared by every set).
 NORMAL = "normal"
@@ -140,13 +143,9 @@ def score_with_model(model, normal: tuple, sets: dict, config: EvalConfig, *,
     if cal is None:
         raise ValueError("--model: the model carries no familiarity calibration; fit it with "
                          "'python -m sandbox fit --calibrate'")
-    from dataclasses import replace
-
     config = replace(config, subsample=cal.subsample, observe=tuple(model.modality_names))
     groups = [(None, normal)] + list(sets.items())
     out = []
-    from sandbox.eval.progress import bar
-
     with bar(sum(len(p[1]) for _, p in groups), "streams", progress) as shown:
         for group, (train, test) in groups:
             for i, (truth, stream) in enumerate(zip(_select(train, config),
