@@ -247,6 +247,8 @@ def _scenario(args) -> int:
     def show(belief) -> None:
         probs = " ".join(f"{k}={v:.2f}" for k, v in belief.posterior.items())
         extra = "" if belief.familiarity is None else f" familiarity={belief.familiarity:.2f}"
+        if belief.familiar is False:
+            extra += " UNSURE (unknown motion)"
         if belief.moving < 0.5:
             extra += f" (hand at rest: p(moving)={belief.moving:.2f})"
         print(f"  t={belief.time:5.2f}s task={belief.task} p[{probs}] T={belief.duration:.2f}s "
@@ -262,5 +264,9 @@ def _scenario(args) -> int:
     changes = ", ".join(f"{r['task']}@{r['time']:.2f}s" for r in summary["recognised"])
     print(f"{outcome}; gripper {100 * summary['final_distance_m']:.1f} cm from the object at "
           f"the end; recognised over time: {changes}")
+    if summary.get("unfamiliar_updates") is not None:
+        first = summary["first_warning_s"]
+        print("familiarity warning: " + ("none" if first is None else
+              f"from {first:.2f} s, {summary['unfamiliar_updates']} unfamiliar updates"))
     print(f"replay: {summary['replay']}\nsummary: {summary_path}")
     return 0

@@ -27,6 +27,8 @@ from sandbox.data.spec import DataSpec, resolve
 from sandbox.validation import check_array, check_choice, check_integer, check_positive
 
 SYNTHETIC_PREFIX = "synthetic:"
+#: Prefix of a synthetic out-of-distribution set (:mod:`sandbox.data.synthetic.ood`).
+SYNTHETIC_OOD_PREFIX = "synthetic-ood:"
 #: Prefix of a Minari dataset id (:mod:`sandbox.data.minari_io`, optional extra).
 MINARI_PREFIX = "minari:"
 #: Demonstrations per task of a synthetic set when ``n_per_task`` is not given.
@@ -47,7 +49,8 @@ def synthetic_names() -> tuple[str, ...]:
 
 def _spec_options() -> str:
     names = ", ".join(f"synthetic:{n}" for n in synthetic_names())
-    return f"a folder <root>/<task>/<trial>.csv, minari:ID or one of [{names}]"
+    return (f"a folder <root>/<task>/<trial>.csv, minari:ID, synthetic-ood:FAMILY or one of "
+            f"[{names}]")
 
 
 def load_dataset(
@@ -70,7 +73,8 @@ def load_dataset(
     Parameters
     ----------
     data : str or Path
-        A dataset folder, ``"synthetic:NAME"``, or ``"minari:ID"``: a Minari
+        A dataset folder, ``"synthetic:NAME"``, ``"synthetic-ood:FAMILY[@BASE]"``
+        (:mod:`sandbox.data.synthetic.ood`), or ``"minari:ID"``: a Minari
         dataset written by ``python -m sandbox data export`` (optional extra,
         :mod:`sandbox.data.minari_io`; stored preprocessed, so ``preprocess`` must be
         the export's).
@@ -151,10 +155,11 @@ def _load(data: str | Path, layout: DataSpec, spec_given: bool, observe, seed: i
           options: dict) -> list[Demonstration]:
     """The demonstrations of a synthetic set, a Minari dataset or a folder (``folder``:
     the folder-only ``cache`` and ``on_trial``)."""
-    if isinstance(data, str) and data.startswith(SYNTHETIC_PREFIX):
-        observed = [m.name for m in layout.observed(observe)]
-        return _synthetic(data[len(SYNTHETIC_PREFIX):], seed, tasks, n_per_task, preprocess,
-                          {"observe": observed, **options})
+    for prefix in (SYNTHETIC_PREFIX, SYNTHETIC_OOD_PREFIX):
+        if isinstance(data, str) and data.startswith(prefix):
+            observed = [m.name for m in layout.observed(observe)]
+            return _synthetic(data[len(prefix):], seed, tasks, n_per_task, preprocess,
+                              {"observe": observed, **options}, ood=prefix != SYNTHETIC_PREFIX)
     if isinstance(data, str) and data.startswith(MINARI_PREFIX):
         return _minari(data[len(MINARI_PREFIX):], layout, observe, tasks, n_per_task,
                        preprocess, options)
@@ -205,21 +210,22 @@ def _minari(dataset_id, layout, observe, tasks, n_per_task, preprocess, options)
                         n_per_task=n_per_task, preprocess=preprocess)
 
 
-def _synthetic(name, seed, tasks, n_per_task, preprocess, options) -> list[Demonstration]:
-    """A named synthetic set; ``options["observe"]``: its modalities (hand and/or arm)."""
-    from sandbox.data.synthetic import make_dataset
+def _synthetic(name, seed, tasks, n_per_task, preprocess, options, *,
+               ood: bool = False) -> list[Demonstration]:
+    """A named synthetic set (``ood``: an out-of-distribution one, ``synthetic-ood:NAME``);
+    ``options["observe"]``: its modalities (hand and/or arm)."""
     from sandbox.data.synthetic.observe import check_observe
 
     options = dict(options)
     observe = check_observe(options.pop("observe"))
-    if name not in synthetic_names():
-        raise ValueError(f"data: expected {_spec_options()}, got 'synthetic:{name}'")
+    if not ood and name not in synthetic_names():
+        raise ValueError(f"data: expected {_spec_options()}, got 'synthetic:{_short(name)}'")
     for key in ("columns", "max_duration"):
         if key in options:
             raise ValueError(f"{key}: only used for recorded folders, not synthetic:NAME")
     n = DEFAULT_SYNTHETIC_PER_TASK if n_per_task is None else int(n_per_task)
     session = options.pop("session", None)
-    demos = make_dataset(name, n, np.random.default_rng(seed), observe=observe, session=session)
+    demos = _generate(name, n, np.random.default_rng(seed), observe, session, ood)
     if tasks is not None:
         available = list(stack_tasks(demos))
         unknown = [t for t in tasks if t not in available]
@@ -231,6 +237,22 @@ def _synthetic(name, seed, tasks, n_per_task, preprocess, options) -> list[Demon
     from sandbox.data.preprocess import preprocess_demonstration
 
     return [preprocess_demonstration(d, preprocess, **options) for d in demos]
+
+
+def _generate(name: str, n: int, rng: np.random.Generator, observe, session,
+              ood: bool) -> list[Demonstration]:
+    """``make_dataset`` of ``synthetic:NAME``, or the OOD family of ``synthetic-ood:NAME``."""
+    if not ood:
+        from sandbox.data.synthetic import make_dataset
+
+        return make_dataset(name, n, rng, observe=observe, session=session)
+    from sandbox.data.synthetic.ood import ood_demos, parse_name
+
+    family, base = parse_name(name)
+    if session is not None:
+        raise ValueError("session: expected none for synthetic-ood:NAME (its motions are "
+                         "today's session's)")
+    return ood_demos(family, n, rng, base=base, observe=observe)
 
 
 def resample_uniform(

@@ -56,6 +56,10 @@ class Beliefs:
     familiar : bool or None
         False when the motion is unlike the training demonstrations; None when
         the policy cannot tell.
+    familiarity_threshold : float or None
+        The model's calibrated threshold: an update whose
+        :attr:`~sandbox.core.Update.familiarity` is below it is unfamiliar (None
+        without a calibration).
     updates : tuple of Update
         The predictor's updates so far (:class:`sandbox.core.predictor.Update`,
         frozen), oldest first; empty for a policy without a predictor.
@@ -67,6 +71,7 @@ class Beliefs:
     duration: float = math.nan
     alpha: float = 1.0
     familiar: bool | None = None
+    familiarity_threshold: float | None = None
     updates: tuple[Any, ...] = ()
     _plan: Callable[[], tuple[FloatArray, FloatArray, FloatArray]] = field(
         default=_no_predictor, repr=False, compare=False)
@@ -101,8 +106,15 @@ class Beliefs:
                    task_posterior=dict(predictor.task_posterior),
                    duration=float(predictor.duration), alpha=float(predictor.alpha),
                    familiar=predictor.familiar, updates=tuple(predictor.updates),
+                   familiarity_threshold=_threshold(predictor.model),
                    _plan=predictor.plan, _command=predictor.command,
                    _observations=predictor.observations)
+
+
+def _threshold(model: Any) -> float | None:
+    """The familiarity threshold of ``model``'s calibration (None without one)."""
+    calibration = getattr(model, "calibration", None)
+    return None if calibration is None else float(calibration.threshold)
 
 
 def recognitions(beliefs: Beliefs, n_known: int, time: float) -> list[tuple[float, str]]:

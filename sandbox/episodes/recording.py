@@ -47,6 +47,10 @@ class Belief:
     moving : float
         Probability that the hand had started moving
         (:attr:`sandbox.core.Update.motion_probability`).
+    familiar : bool or None
+        False when ``familiarity`` is below the model's calibrated threshold:
+        the viewer's "unsure / unknown motion" warning was on; None without a
+        calibration.
     """
 
     time: float
@@ -56,13 +60,15 @@ class Belief:
     jump: float = 0.0
     familiarity: float | None = None
     moving: float = 1.0
+    familiar: bool | None = None
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready form (``nan`` becomes ``None``)."""
         return {"time": round(self.time, 4), "task": self.task,
                 "posterior": {k: round(float(v), 4) for k, v in self.posterior.items()},
                 "duration": _finite(self.duration), "jump": _finite(self.jump),
-                "familiarity": _finite(self.familiarity), "moving": round(self.moving, 4)}
+                "familiarity": _finite(self.familiarity), "moving": round(self.moving, 4),
+                "familiar": self.familiar}
 
 
 @dataclass
@@ -139,7 +145,19 @@ class EpisodeRecord:
             "recognised": [{"time": round(t, 4), "task": k} for t, k in changes],
             "updates": [b.as_dict() for b in self.updates],
             "n_updates": len(self.updates),
+            **warnings(self.updates),
         }
+
+
+def warnings(updates: list[Belief]) -> dict[str, Any]:
+    """The familiarity warning over an episode: ``unfamiliar_updates`` (count) and
+    ``first_warning_s`` (time of the first unfamiliar update, None if none); both None
+    when no update had a calibrated familiarity."""
+    judged = [b for b in updates if b.familiar is not None]
+    if not judged:
+        return {"unfamiliar_updates": None, "first_warning_s": None}
+    low = [b.time for b in judged if not b.familiar]
+    return {"unfamiliar_updates": len(low), "first_warning_s": round(low[0], 4) if low else None}
 
 
 def _finite(value: float | None) -> float | None:
@@ -219,7 +237,7 @@ class _Recorder:
             record.truth.append((t, str(self.truth.task_at(t))))
         self.distances.append(step.info["distance"])
         for update in beliefs.updates[len(record.updates):]:
-            belief = _belief(update, beliefs.tasks)
+            belief = _belief(update, beliefs.tasks, beliefs.familiarity_threshold)
             record.updates.append(belief)
             if self.on_update is not None:
                 self.on_update(belief)
@@ -239,9 +257,12 @@ class _Recorder:
         return self.record
 
 
-def _belief(update, tasks) -> Belief:
+def _belief(update, tasks, threshold: float | None = None) -> Belief:
     posterior = {task: float(p) for task, p in zip(tasks, update.task_posterior)}
+    familiarity = getattr(update, "familiarity", None)
+    familiar = (None if familiarity is None or threshold is None
+                or not math.isfinite(float(familiarity)) else bool(familiarity >= threshold))
     return Belief(time=float(update.time), task=update.task, posterior=posterior,
                   duration=float(update.duration), jump=float(update.jump),
-                  familiarity=getattr(update, "familiarity", None),
+                  familiarity=familiarity, familiar=familiar,
                   moving=float(getattr(update, "motion_probability", 1.0)))

@@ -1,6 +1,8 @@
 """Out-of-distribution honesty: does the familiarity fire on motions of a task never trained?
 
-Leave each task out in turn (``python -m sandbox.eval.ood --data DIR``):
+Leave each task out in turn (``python -m sandbox ood --data DIR``, whose report,
+:mod:`sandbox.eval.oodreport`, adds detection at fixed false-alarm rates, AUC
+and delays; ``python -m sandbox.eval.ood`` is its deprecated alias):
 
 * **held-in** motions: every trial of the trained tasks, streamed causally
   (as the evaluation's test streams) and scored by a model fitted on the
@@ -22,8 +24,6 @@ swept over the calibration's ``alpha``.
 
 from __future__ import annotations
 
-import argparse
-import json
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
@@ -215,36 +215,19 @@ def summarize(records: list[dict], *, alpha: float = 0.05, **about) -> dict:
 
 
 def main(argv=None) -> int:
-    """Run ``python -m sandbox.eval.ood`` with ``argv``; return the exit status."""
-    parser = argparse.ArgumentParser(prog="python -m sandbox.eval.ood", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--data", default=None, help="dataset folder or synthetic:NAME")
-    parser.add_argument("--observe", default=None,
-                        help="modalities, comma-separated (default: the data's; hand)")
-    parser.add_argument("--dow-t", type=float, default=0.2, help="update window (s; 0.2)")
-    parser.add_argument("--alpha", type=float, default=0.05,
-                        help="share of calibration motions allowed to fire (0.05)")
-    parser.add_argument("--workers", type=int, default=1, help="processes (1)")
-    parser.add_argument("--out", default=None, help="write everything as JSON here")
-    parser.add_argument("--records", default=None,
-                        help="re-judge the streams of a previous --out file (no rescoring)")
-    args = parser.parse_args(argv)
-    if (args.data is None) == (args.records is None):
-        parser.error("expected --data DIR or --records FILE")
-    observe = None if args.observe is None else args.observe.split(",")
-    if args.records:
-        with open(args.records) as fh:
-            saved = json.load(fh)
-        result = summarize(saved["records"], alpha=args.alpha,
-                           **{k: saved[k] for k in ("data", "observe", "dow_t", "seconds")})
-    else:
-        result = run(args.data, observe=observe, dow_t=args.dow_t, alpha=args.alpha,
-                     workers=args.workers, progress=True)
-    if args.out:
-        with open(args.out, "w") as fh:
-            json.dump(result, fh)
-    print(markdown(result), end="")
-    return 0
+    """``python -m sandbox.eval.ood``: a deprecated alias of ``python -m sandbox ood``.
+
+    Kept for one release: its options (``--data``, ``--observe``, ``--dow-t``,
+    ``--alpha``, ``--workers``, ``--out``, ``--records``) mean the same there;
+    this runs the command in a child process (the evaluation layer does not
+    import the commands) and returns its exit status.
+    """
+    import subprocess
+
+    print("note: 'python -m sandbox.eval.ood' is deprecated and goes in the next release; "
+          "use 'python -m sandbox ood' (same options)", file=sys.stderr, flush=True)
+    args = sys.argv[1:] if argv is None else list(argv)
+    return subprocess.call([sys.executable, "-m", "sandbox", "ood", *args])
 
 
 if __name__ == "__main__":

@@ -16,6 +16,8 @@ notebook leaves its inline backend alone.
   recording of several methods, with bootstrap bands.
 * :func:`plot_sweep` (``summary.png``): the objective J of every configuration
   of a sweep, best first.
+* :func:`plot_roc` (``ood --plot``): detection before the handover against false
+  alarms on held-out normal motions, one curve per OOD set or left-out task.
 """
 
 from __future__ import annotations
@@ -192,6 +194,29 @@ def plot_sweep(summary: dict, path) -> Path:
     failed = len(summary["failed"])
     fig.suptitle(f"Sweep: {len(ranked)} configurations ranked"
                  + (f", {failed} failed" if failed else ""))
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    return _save(fig, Path(path))
+
+
+def plot_roc(result: dict, path) -> Path:
+    """ROC curves of an ``ood`` result (:mod:`sandbox.eval.oodreport`), one per group."""
+    from sandbox.eval.oodreport import FA_RATES, groups, roc
+
+    fig, ax = _figure(1, (5.5, 5))
+    auc = {g: v["auc"] for g, v in result["groups"].items()}
+    for g, (normal, ood) in groups(result["records"]).items():
+        fa, det = roc(normal, ood)
+        ax.step(fa, det, where="post", lw=2.5 if g == "all" else 1.3,
+                color="k" if g == "all" else None, label=f"{g} (AUC {auc[g]:.2f})")
+    for rate in FA_RATES:
+        ax.axvline(rate, color="0.7", lw=0.8, ls=":")
+    ax.plot([0, 1], [0, 1], color="0.6", lw=0.8, ls="--")
+    ax.set_xlabel("false alarms (held-out normal motions)")
+    ax.set_ylabel("detection before the handover")
+    ax.set_xlim(0, 1), ax.set_ylim(0, 1.02)
+    ax.legend(fontsize=7, loc="lower right")
+    ax.set_title(f"{result['mode']}: {Path(str(result['data'])).name} ({result['observe']})",
+                 fontsize=9)
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     return _save(fig, Path(path))
 

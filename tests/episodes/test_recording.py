@@ -92,3 +92,51 @@ def test_belief_dict_turns_nan_into_none():
     belief = Belief(time=0.1, task="a", posterior={"a": 1.0}, duration=float("nan"))
     assert belief.as_dict()["duration"] is None
     assert EpisodeRecord(task="a", object="box", source="x").summary()["final_task"] == ""
+
+
+def test_warnings_count_the_unfamiliar_updates():
+    from sandbox.episodes.recording import warnings
+
+    def b(t, familiar):
+        return Belief(time=t, task="a", posterior={"a": 1.0}, duration=1.0, familiar=familiar)
+
+    assert warnings([]) == {"unfamiliar_updates": None, "first_warning_s": None}
+    assert warnings([b(0.2, None)])["unfamiliar_updates"] is None
+    assert warnings([b(0.2, True), b(0.4, True)]) == {"unfamiliar_updates": 0,
+                                                      "first_warning_s": None}
+    assert warnings([b(0.2, True), b(0.4, False), b(0.6, True), b(0.8, False)]) == {
+        "unfamiliar_updates": 2, "first_warning_s": 0.4}
+
+
+def test_an_unfamiliar_motion_is_in_the_summary_and_the_replay(env, model):
+    """Issue 30 item 6: with a calibration of motions that fitted far better than any real
+    stream can, every update is unfamiliar: the summary says when the warning came, the
+    replay shows it."""
+    import copy
+
+    from sandbox.core.familiarity import Calibration
+    from sandbox.viz import Viewer
+
+    rng = np.random.default_rng(0)
+    K = len(model.tasks)
+    records = [(np.arange(1, 11) * 0.2, 1e-9 * rng.lognormal(size=10), np.full(10, k))
+               for k in range(K) for _ in range(25)]
+    unsure = copy.copy(model)
+    unsure.calibration = Calibration.from_records(records, K)
+    viewer = Viewer(fps=10.0)
+    viewer.add_simulation(env.unwrapped.sim)
+    overlay = viewer.add_overlay(unsure.tasks, rng=np.random.default_rng(0))
+    record = record_episode(env, IProMPPolicy(unsure, dow_t=0.2), seed=2, viewer=viewer,
+                            overlay=overlay, max_steps=40)
+    summary = record.summary()
+    assert record.updates and all(b.familiar is False for b in record.updates)
+    assert summary["first_warning_s"] == round(record.updates[0].time, 4)
+    assert summary["unfamiliar_updates"] == len(record.updates)
+    assert summary["updates"][0]["familiar"] is False
+    shown = [v for path, props in viewer.scene.timeline.tracks.items()
+             if path.endswith("warning_box") for v in props.get("visible", {}).values()]
+    assert True in shown           # the warning box appears in the replay
+    # an uncalibrated model's summary says nothing about a warning
+    plain = record_episode(env, IProMPPolicy(model, dow_t=0.2), seed=2, max_steps=40)
+    assert plain.summary()["unfamiliar_updates"] is None
+    assert all(b.familiar is None for b in plain.updates)
