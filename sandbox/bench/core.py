@@ -13,6 +13,13 @@ Timed, from one run, as medians over ``repeats`` repetitions:
   it, with the likelihood's sufficient statistics grown as the 40 observations
   arrived (:mod:`sandbox.core.statistics`); ``observe_ms`` is what that growth
   costs per kept observation.
+* ``familiarity_ms``: what the familiarity adds to that update
+  (:mod:`sandbox.core.familiarity`): the four statistics of the update's
+  prediction (:func:`~sandbox.core.familiarity.statistics`) and their ranking and
+  Fisher combination against a calibration of the reference case's size (4
+  tasks, the default time bins; its quantiles are drawn at random, as the cost
+  does not depend on them). ``update_ms`` includes it only for a calibrated model,
+  which the reference model is not.
 * ``update_cold_ms``: the same update computing everything from the 40
   observations at update time (``incremental=False``).
 * ``naive_update_ms``: the same update done the straightforward way, written
@@ -206,8 +213,10 @@ def run_core_benchmarks(repeats: int = 200, seed: int = 0) -> dict:
     naive = _median_ms(lambda: naive_update(model, times, values, lattice), naive_reps)
     upd = pred.update(t_update)
     spans = lattice.spans()
+    familiarity_ms = _median_ms(_familiarity_run(model, pred, t_update), repeats)
     out = {
         "update_ms": round(fast, 4),
+        "familiarity_ms": round(familiarity_ms, 4),
         "update_cold_ms": round(cold, 4),
         "naive_update_ms": round(naive, 4),
         "speedup_vs_naive": round(naive / fast, 1),
@@ -247,6 +256,27 @@ def _multimodal_figures(seed: int, repeats: int, n_cand: int, hand_ms: float) ->
             "observe_multimodal_ms": round(_observe_ms(model, t200, y200, n_cand), 4),
             "multimodal_config": {"P": model.n_human, "observe": list(model.modality_names),
                                   "recognised": pred.update(t_update).task}}
+
+
+def _familiarity_run(model, pred: DynamicPredictor, t: float) -> Callable[[], object]:
+    """One update's familiarity: the statistics of its prediction, ranked and combined."""
+    from sandbox.core.calibration import EDGES, Calibration
+    from sandbox.core.familiarity import COMPONENTS, chosen, statistics
+
+    rng = np.random.default_rng(0)
+    K, mean = len(model.tasks), float(model.task_models[0].mean_duration)
+    records = [(np.arange(15) * 0.2, rng.lognormal(0.0, 1.0, (15, len(COMPONENTS))),
+                rng.integers(0, K, 15)) for _ in range(80)]
+    cal = Calibration.from_records(records, K, edges=np.array(EDGES) * mean)
+    prediction = pred.last_prediction
+    times, values = pred.observations()
+    times, values = times[times <= t], values[times <= t]
+
+    def run():
+        value = statistics(model, prediction, t, times, values)
+        return cal.familiarity(t, value, chosen(prediction))
+
+    return run
 
 
 def _observe_ms(model, times, values, n_candidates: int) -> float:

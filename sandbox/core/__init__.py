@@ -17,7 +17,8 @@ Modules: :mod:`~sandbox.core.basis`, :mod:`~sandbox.core.promp`,
 :mod:`~sandbox.core.recognition`, :mod:`~sandbox.core.blending`,
 :mod:`~sandbox.core.predictor` (with :mod:`~sandbox.core.updating`, the machinery both
 predictors share, and :mod:`~sandbox.core.stream`, the observation stream),
-:mod:`~sandbox.core.familiarity` (with :mod:`~sandbox.core.calibration`),
+:mod:`~sandbox.core.familiarity` (with :mod:`~sandbox.core.evidence`, its timing
+statistics, :mod:`~sandbox.core.calibration` and :mod:`~sandbox.core.conformal`),
 :mod:`~sandbox.core.modality`, :mod:`~sandbox.core.io` (with :mod:`~sandbox.core.archive`,
 the checked ``.npz`` reader). At the public
 boundary: :mod:`~sandbox.validation` (``check_*``, only ``ValueError``),

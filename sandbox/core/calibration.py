@@ -1,12 +1,40 @@
-"""The familiarity calibration: quantiles of held-out updates' statistic, to rank new ones.
+"""The familiarity calibration: quantiles of held-out updates' statistics, to rank new ones.
 
 :class:`Calibration` stores, per chosen task and bin of elapsed time, the
-quantiles of :func:`~sandbox.core.familiarity.statistic` over the updates of
+quantiles of each statistic of :data:`~sandbox.core.evidence.COMPONENTS` (or of
+the Mahalanobis term alone, as files before them did) over the updates of
 held-out training motions, and ranks a new update against them
 (:meth:`Calibration.familiarity`); :func:`leave_one_out` builds it from
 per-motion records and ranks each motion against the others (for the
-threshold); :func:`check` validates one (e.g. read from a model file). How the
-records are made, and what the statistic means: :mod:`sandbox.core.familiarity`.
+threshold, :func:`conformal_threshold`); :func:`check` validates one (e.g. read
+from a model file). How the records are made, and what the statistics mean:
+:mod:`sandbox.core.familiarity`, :mod:`sandbox.core.evidence`.
+
+**Combining.** Statistic :math:`j` of an update ranks as
+:math:`p_j = \\hat F_j^c(s_j)`, the share of the cell's held-out updates with a
+larger value (a p-value under the calibration motions' distribution). The
+:math:`J` ranks are combined by Fisher's method,
+
+.. math::  X = -2 \\sum_{j=1}^{J} \\log p_j, \\qquad
+           f = P(\\chi^2_{2J} \\ge X) = e^{-X/2} \\sum_{i=0}^{J-1} \\frac{(X/2)^i}{i!},
+
+the familiarity in (0, 1] (exact for independent uniform :math:`p_j`; the
+statistics are not independent, so :math:`f` is a score, not a p-value, and the
+threshold below makes the decision honest).
+
+**Threshold (split-conformal, per motion).** Each calibration motion's lowest
+familiarity :math:`\\ell_i` over its updates is computed as a new motion's
+would be: the motion streamed by a model fitted without it
+(:func:`~sandbox.core.familiarity.loo_records`) and ranked against the other
+motions' updates (:func:`leave_one_out`). With the :math:`n` values sorted,
+:math:`\\ell_{(1)} \\le \\dots \\le \\ell_{(n)}`, the threshold is
+:math:`\\ell_{(k)}`, :math:`k = \\alpha (n + 1)` (interpolated between order
+statistics when not an integer, :func:`conformal_threshold`), and a motion is
+unfamiliar when some update's familiarity is below it. For a new motion
+exchangeable with the calibration ones, :math:`\\ell` is below
+:math:`\\ell_{(k)}` with probability :math:`k / (n + 1)` for an integer
+:math:`k` (the rank of :math:`\\ell` among the :math:`n + 1` is uniform),
+whatever the statistics' distribution: about ``alpha``.
 """
 
 from __future__ import annotations
@@ -15,6 +43,13 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from sandbox.core.conformal import (
+    LEVELS,
+    conformal_threshold,
+    fisher,
+    rank,
+)
+from sandbox.core.evidence import COMPONENTS
 from sandbox.core.limits import MAX_SUBSAMPLE, MAX_TIME_S
 from sandbox.validation import (
     FloatArray,
@@ -26,16 +61,14 @@ from sandbox.validation import (
     check_positive,
 )
 
-#: Quantile levels stored per time bin.
-LEVELS = np.linspace(0.0, 1.0, 41)
 #: Left edges of the time bins, as fractions of the model's mean duration (last bin open).
 EDGES = (0.0, 0.2, 0.4, 0.6, 0.8, 1.0, 1.3, 1.7)
 LIKELIHOODS = ("joint",)
-#: Level above which the familiarity follows a fitted tail instead of the quantiles.
-TAIL_LEVEL = 0.95
-#: Smallest tail scale (log-statistic per e-fold of familiarity).
-MIN_TAIL = 1e-3
-TINY = 1e-300
+#: Smallest tail scale of the statistics after the Mahalanobis term: a statistic whose
+#: calibration values hardly vary (e.g. all 0) must grow by 10 % per e-fold of its rank.
+EXTRA_MIN_TAIL = 0.1
+#: The statistic ranked by its analytic p-value (``not_arrived``, index in COMPONENTS).
+ANALYTIC = COMPONENTS.index("not_arrived")
 #: Fewest updates of a (task, time bin) cell for its own quantiles (else the bin's).
 MIN_CELL = 20
 
@@ -66,6 +99,11 @@ class Calibration:
         familiarity, less well calibrated: more updates fire more often).
     n_motions : int
         Calibration motions.
+    components : tuple of str
+        The statistics ranked: ``("mahalanobis",)`` (files before the timing
+        evidence) or :data:`~sandbox.core.evidence.COMPONENTS`.
+    extra : ndarray or None, shape (J - 1, K, B, L)
+        Quantiles of the statistics after the first, like ``quantiles``; None for one.
     """
 
     edges: FloatArray
@@ -77,6 +115,8 @@ class Calibration:
     subsample: int = 2
     dow_t: float = 0.2
     n_motions: int = 0
+    components: tuple = ("mahalanobis",)
+    extra: FloatArray | None = None
 
     def __post_init__(self) -> None:
         check(self)
@@ -86,27 +126,40 @@ class Calibration:
         """K."""
         return int(self.quantiles.shape[0])
 
-    def familiarity(self, t: float, value: float, task: int) -> float:
-        """Familiarity in (0, 1] of statistic ``value`` at elapsed time ``t`` (s), task chosen.
+    @property
+    def stack(self) -> FloatArray:
+        """All statistics' quantiles, shape (J, K, B, L)."""
+        if self.extra is None:
+            return self.quantiles[None]
+        return np.concatenate([self.quantiles[None], self.extra])
 
-        The share of the cell's calibration updates with a larger statistic:
-        interpolated between the stored quantiles up to level
-        :data:`TAIL_LEVEL`; beyond it a power-law tail through the quantiles at
-        levels 0.75 and ``TAIL_LEVEL`` (so a motion far worse than any
-        calibration one still gets a graded, positive score). NaN for a NaN ``value``.
+    def familiarity(self, t: float, value, task: int) -> float:
+        """Familiarity in (0, 1] of the statistics ``value`` at elapsed time ``t`` (s), task chosen.
+
+        ``value`` is one float per statistic of :attr:`components` (a float for
+        one). Each ranks as the share of the cell's calibration updates with a
+        larger value (:func:`rank`; the tail of a statistic after the first
+        falls at most one e-fold per :data:`EXTRA_MIN_TAIL` of its log), except
+        ``not_arrived``, already a p-value bound: it ranks as :math:`e^{-s_T}`
+        (:mod:`sandbox.core.evidence`; its stored quantiles only describe it).
+        Several ranks combine by Fisher's method (module docstring). NaN when the
+        first statistic is NaN; a later NaN statistic counts as no evidence (rank 1).
         """
-        if not np.isfinite(value):
+        v = np.atleast_1d(np.asarray(value, dtype=np.float64))
+        if v.shape != (len(self.components),):
+            raise ValueError(f"value: expected {len(self.components)} statistics "
+                             f"{self.components}, got shape {v.shape}")
+        if not np.isfinite(v[0]):
             return float("nan")
         b = max(int(np.searchsorted(self.edges, t, side="right")) - 1, 0)
-        u = np.log(max(value, TINY))
-        lq = np.log(np.maximum(self.quantiles[int(task), b], TINY))
-        top = int(np.searchsorted(LEVELS, TAIL_LEVEL))
-        if u <= lq[top]:
-            return float(1.0 - np.interp(u, lq[: top + 1], LEVELS[: top + 1]))
-        mid = int(np.searchsorted(LEVELS, 0.75))
-        decades = np.log((1.0 - LEVELS[mid]) / (1.0 - LEVELS[top]))
-        beta = max((lq[top] - lq[mid]) / decades, MIN_TAIL)   # log-stat per e-fold of p
-        return float((1.0 - LEVELS[top]) * np.exp(-(u - lq[top]) / beta))
+        q = self.stack[:, int(task), b]
+        if v.size == 1:
+            return rank(q[0], v[0])
+        ranks = [rank(q[j], v[j], EXTRA_MIN_TAIL) if np.isfinite(v[j]) else 1.0
+                 for j in range(v.size)]
+        ranks[0] = rank(q[0], v[0])
+        ranks[ANALYTIC] = float(np.exp(-v[ANALYTIC])) if np.isfinite(v[ANALYTIC]) else 1.0
+        return fisher(np.array(ranks))
 
     @classmethod
     def from_records(cls, records, n_tasks: int, *, alpha: float = 0.05, edges=None,
@@ -117,8 +170,9 @@ class Calibration:
         ----------
         records : sequence of (times, values, tasks)
             Per calibration motion: update times (s,) in seconds, their
-            :func:`~sandbox.core.familiarity.statistic` (s,) and the task each chose
-            (s,) (int in [0, K)).
+            statistics, (s,) (:func:`~sandbox.core.familiarity.statistic`) or
+            (s, J) (:data:`~sandbox.core.evidence.COMPONENTS`), and the task each
+            chose (s,) (int in [0, K)).
         n_tasks : int
             K.
         alpha : float
@@ -131,8 +185,7 @@ class Calibration:
         alpha = check_fraction(alpha, "alpha")
         full, held_out = leave_one_out(records, n_tasks, edges=edges, **settings)
         lowest = np.array([f.min() if f.size else np.inf for f in held_out])
-        threshold = float(np.quantile(lowest[np.isfinite(lowest)], alpha))
-        return replace(full, threshold=threshold, alpha=alpha)
+        return replace(full, threshold=conformal_threshold(lowest, alpha), alpha=alpha)
 
 
 def leave_one_out(records, n_tasks: int, *, edges=None,
@@ -161,8 +214,10 @@ def leave_one_out(records, n_tasks: int, *, edges=None,
     edges = check_array(EDGES if edges is None else edges, "edges", 1)
     edges = _populated(np.sort(edges), times)
     bins = np.searchsorted(edges, times, side="right") - 1
-    full = Calibration(edges, *_cells(values, tasks, bins, (n_tasks, edges.size)), 0.0, 1.0,
-                       n_motions=len(records), **settings)
+    q, counts = _cells(values, tasks, bins, (n_tasks, edges.size))
+    settings.setdefault("components", COMPONENTS if q.shape[0] > 1 else ("mahalanobis",))
+    full = Calibration(edges, q[0], counts, 0.0, 1.0, n_motions=len(records),
+                       extra=q[1:] if q.shape[0] > 1 else None, **settings)
     held_out = [_against_others(full, times, values, tasks, bins, owner == i)
                 for i in range(len(records))]
     return full, held_out
@@ -170,20 +225,21 @@ def leave_one_out(records, n_tasks: int, *, edges=None,
 
 def _cells(values: FloatArray, tasks: np.ndarray, bins: np.ndarray,
            cells: tuple[int, int]) -> tuple[FloatArray, FloatArray]:
-    """Quantiles (K, B, L) and counts (K, B) per (task, bin); thin cells use the whole bin."""
+    """Quantiles (J, K, B, L) of ``values`` (n, J) and counts (K, B) per (task, bin); thin
+    cells use the whole bin."""
     K, B = cells
-    q, counts = np.empty((K, B, LEVELS.size)), np.zeros((K, B))
+    q, counts = np.empty((values.shape[1], K, B, LEVELS.size)), np.zeros((K, B))
     for b in range(B):
         in_bin = bins == b
-        pooled = np.quantile(values[in_bin], LEVELS) if in_bin.any() else np.full(LEVELS.size,
-                                                                                  np.nan)
+        pooled = (np.quantile(values[in_bin], LEVELS, axis=0).T if in_bin.any()
+                  else np.full((values.shape[1], LEVELS.size), np.nan))
         for k in range(K):
             mine = in_bin & (tasks == k)
             n = int(mine.sum())
             if n >= MIN_CELL:
-                q[k, b], counts[k, b] = np.quantile(values[mine], LEVELS), n
+                q[:, k, b], counts[k, b] = np.quantile(values[mine], LEVELS, axis=0).T, n
             else:
-                q[k, b], counts[k, b] = pooled, int(in_bin.sum())
+                q[:, k, b], counts[k, b] = pooled, int(in_bin.sum())
     return q, counts
 
 
@@ -193,8 +249,9 @@ def _against_others(full: Calibration, times, values, tasks, bins, mine) -> Floa
         return np.empty(0)
     q, counts = _cells(values[~mine], tasks[~mine], bins[~mine], full.counts.shape)
     empty = counts == 0
-    q[empty], counts[empty] = full.quantiles[empty], full.counts[empty]
-    others = replace(full, quantiles=q, counts=counts)
+    q[:, empty], counts[empty] = full.stack[:, empty], full.counts[empty]
+    others = replace(full, quantiles=q[0], counts=counts,
+                     extra=q[1:] if q.shape[0] > 1 else None)
     return np.array([others.familiarity(t, v, k)
                      for t, v, k in zip(times[mine], values[mine], tasks[mine])])
 
@@ -212,6 +269,7 @@ def check(cal: Calibration) -> Calibration:
     counts = check_array(cal.counts, "calibration counts", 2, shape=(q.shape[0], edges.size))
     if np.any(counts < 1) or np.any(counts != np.round(counts)):
         raise ValueError(f"calibration counts: expected positive integers, got {counts}")
+    _check_extra(cal, q)
     check_number(cal.threshold, "calibration threshold", low=0.0, high=1.0)
     check_fraction(cal.alpha, "calibration alpha")
     check_choice(cal.likelihood, "calibration likelihood", LIKELIHOODS)
@@ -219,6 +277,22 @@ def check(cal: Calibration) -> Calibration:
     check_positive(cal.dow_t, "calibration dow_t", high=MAX_TIME_S)
     check_integer(cal.n_motions, "calibration n_motions", 0)
     return cal
+
+
+def _check_extra(cal: Calibration, q: FloatArray) -> None:
+    names = tuple(cal.components)
+    if names not in {("mahalanobis",), COMPONENTS}:
+        raise ValueError(f"calibration components: expected {('mahalanobis',)} or "
+                         f"{COMPONENTS}, got {names!r}")
+    if len(names) == 1 or cal.extra is None:
+        if cal.extra is not None or len(names) > 1:
+            raise ValueError(f"calibration extra: expected quantiles of {len(names) - 1} more "
+                             f"statistics, got {'none' if cal.extra is None else 'some'}")
+        return
+    extra = check_array(cal.extra, "calibration extra quantiles", 4,
+                        shape=(len(names) - 1,) + q.shape)
+    if np.any(np.diff(extra, axis=3) < 0) or np.any(extra < 0):
+        raise ValueError("calibration extra quantiles: expected non-negative, non-decreasing rows")
 
 
 def _pool(records, n_tasks: int):
@@ -229,16 +303,19 @@ def _pool(records, n_tasks: int):
     tasks, owner = [], []
     for i, (t, v, k) in enumerate(records):
         t, v = np.asarray(t, dtype=np.float64), np.asarray(v, dtype=np.float64)
+        v = v[:, None] if v.ndim == 1 else v
         k = np.asarray(k)
-        if t.shape != v.shape or t.shape != k.shape or t.ndim != 1:
-            raise ValueError(f"records[{i}]: expected times, values and tasks of one length, "
-                             f"got shapes {t.shape}, {v.shape} and {k.shape}")
+        if (t.ndim != 1 or v.ndim != 2 or t.shape != k.shape or v.shape[0] != t.size
+                or (value_parts and v.shape[1] != value_parts[0].shape[1])):
+            raise ValueError(f"records[{i}]: expected times, values and tasks of one length "
+                             f"(values (s,) or (s, J), J alike in all records), got shapes "
+                             f"{t.shape}, {v.shape} and {k.shape}")
         if k.size and (k.dtype.kind not in "iu" or k.min() < 0 or k.max() >= n_tasks):
             raise ValueError(f"records[{i}]: expected task indices in [0, {n_tasks}), got "
                              f"{k.tolist()[:10]}")
-        ok = np.isfinite(v) & np.isfinite(t)
+        ok = np.isfinite(v[:, 0]) & np.isfinite(t)
         time_parts.append(t[ok])
-        value_parts.append(v[ok])
+        value_parts.append(np.where(np.isfinite(v[ok]), v[ok], 0.0))   # later NaN: no evidence
         tasks.append(k[ok].astype(np.int64))
         owner.append(np.full(int(ok.sum()), i))
     times, values = np.concatenate(time_parts), np.concatenate(value_parts)

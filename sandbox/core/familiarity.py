@@ -6,7 +6,7 @@ confident "most probable" task. Familiarity asks the other question: how well
 do the observations fit the *best* task, compared with how well held-out
 motions of the trained tasks fit it?
 
-The statistic of one update (:func:`statistic`) is the squared Mahalanobis
+The first statistic of one update (:func:`statistic`) is the squared Mahalanobis
 distance of all observations so far from the best task's predictive
 distribution at its MAP speed, per observed value,
 
@@ -16,27 +16,38 @@ distribution at its MAP speed, per observed value,
 (the quadratic term of the joint log-likelihood, eq. 12; :math:`n` observed
 values). Under the model it would be about 1; the real scale is not (the noise
 floor is set for recognition, not for calibration, and observations are
-correlated), so it is *calibrated* (:func:`calibrate`): each training motion,
+correlated). A slow or hesitant person is absorbed by the speed factor in
+:math:`m`, so three statistics of timing join it (:mod:`sandbox.core.evidence`,
+with their equations): the elapsed time against the best task's speed prior
+while the motion has not ended, the observed speed against the predicted one
+over the last 0.3 s, and the spread of the speed posterior;
+:func:`statistics` gives all four, :math:`s = (m, s_T, s_v, s_\\phi)`.
+
+They are *calibrated* (:func:`calibrate`): each training motion,
 streamed as a predictor sees it, is scored by a model fitted without it
-(leave-one-out), and the quantiles of the statistic per chosen task and bin of
-elapsed time are stored (:class:`Calibration`). The familiarity of an update is
-then a p-value-like score in (0, 1]: the share of held-out training updates
-that chose the same task at about the same elapsed time and fitted worse
-(:meth:`Calibration.familiarity`). The
-threshold below which :attr:`~sandbox.core.updating.PredictorBase.familiar` is
-False is the ``alpha`` quantile of each calibration motion's *lowest*
-familiarity over its updates, so a motion like the training ones is called
-unfamiliar at some update with probability about ``alpha``.
+(leave-one-out), and the quantiles of each statistic per chosen task and bin of
+elapsed time are stored (:class:`Calibration`). Each statistic of an update
+then ranks as a p-value-like :math:`p_j` in (0, 1]: the share of held-out
+training updates that chose the same task at about the same elapsed time and
+scored worse; the familiarity is Fisher's combination of the four,
+:math:`f = P(\\chi^2_8 \\ge -2 \\sum_j \\log p_j)` (:meth:`Calibration.familiarity`).
+The threshold below which :attr:`~sandbox.core.updating.PredictorBase.familiar`
+is False is the split-conformal quantile of each calibration motion's *lowest*
+familiarity over its updates (:func:`~sandbox.core.calibration.conformal_threshold`),
+so a new motion like the training ones is called unfamiliar at some update
+with probability at most ``alpha`` (and above ``alpha - 1/(n+1)``).
+``score="mahalanobis"`` calibrates :math:`m` alone (what models before the
+timing evidence carry; they still load and rank that way).
 
 The statistic grows with the white noise of the stream (1 cm of tracker noise
 adds (1 cm / 2 cm floor)^2 = 0.25), so the calibration streams must be
 preprocessed like the live ones (causally filtered, same rate).
 
 Measured on the recorded handovers, hand only (``python -m sandbox.eval.ood``;
-README, Results): the Mahalanobis term, the log-likelihood per value and the
-smallest Mahalanobis term over tasks all detected a left-out task at about their
-false-alarm rate (within 1 point of each other); left-out objects are reached
-like the trained ones. The false-alarm rate is as calibrated.
+README, Results), with :math:`m` alone: the Mahalanobis term, the
+log-likelihood per value and the smallest Mahalanobis term over tasks all
+detected a left-out task at about their false-alarm rate (within 1 point of
+each other); left-out objects are reached like the trained ones.
 """
 
 from __future__ import annotations
@@ -47,18 +58,23 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from sandbox.core.calibration import EDGES, LEVELS, Calibration, check, leave_one_out
+from sandbox.core.evidence import COMPONENTS, components
 from sandbox.core.inference import Prediction, predict
 from sandbox.core.likelihood import Scorer
 from sandbox.core.phase import Lattice
 from sandbox.core.statistics import StreamStatistics
 from sandbox.core.stream import ObservationStream
-from sandbox.validation import FloatArray, check_array
+from sandbox.validation import FloatArray, check_array, check_choice
 
 if TYPE_CHECKING:
     from sandbox.core.model import IProMP
 
-__all__ = ["EDGES", "LEVELS", "Calibration", "calibrate", "check", "chosen", "leave_one_out",
-           "loo_records", "statistic", "stream_record", "update_times"]
+__all__ = ["COMPONENTS", "EDGES", "LEVELS", "SCORES", "Calibration", "calibrate", "check",
+           "chosen", "leave_one_out", "loo_records", "statistic", "statistics", "stream_record",
+           "update_times"]
+
+#: What a calibration ranks: the four statistics (default) or the Mahalanobis term alone.
+SCORES = ("timing", "mahalanobis")
 
 
 def statistic(prediction: Prediction) -> float:
@@ -79,6 +95,28 @@ def statistic(prediction: Prediction) -> float:
         return float("nan")
     k = chosen(prediction)
     return float(prediction.factors[k, -1, -1] ** 2 / prediction.n_values)
+
+
+def statistics(model: IProMP, prediction: Prediction, t: float, times: FloatArray,
+               values: FloatArray) -> FloatArray:
+    """All four statistics of an update, shape (4,): :data:`COMPONENTS` (module docstring).
+
+    Parameters
+    ----------
+    model : IProMP
+    prediction : Prediction
+        As for :func:`statistic`, made from ``times`` and ``values``.
+    t : float
+        Update time (s) since the motion started.
+    times : ndarray, shape (s,)
+        Kept observation times (s).
+    values : ndarray, shape (s, P)
+        Kept observations (normalised units; NaN where unobserved).
+    """
+    m = statistic(prediction)
+    if not np.isfinite(m):
+        return np.full(len(COMPONENTS), np.nan)
+    return components(model, prediction, t, times, values, chosen(prediction), m)
 
 
 def chosen(prediction: Prediction) -> int:
@@ -104,10 +142,12 @@ def update_times(times: FloatArray, kept: FloatArray, dow_t: float) -> FloatArra
 
 
 def stream_record(model: IProMP, times, human, *, dow_t: float = 0.2, subsample: int = 2,
-                  n_candidates: int = 50, width: float = 3.0,
-                  refine_steps: int = 1) -> tuple[FloatArray, FloatArray, np.ndarray]:
-    """Update times (u,), :func:`statistic` (u,) and chosen task (u,) of a stream, as a
-    predictor sees it.
+                  n_candidates: int = 50, width: float = 3.0, refine_steps: int = 1,
+                  score: str = "timing") -> tuple[FloatArray, FloatArray, np.ndarray]:
+    """Update times (u,), statistics and chosen task (u,) of a stream, as a predictor sees it.
+
+    The statistics are :func:`statistics` (u, 4) with ``score="timing"``
+    (default), :func:`statistic` (u,) with ``score="mahalanobis"``.
 
     Parameters
     ----------
@@ -120,8 +160,11 @@ def stream_record(model: IProMP, times, human, *, dow_t: float = 0.2, subsample:
     dow_t, subsample, n_candidates, width, refine_steps
         As for :class:`~sandbox.core.predictor.DynamicPredictor` (joint likelihood,
         all observations so far).
+    score : {"timing", "mahalanobis"}
+        What to record (:data:`SCORES`).
     """
     times = check_array(times, "times", 1)
+    timing = check_choice(score, "score", SCORES) == "timing"
     stream = ObservationStream(model, subsample=subsample)
     for ti, yi in zip(times, np.asarray(human, dtype=np.float64)):
         stream.accept(ti, yi)
@@ -129,7 +172,8 @@ def stream_record(model: IProMP, times, human, *, dow_t: float = 0.2, subsample:
     scorer = Scorer(model)
     stats = StreamStatistics(scorer, Lattice.for_tasks(model.task_models, n_candidates, width))
     at = update_times(times, t_obs, dow_t)
-    out, task, fed = np.empty(at.size), np.zeros(at.size, dtype=np.int64), 0
+    out = np.empty((at.size, len(COMPONENTS)) if timing else at.size)
+    task, fed = np.zeros(at.size, dtype=np.int64), 0
     for j, tau in enumerate(at):
         n = int(np.searchsorted(t_obs, tau, side="right"))
         for i in range(fed, n):
@@ -137,7 +181,8 @@ def stream_record(model: IProMP, times, human, *, dow_t: float = 0.2, subsample:
         fed = n
         pred = predict(model, scorer, t_obs[:n], y_obs[:n], n_candidates=n_candidates,
                        width=width, refine_steps=refine_steps, stats=stats)
-        out[j], task[j] = statistic(pred), chosen(pred)
+        out[j] = statistics(model, pred, tau, t_obs[:n], y_obs[:n]) if timing else statistic(pred)
+        task[j] = chosen(pred)
     return at, out, task
 
 
@@ -162,7 +207,7 @@ def loo_records(model: IProMP, demos, streams=None, **options) -> list[tuple]:
 
 
 def calibrate(model: IProMP, demos, streams=None, *, alpha: float = 0.05, dow_t: float = 0.2,
-              subsample: int = 2, **options) -> Calibration:
+              subsample: int = 2, score: str = "timing", **options) -> Calibration:
     """Leave-one-out calibration of the familiarity of ``model`` (fitted on ``demos``).
 
     Sets ``model.calibration`` and returns it. Cost: one stream of every demo
@@ -178,8 +223,11 @@ def calibrate(model: IProMP, demos, streams=None, *, alpha: float = 0.05, dow_t:
         Share of held-out motions allowed to be unfamiliar at some update.
     dow_t, subsample : float, int
         The predictor's window (s) and subsampling the familiarity is calibrated for.
+    score : {"timing", "mahalanobis"}
+        The four statistics (default) or the Mahalanobis term alone (:data:`SCORES`).
     """
-    records = loo_records(model, demos, streams, dow_t=dow_t, subsample=subsample, **options)
+    records = loo_records(model, demos, streams, dow_t=dow_t, subsample=subsample,
+                          score=score, **options)
     mean = float(np.dot(model.priors, [t.mean_duration for t in model.task_models]))
     cal = Calibration.from_records(records, len(model.task_models), alpha=alpha,
                                    edges=np.array(EDGES) * mean,

@@ -13,9 +13,12 @@ Layout of the file (a numpy ``.npz`` archive, written atomically; any reader of
 
 Optional, for a model with a familiarity calibration
 (:mod:`sandbox.core.familiarity`): a ``familiarity`` entry in the metadata
-(threshold, alpha, likelihood, subsample, dow_t, n_motions) and the members
-``familiarity_edges`` (B,), ``familiarity_quantiles`` (K, B, L) and
-``familiarity_counts`` (K, B).
+(threshold, alpha, likelihood, subsample, dow_t, n_motions, and ``components``
+when more than the Mahalanobis term is ranked) and the members
+``familiarity_edges`` (B,), ``familiarity_quantiles`` (K, B, L),
+``familiarity_counts`` (K, B), and ``familiarity_extra`` (J - 1, K, B, L) with
+``components``. Files without ``components`` (before the timing evidence)
+load as a calibration of the Mahalanobis term alone.
 
 Optional: a ``session`` object in the metadata, what a recording session taught
 besides the model (e.g. the meeting geometry, :mod:`sandbox.data.geometry`),
@@ -82,6 +85,8 @@ if TYPE_CHECKING:
 
 #: Most time bins of a stored familiarity calibration.
 MAX_TIME_BINS = 1000
+#: Most statistics a stored familiarity calibration ranks.
+MAX_COMPONENTS = 16
 
 
 def save_model(model: IProMP, path: str | os.PathLike) -> None:
@@ -125,6 +130,9 @@ def save_model(model: IProMP, path: str | os.PathLike) -> None:
                                "dow_t": cal.dow_t, "n_motions": cal.n_motions}
         arrays.update(familiarity_edges=cal.edges, familiarity_quantiles=cal.quantiles,
                       familiarity_counts=cal.counts)
+        if cal.extra is not None:
+            meta["familiarity"]["components"] = list(cal.components)
+            arrays["familiarity_extra"] = cal.extra
     if getattr(model, "session", None):
         meta["session"] = model.session     # kept, not interpreted (e.g. the meeting geometry)
     arrays["metadata"] = np.array(json.dumps(meta))
@@ -234,7 +242,7 @@ def _calibration(archive, entry, n_tasks: int):
     if entry is None:
         return None
     keys = {"threshold", "alpha", "likelihood", "subsample", "dow_t", "n_motions"}
-    if not isinstance(entry, dict) or set(entry) != keys:
+    if not isinstance(entry, dict) or set(entry) - {"components"} != keys:
         got = sorted(map(str, entry)) if isinstance(entry, dict) else entry
         raise ValueError(f"metadata familiarity: expected the keys {sorted(keys)}, got {got!r}")
     edges = _read(archive, "familiarity_edges", (None,))
@@ -243,8 +251,16 @@ def _calibration(archive, entry, n_tasks: int):
                          f"got {edges.size}")
     quantiles = _read(archive, "familiarity_quantiles", (n_tasks, edges.size, LEVELS.size))
     counts = _read(archive, "familiarity_counts", (n_tasks, edges.size))
+    entry = dict(entry)
+    names = entry.pop("components", ["mahalanobis"])
+    if not isinstance(names, list) or not 1 <= len(names) <= MAX_COMPONENTS:
+        raise ValueError(f"metadata familiarity components: expected a list of 1 to "
+                         f"{MAX_COMPONENTS} names, got {str(names)[:80]}")
+    extra = (_read(archive, "familiarity_extra", (len(names) - 1, n_tasks, edges.size,
+                                                  LEVELS.size)) if len(names) > 1 else None)
     try:
-        return Calibration(edges, quantiles, counts, **entry)
+        return Calibration(edges, quantiles, counts, **entry, components=tuple(names),
+                           extra=extra)
     except TypeError:
         raise ValueError(f"metadata familiarity: malformed entry {str(entry)[:80]}") from None
 

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from sandbox.core.familiarity import chosen, statistic
+from sandbox.core.familiarity import chosen, statistic, statistics
 from sandbox.core.inference import Prediction, predict
 from sandbox.core.likelihood import Scorer
 from sandbox.core.limits import (
@@ -366,7 +366,9 @@ class PredictorBase:
         cal = getattr(self.model, "calibration", None)
         if cal is None or prediction.factors is None:
             return None
-        return cal.familiarity(t, statistic(prediction), chosen(prediction))
+        value: float | FloatArray = (statistic(prediction) if len(cal.components) == 1 else
+                                     statistics(self.model, prediction, t, *self._window(t)))
+        return cal.familiarity(t, value, chosen(prediction))
 
     @property
     def _last_update(self) -> float:

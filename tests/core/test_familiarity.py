@@ -119,11 +119,11 @@ def test_familiarity_is_in_0_1_and_falls_with_the_statistic(model):
     cal = model.calibration
     values = np.geomspace(1e-4, 1e4, 200)
     for t in (0.0, 1.0, 5.0):
-        fam = np.array([cal.familiarity(t, v, 0) for v in values])
+        fam = np.array([cal.familiarity(t, [v, 0.0, 0.0, 0.0], 0) for v in values])
         assert np.all((fam > 0) & (fam <= 1))
         assert np.all(np.diff(fam) <= 0)
         assert fam[0] == 1.0 and fam[-1] < 1e-3
-    assert np.isnan(cal.familiarity(1.0, float("nan"), 1))
+    assert np.isnan(cal.familiarity(1.0, [float("nan"), 0.0, 0.0, 0.0], 1))
 
 
 def test_familiarity_of_a_bin_matches_its_quantiles():
@@ -236,8 +236,9 @@ def test_round_trip_keeps_the_calibration(model, tmp_path):
     np.testing.assert_array_equal(a.edges, b.edges)
     np.testing.assert_array_equal(a.quantiles, b.quantiles)
     np.testing.assert_array_equal(a.counts, b.counts)
-    assert (a.threshold, a.alpha, a.subsample, a.dow_t, a.n_motions) == (
-        b.threshold, b.alpha, b.subsample, b.dow_t, b.n_motions)
+    np.testing.assert_array_equal(a.extra, b.extra)
+    assert (a.threshold, a.alpha, a.subsample, a.dow_t, a.n_motions, a.components) == (
+        b.threshold, b.alpha, b.subsample, b.dow_t, b.n_motions, b.components)
     demo = unseen(2, seed=12)
     assert [u.familiarity for u in stream(model, demo).updates] == [
         u.familiarity for u in stream(loaded, demo).updates]
@@ -256,6 +257,37 @@ def test_files_without_a_calibration_load_with_none(model, tmp_path):
     assert stream(old, unseen(0, seed=10)).familiarity is None
 
 
+def test_files_before_the_timing_evidence_rank_the_mahalanobis_term(model, tmp_path):
+    """A file with a calibration but no ``components`` (before issue 30) loads as a
+    calibration of the Mahalanobis term alone, and the predictors rank that term."""
+    path = tmp_path / "m.npz"
+    model.save(path)
+    with np.load(path) as data:
+        arrays = {k: data[k] for k in data.files if k != "familiarity_extra"}
+    meta = json.loads(str(arrays["metadata"]))
+    del meta["familiarity"]["components"]
+    np.savez(tmp_path / "old.npz", **{**arrays, "metadata": np.array(json.dumps(meta))})
+    old = IProMP.load(tmp_path / "old.npz")
+    assert old.calibration.components == ("mahalanobis",) and old.calibration.extra is None
+    demo = unseen(0, seed=10)
+    times, stats, tasks = stream_record(old, demo.times, demo.human, score="mahalanobis",
+                                        **OPTIONS)
+    fam = [old.calibration.familiarity(*update) for update in zip(times, stats, tasks)]
+    np.testing.assert_allclose(fam, [u.familiarity for u in stream(old, demo).updates])
+
+
+def test_a_mahalanobis_calibration_round_trips(tmp_path):
+    train = synth.demos(np.random.default_rng(0), n_per_task=4, n_tasks=2)
+    bare = IProMP(n_basis=9).fit(train)
+    cal = bare.calibrate(train, score="mahalanobis", **OPTIONS)
+    assert cal.components == ("mahalanobis",) and cal.extra is None
+    bare.save(tmp_path / "m.npz")
+    with np.load(tmp_path / "m.npz") as data:
+        assert "familiarity_extra" not in data.files
+        assert "components" not in json.loads(str(data["metadata"]))["familiarity"]
+    assert IProMP.load(tmp_path / "m.npz").calibration.components == ("mahalanobis",)
+
+
 def test_tampered_calibration_is_refused(model, tmp_path):
     path = tmp_path / "m.npz"
     model.save(path)
@@ -271,6 +303,15 @@ def test_tampered_calibration_is_refused(model, tmp_path):
     np.savez(tmp_path / "meta.npz", **{**arrays, "metadata": np.array(json.dumps(meta))})
     with pytest.raises(ValueError, match="threshold"):
         IProMP.load(tmp_path / "meta.npz")
+    meta["familiarity"]["threshold"] = 0.1
+    meta["familiarity"]["components"] = ["mahalanobis", "made_up", "x", "y"]
+    np.savez(tmp_path / "names.npz", **{**arrays, "metadata": np.array(json.dumps(meta))})
+    with pytest.raises(ValueError, match="components"):
+        IProMP.load(tmp_path / "names.npz")
+    del arrays["familiarity_extra"]
+    np.savez(tmp_path / "extra.npz", **arrays)
+    with pytest.raises(ValueError, match="familiarity_extra"):
+        IProMP.load(tmp_path / "extra.npz")
     del arrays["familiarity_counts"]
     np.savez(tmp_path / "short.npz", **arrays)
     with pytest.raises(ValueError, match="familiarity_counts"):
