@@ -31,6 +31,7 @@ from multiprocessing import get_context
 
 import numpy as np
 
+from sandbox.core.conformal import conformal_threshold
 from sandbox.core.familiarity import leave_one_out, stream_record
 from sandbox.eval.loocv import EvalConfig, prepare
 
@@ -137,7 +138,7 @@ def judge(ranked: list[dict], alpha: float = 0.05) -> list[dict]:
     """Flag each ranked record (:func:`rank`) by each rule at calibration level ``alpha``."""
     out = []
     for r in ranked:
-        threshold = float(np.quantile(r["reference"], alpha))
+        threshold = conformal_threshold(r["reference"], alpha)
         low = np.asarray(r["familiarity"]) < threshold
         before = np.asarray(r["times"]) <= r["end"] + 1e-9
         out.append({**r, "threshold": threshold,

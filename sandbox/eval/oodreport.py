@@ -27,6 +27,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from sandbox.core.conformal import conformal_threshold
+
 #: False-alarm rates the detection is reported at.
 FA_RATES = (0.01, 0.02, 0.05, 0.10)
 #: Rules of the calibrated threshold: updates of the whole recording, or up to the handover.
@@ -89,7 +91,7 @@ def calibrated(records: list[dict], alpha: float) -> dict:
     for rule in CALIBRATED_RULES:
         flags = []
         for r in records:
-            h = (float(np.quantile(r["reference"], alpha)) if r.get("reference") is not None
+            h = (conformal_threshold(r["reference"], alpha) if r.get("reference") is not None
                  else float(r["threshold"]))
             t, fam = np.asarray(r["times"], dtype=float), np.asarray(r["familiarity"], float)
             keep = np.isfinite(fam) & ((t <= r["end"] + 1e-9) if rule != "any update" else True)
