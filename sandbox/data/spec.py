@@ -20,6 +20,8 @@ command)::
     time: stamp                      # optional, default t
     time_unit: ms                    # optional: s (default), ms, us or ns
     robot: [j1, j2, j3, j4, j5, j6, j7]   # optional, default left_s0 ... left_w2
+    # or, with the space the robot part is in (default joint: Baxter's 7 arm joints, rad):
+    # robot: {columns: [rx, ry, rz], space: task}   # task: positions (m) in the base frame
     observe: [wrist, grip]           # optional default choice, default [hand]
     modalities:                      # added to (or replacing) the built-ins
       wrist: {columns: [wx, wy, wz], kind: position, units: m}
@@ -28,6 +30,11 @@ command)::
 Every key is checked; a mistake is a ``ValueError`` naming the file, the key
 and what was expected. ``time_unit`` converts the time column to seconds as
 it is read (``--time-unit`` on the commands does the same without a spec).
+``robot.space`` says what the robot columns are: ``joint`` (default; joint
+angles, rad, checked against Baxter's 7-joint arm by the commands) or ``task``
+(a position in the robot's base frame, m, any size, e.g. the receiving hand's
+x, y, z): a model fitted on it predicts that position directly, e_p is measured
+on it without forward kinematics and e_q does not apply.
 """
 
 from __future__ import annotations
@@ -53,6 +60,9 @@ EMG = Modality("emg", tuple(f"emg{i}" for i in range(8)), "signal", "raw")
 #: The built-in modalities, by name.
 BUILT_IN: dict[str, Modality] = {m.name: m for m in (HAND, ARM, EMG)}
 _KEYS = {"time", "time_unit", "robot", "observe", "modalities"}
+#: Spaces a robot part may be in (``robot: {columns, space}``).
+ROBOT_SPACES = ("joint", "task")
+_ROBOT_KEYS = {"columns", "space"}
 #: Units a time column may be in, and their length in seconds.
 TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
 _MODALITY_KEYS = {"columns", "kind", "units"}
@@ -76,6 +86,9 @@ class DataSpec:
     time_unit : {"s", "ms", "us", "ns"}
         Unit of the time column (default seconds); the loaders convert it to
         seconds (:attr:`time_scale`).
+    robot_space : {"joint", "task"}
+        What the robot columns are: joint angles (rad, default) or a task-space
+        position (m) in the robot's base frame.
     """
 
     time: str = TIME_COLUMN
@@ -83,6 +96,7 @@ class DataSpec:
     modalities: Mapping[str, Modality] = field(default_factory=lambda: dict(BUILT_IN))
     observe: tuple[str, ...] = ("hand",)
     time_unit: str = "s"
+    robot_space: str = "joint"
 
     def __post_init__(self) -> None:
         if not isinstance(self.time, str) or not self.time:
@@ -90,6 +104,9 @@ class DataSpec:
         if not isinstance(self.time_unit, str) or self.time_unit not in TIME_UNITS:
             raise ValueError(f"time_unit: expected one of {list(TIME_UNITS)}, "
                              f"got {self.time_unit!r}")
+        if not isinstance(self.robot_space, str) or self.robot_space not in ROBOT_SPACES:
+            raise ValueError(f"robot.space: expected one of {list(ROBOT_SPACES)}, "
+                             f"got {self.robot_space!r}")
         robot = _names(self.robot, "robot")
         repeated = sorted({c for c in robot if robot.count(c) > 1})
         if repeated:
@@ -185,13 +202,17 @@ class DataSpec:
         observe = data.get("observe", ("hand",))
         if isinstance(observe, str):
             observe = [n.strip() for n in observe.split(",") if n.strip()]
-        return cls(time=data.get("time", TIME_COLUMN), robot=data.get("robot", ROBOT_COLUMNS),
+        robot, space = _robot(data.get("robot", ROBOT_COLUMNS))
+        return cls(time=data.get("time", TIME_COLUMN), robot=robot,
                    modalities=mods, observe=tuple(_names(observe, "observe")),
-                   time_unit=data.get("time_unit", "s"))
+                   time_unit=data.get("time_unit", "s"), robot_space=space)
 
     def to_dict(self) -> dict:
         """JSON-ready form (inverse of :meth:`from_dict`)."""
-        return {"time": self.time, "time_unit": self.time_unit, "robot": list(self.robot),
+        robot: Any = list(self.robot)
+        if self.robot_space != "joint":
+            robot = {"columns": robot, "space": self.robot_space}
+        return {"time": self.time, "time_unit": self.time_unit, "robot": robot,
                 "observe": list(self.observe),
                 "modalities": {n: {"columns": list(m.dims), "kind": m.kind, "units": m.units}
                                for n, m in self.modalities.items()}}
@@ -218,6 +239,18 @@ def _names(values: Any, what: str) -> tuple[str, ...]:
     if not names or not all(isinstance(v, str) and v.strip() for v in names):
         raise ValueError(f"{what}: expected non-empty names, got {list(names)!r}")
     return tuple(v.strip() for v in names)
+
+
+def _robot(entry: Any) -> tuple[Any, str]:
+    """``robot:`` as given: a list of columns (joint space), or ``{columns, space}``."""
+    if not isinstance(entry, Mapping):
+        return entry, "joint"
+    unknown = sorted(map(str, set(entry) - _ROBOT_KEYS))
+    if unknown:
+        raise ValueError(f"robot: unknown keys {unknown}; expected some of {sorted(_ROBOT_KEYS)}")
+    if "columns" not in entry:
+        raise ValueError("robot: 'columns' is missing")
+    return entry["columns"], entry.get("space", "joint")
 
 
 def _modality(name: str, entry: Any) -> Modality:
