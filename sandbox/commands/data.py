@@ -156,10 +156,14 @@ def _summary(args: argparse.Namespace) -> int:
         raise ValueError(f"data: no usable trial in {args.data} ({len(skipped)} skipped)")
     result = {"data": str(args.data), "observe": list(observe), **summarize(demos, skipped)}
     result["realism"] = _realism(args, spec) if "hand" in observe else None
+    from sandbox.data.noisefloor import floor_summary, format_floors  # issue 28 item 4
+
+    result["noise_floor"] = floor_summary(demos)
+    result["robot_space"] = spec.robot_space
     if args.json:
         print(json.dumps(result, indent=2))
     else:
-        print(format_summary(result))
+        print("\n".join([format_summary(result), *format_floors(result["noise_floor"])]))
     return 0
 
 

@@ -215,8 +215,8 @@ class IProMP:
         self.signal_floor = check_floor(signal_floor, "signal_floor", "signal_floor")
         self.noise_floors = {k: check_floor(v, f"noise_floors[{k!r}]", "noise_floors")
                              for k, v in check_mapping(noise_floors, "noise_floors").items()}
-        self.jitter_floor = (None if jitter_floor is None else
-                             check_positive(jitter_floor, "jitter_floor", high=MAX_RELATIVE))
+        self.jitter_floor = (None if jitter_floor is None else BOUNDS["jitter_floor"].check(
+            jitter_floor, "jitter_floor", or_null=True))
         self.settle_tol = check_tolerance(settle_tol, "settle_tol")
         self.arrive_tol = check_tolerance(arrive_tol, "arrive_tol")
         self.robot_tol = None if robot_tol is None else check_positive(robot_tol, "robot_tol")

@@ -113,6 +113,15 @@ class Demonstration:
         return float(self.times[-1] - self.times[0])
 
     @property
+    def jitter(self) -> dict[str, float]:
+        """Jitter (m) of each position modality's raw tracker frames, by name, as the
+        loader measured it before any filter (``meta["report"]``; :mod:`sandbox.core.jitter`);
+        empty when not measured (e.g. a demonstration never preprocessed)."""
+        counts = (self.meta.get("report") or {}).get("modalities") or {}
+        return {name: float(c["jitter_m"]) for name, c in counts.items()
+                if isinstance(c, dict) and c.get("jitter_m") is not None}
+
+    @property
     def n_steps(self) -> int:
         """Number of samples T."""
         return int(self.times.size)

@@ -40,6 +40,7 @@ from typing import Any
 
 import numpy as np
 
+from sandbox.core.jitter import track_jitter
 from sandbox.core.modality import Modality, default_modalities
 from sandbox.data.demonstration import Demonstration
 from sandbox.data.filtering import FilterConfig, filter_track, smooth_track
@@ -169,7 +170,9 @@ def preprocess_human(
     measured : ndarray of bool, shape (T', n_modalities)
         Time stamps at which each modality received a new (accepted) sample.
     counts : dict
-        Per modality name, its glitch and filter counts (JSON-ready).
+        Per modality name, its glitch and filter counts (JSON-ready); a position
+        modality's ``jitter_m`` is the jitter (m) of its raw accepted frames
+        (:func:`sandbox.core.jitter.track_jitter`; None if too few).
     """
     opts = check_options(preprocess, **options)
     position = {k: opts[k] for k in ("config", "freeze_s", "max_fill_s", "jump_m", "excursion_m")}
@@ -180,6 +183,7 @@ def preprocess_human(
         start += m.size
         if m.kind == "position":
             out, meas, c = _positions(times, cols, preprocess, position)
+            c = {**c, "jitter_m": track_jitter(times[last], cols[last], meas)}   # raw frames
         else:
             out, meas, c = _signal(times, cols, preprocess, opts, last)
         outs.append(out)
