@@ -187,8 +187,10 @@ def _export(args: argparse.Namespace) -> int:
                              seed=args.seed, tasks=_split(args.tasks),
                              n_per_task=args.n_per_task, preprocess=args.preprocess)
     if not demos:
-        raise ValueError(f"--data: no usable demonstration in {args.data} "
-                         f"({len(caught)} skipped)")
+        from sandbox.data.skipped import no_usable
+
+        raise no_usable(f"--data {args.data}", [str(w.message) for w in caught],
+                        "demonstration")
     dataset = export_demonstrations(demos, args.minari_id, env_id=env_id,
                                     preprocess=args.preprocess, data=str(args.data),
                                     force=args.force)

@@ -235,17 +235,28 @@ def _replay(seed: int, model, held_out, replayed: _Set, options: dict,
 
 
 def _motion(held_out, spec):
-    """The environment's motion of a trial loaded with ``spec``: its smoothed hand as the
-    true one, the causal stream as measured (:func:`sandbox.envs.sources.motion_of`)."""
+    """The environment's motion of a trial loaded with ``spec`` (:func:`spec_motion`)."""
+    return spec_motion(held_out.source, held_out.task, spec,
+                       [m.name for m in held_out.modalities], smooth=held_out)
+
+
+def spec_motion(path, task: str, spec, observe, smooth=None):
+    """The environment's replay (``HumanMotion``) of the trial ``path`` of a set described
+    by ``spec``: its smoothed ``hand`` as the true motion, its causal stream as measured
+    (:func:`sandbox.envs.sources.motion_of`); ``smooth``: the smoothed trial if loaded.
+
+    ``ValueError`` if ``observe`` has no ``hand`` (the environment's human is driven by it).
+    """
     from sandbox.data.recorded import load_trial
     from sandbox.envs.sources import motion_of
 
-    if "hand" not in [m.name for m in held_out.modalities]:
+    if "hand" not in list(observe):
         raise ValueError("spec: expected the observed modalities to include 'hand' (x, y, z, "
                          "m): the environment's human is driven by it")
-    causal = load_trial(held_out.source, task=held_out.task, spec=spec,
-                        observe=[m.name for m in held_out.modalities], preprocess="causal")
-    return motion_of(held_out, causal)
+    if smooth is None:
+        smooth = load_trial(path, task=task, spec=spec, observe=list(observe))
+    causal = load_trial(path, task=task, spec=spec, observe=list(observe), preprocess="causal")
+    return motion_of(smooth, causal)
 
 
 def _leave_one_out(data: _Set, n: int, seed: int, options: dict) -> list[Replay]:
