@@ -105,7 +105,8 @@ def jitter(times: FloatArray, values: FloatArray) -> FloatArray:
 
 def pooled_jitter(parts) -> float:
     """One jitter estimate (m) from the residuals of several tracks (:func:`residuals`)."""
-    r = np.concatenate([np.asarray(p, dtype=np.float64).ravel() for p in parts] or [[]])
+    r = np.concatenate([np.asarray(p, dtype=np.float64).ravel() for p in parts]
+                       or [np.empty(0)])
     if r.size < MIN_RESIDUALS:
         return float("nan")
     return float(MAD_TO_STD * np.median(np.abs(r)))

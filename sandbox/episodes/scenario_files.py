@@ -195,18 +195,19 @@ def load_scenario(path: str | Path, *, observe: list[str] | str | None = None,
         obj = check.choice(obj, "object", urdf.OBJECTS)
     seed = check.bounded(data.get("seed", 0), "seed", "seed")
     kind, human = _human(check, data["human"], family, path.parent, seed)
-    spec = _model(check, data.get("model"), path.parent)
-    names = _observe(check, data.get("observe", default_observe(spec, ENV_MODALITIES)))
-    if "file" in spec:
-        check_model_file(check, spec["file"], names, human_tasks(kind, human, family))
-    if kind != "recorded" and "file" not in spec and not set(names) <= set(SYNTHETIC_MODALITIES):
+    model_spec = _model(check, data.get("model"), path.parent)
+    names = _observe(check, data.get("observe", default_observe(model_spec, ENV_MODALITIES)))
+    if "file" in model_spec:
+        check_model_file(check, model_spec["file"], names, human_tasks(kind, human, family))
+    synthetic_model = kind != "recorded" and "file" not in model_spec
+    if synthetic_model and not set(names) <= set(SYNTHETIC_MODALITIES):
         check.fail("observe", f"modalities of the synthetic model {list(SYNTHETIC_MODALITIES)} "
                               "(EMG is not simulated: use a recorded human or a model file)",
                    list(names))
     return Scenario(
         path=path, name=str(data.get("name", path.stem)), family=family,
         seed=seed, human_kind=kind, human=human,
-        policy=_policy(check, data["policy"]), model=spec,
+        policy=_policy(check, data["policy"]), model=model_spec,
         object=obj, speed=check.bounded(data.get("speed", 1.0), "speed", "speed"),
         time_limit=check.bounded(data.get("time_limit", 6.0), "time_limit", "time_limit"),
         observe=names)
