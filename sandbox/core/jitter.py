@@ -60,6 +60,8 @@ def residuals(times: FloatArray, values: FloatArray) -> FloatArray:
     """
     t = np.asarray(times, dtype=np.float64)
     y = np.asarray(values, dtype=np.float64)
+    if t.ndim != 1 or y.shape != t.shape:
+        raise ValueError(f"values: expected shape {t.shape} (one per time), got {y.shape}")
     ok = np.isfinite(y) & np.isfinite(t)
     t, y = t[ok], y[ok]
     fresh = np.r_[True, np.diff(y) != 0.0]           # a re-sent frame is no new sample
