@@ -155,13 +155,9 @@ def run_scenario(scenario: str = "diverging", policy: str | Callable = "dynamic"
         same) and ``recorded_robot`` replays each motion's own robot
         (:mod:`sandbox.episodes.sessions`).
     spec : DataSpec, optional
-        ``recorded`` only: the sets' layout (:mod:`sandbox.data.spec`), see
-        :func:`~sandbox.episodes.replays.plan_replays`.
+        ``recorded`` only: the sets' layout (:func:`~sandbox.episodes.replays.plan_replays`).
     """
     sessions = (session, train_session)
-    if spec is not None and scenario != "recorded":
-        raise ValueError(f"spec: expected with the recorded scenario (a spec describes "
-                         f"recordings), got scenario {scenario!r}")
     observe = _check_run(scenario, policy, n_episodes, data, observe, test, sessions)
     make_policy = _policy_factory(policy, dow_t, ratio, observe)
     episodes = _episodes(scenario, int(n_episodes), int(seed), data, model, options or {},
@@ -310,6 +306,9 @@ def _episodes(scenario, n, seed, data, model, options, observe, test=None,
     if scenario == "recorded":
         return plan_replays(data, n, seed, test=test, observe=observe, options=options,
                             spec=spec)
+    if spec is not None:
+        raise ValueError(f"spec: expected with the recorded scenario (a spec describes "
+                         f"recordings), got scenario {scenario!r}")
     if sessions[0] is not None:
         from sandbox.episodes.sessions import session_episodes
 
