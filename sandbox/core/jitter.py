@@ -64,6 +64,8 @@ def residuals(times: FloatArray, values: FloatArray) -> FloatArray:
         raise ValueError(f"values: expected shape {t.shape} (one per time), got {y.shape}")
     ok = np.isfinite(y) & np.isfinite(t)
     t, y = t[ok], y[ok]
+    if y.size < 3:
+        return np.empty(0)
     fresh = np.r_[True, np.diff(y) != 0.0]           # a re-sent frame is no new sample
     t, y = t[fresh], y[fresh]
     if y.size < 3:
@@ -98,7 +100,7 @@ def jitter(times: FloatArray, values: FloatArray) -> FloatArray:
     >>> t = np.arange(0, 3, 0.01)
     >>> track = np.c_[np.sin(t), np.cos(t)] + rng.normal(0, 0.001, (t.size, 2))
     >>> np.round(jitter(t, track) * 1000, 1)        # mm
-    array([1. , 1. ])
+    array([1., 1.])
     """
     values = np.asarray(values, dtype=np.float64)
     return np.array([pooled_jitter([residuals(times, values[:, j])])
