@@ -199,7 +199,8 @@ def _config(args, results) -> dict:
 
     mode = results[0].replay["mode"]
     config = {"scenario": args.scenario, "mode": mode,
-              "observe": split(args.observe) or ["hand"], "spec": args.spec}
+              "observe": split(args.observe) or ["hand"],
+              **({"spec": str(args.spec)} if args.spec else {})}
     if mode == "leave-one-session-out":
         config["sessions"] = [p.name for p in find_sessions(args.data, "--data")]
     elif mode == "cross-session":
