@@ -67,7 +67,9 @@ def test_evaluate_measures_e_p_on_the_positions_and_e_q_does_not_apply(
     out, markdown = tmp_path / "report.json", tmp_path / "report.md"
     extra = ["--model", str(model)] if with_model else ["--config", str(n_basis(tmp_path))]
     assert main(["evaluate", "--data", str(data), "--spec", str(spec), "--out", str(out),
-                 "--markdown", str(markdown), *extra, *FAST]) == 0
+                 "--markdown", str(markdown), "--plots", str(tmp_path / "plots"), *extra,
+                 *FAST]) == 0
+    assert (tmp_path / "plots" / "direct.png").exists()       # e_q's panel says n/a
     printed = capsys.readouterr().out
     assert "n/a" in printed and "q: expected joint angles" not in printed
     report = json.loads(out.read_text())
