@@ -70,7 +70,7 @@ def baxter(model) -> None:
         raise ValueError("--model: its robot part is in task space (a position, m); the "
                          "environments drive Baxter's 7 joints and following a task-space "
                          "plan needs inverse kinematics onto the arm (issue 23, not built "
-                         "yet): fit a joint-space model for play")
+                         "yet): fit a joint-space model to drive the arm")
     if model.n_robot != BAXTER_JOINTS:
         raise ValueError(f"--model: the model drives {model.n_robot} robot dims, the "
                          f"environments' Baxter arm has {BAXTER_JOINTS} joints")
