@@ -171,8 +171,10 @@ def preprocess_human(
         Time stamps at which each modality received a new (accepted) sample.
     counts : dict
         Per modality name, its glitch and filter counts (JSON-ready); a position
-        modality's ``jitter_m`` is the jitter (m) of its raw accepted frames
-        (:func:`sandbox.core.jitter.track_jitter`; None if too few).
+        modality's ``jitter_m`` is the jitter (m) of its raw frames, (0, 0, 0) rows left
+        out (:func:`sandbox.core.jitter.track_jitter`, robust to the other glitches; the
+        glitch filter's accepted frames would clip the noise of a noisy tracker at
+        ``jump_m``; None if too few).
     """
     opts = check_options(preprocess, **options)
     position = {k: opts[k] for k in ("config", "freeze_s", "max_fill_s", "jump_m", "excursion_m")}
@@ -183,7 +185,8 @@ def preprocess_human(
         start += m.size
         if m.kind == "position":
             out, meas, c = _positions(times, cols, preprocess, position)
-            c = {**c, "jitter_m": track_jitter(times[last], cols[last], meas)}   # raw frames
+            raw = cols[last]                       # raw frames; (0, 0, 0) is no measurement
+            c = {**c, "jitter_m": track_jitter(times[last], raw, ~(raw == 0).all(axis=1))}
         else:
             out, meas, c = _signal(times, cols, preprocess, opts, last)
         outs.append(out)
