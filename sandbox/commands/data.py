@@ -181,6 +181,9 @@ def _export(args: argparse.Namespace) -> int:
     if env_id not in sandbox.envs.ENV_IDS + sandbox.envs.LEGACY_IDS:
         raise ValueError(f"--env-id: expected one of {sandbox.envs.ENV_IDS}, got {env_id!r}")
     spec = _observation.data_spec(args)
+    if spec.robot_space == "task":      # the datasets' actions are the environments' joints
+        raise ValueError("--spec: expected a joint-space robot part for a Minari dataset (its "
+                         "actions are Baxter's joint targets), got robot.space task")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", SkippedTrialWarning)
         demos = load_dataset(args.data, spec=spec, observe=_observation.observe(args, spec),
