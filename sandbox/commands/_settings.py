@@ -7,7 +7,7 @@ predictor options, the names of :class:`~sandbox.eval.loocv.EvalConfig`::
     n_basis: 21              # model (IProMP) options
     regularizer: 0.001
     noise_floor: 0.02        # m
-    jitter_floor: 20         # opt-in: position floors max(2 mm, 20 x the data's raw jitter)
+    jitter_floor: 15         # opt-in: position floors max(2 mm, 15 x the data's raw jitter)
     settle_tol: 0.05         # rad, or null: the whole recording is the motion
     likelihood: joint        # predictor options: joint | marginal
     window_mode: all         # all | latest
