@@ -29,7 +29,7 @@ import json
 import sys
 from typing import Any
 
-from sandbox.commands import _observation, _types
+from sandbox.commands import _observation, _skipped, _types
 
 NAME = "data"
 HELP = ("inspect a recorded dataset: summary of trials and tracker glitches, filter check; "
@@ -42,10 +42,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     summary = sub.add_parser(
         "summary", help="tasks, durations, rates, glitches, skipped trials",
         description="Summarise a recorded set beside a synthetic one: per task the trials, "
-                    "durations and sample rates, the tracker glitches found, and every trial "
-                    "skipped with its reason (--verbose lists them).")
+                    "durations and sample rates, the tracker glitches found, every trial "
+                    "skipped with its reason (one line each), and a frame: block placing the "
+                    "demos' meeting region in Baxter's reach. With no usable trial, one line "
+                    "per reason (--verbose: per file).")
     _common(summary)
     summary.add_argument("--json", action="store_true", help="print JSON instead of text")
+    summary.add_argument("--no-progress", action="store_true",
+                         help="no progress bar on stderr")
+    _skipped.add_argument(summary)
     summary.add_argument(
         "--synthetic", default="objects", metavar="NAME",
         help="synthetic set to compare with the recordings (default objects; 'none' to skip)",
@@ -108,7 +113,8 @@ def _filter(field: str, high: float = float("inf"), *, open_low: bool = True):
 
 def _common(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--data", required=True, metavar="DIR",
-                        help="dataset folder <DIR>/<task>/<trial>.csv")
+                        help="dataset folder <DIR>/<task>/<trial>.csv, or laid out as --spec "
+                             "says (files, labels)")
     parser.add_argument("--tasks", default=None, help="comma-separated subset of tasks")
     _observation.add_arguments(parser)
 
@@ -144,18 +150,30 @@ def _summary(args: argparse.Namespace) -> int:
     import warnings
 
     from sandbox.data.datasets import summarize
-    from sandbox.data.recorded import SkippedTrialWarning, load_recorded
+    from sandbox.data.recorded import SkippedTrialWarning, count_trials, load_recorded
+    from sandbox.data.spec_frame import frame_yaml, suggest_for
+    from sandbox.eval.progress import bar
 
     spec = _observation.data_spec(args)
     observe = _observation.observe(args, spec)
-    with warnings.catch_warnings():
+    with warnings.catch_warnings(), \
+            bar(count_trials(args.data, _split(args.tasks), spec) or 0, "loading",
+                not args.no_progress) as shown:
         warnings.simplefilter("ignore", SkippedTrialWarning)  # listed in the summary instead
         demos, skipped = load_recorded(args.data, tasks=_split(args.tasks), spec=spec,
-                                       observe=observe, preprocess="causal")
+                                       observe=observe, preprocess="causal",
+                                       on_trial=shown.update)
     if not demos:
-        raise ValueError(f"data: no usable trial in {args.data} ({len(skipped)} skipped)")
+        messages = [f"skipped {f}: {r}" for f, r in skipped]
+        _skipped.report(messages, args.verbose, 0)
+        if not args.verbose:
+            for reason, n in _reasons(skipped):
+                print(f"skipped {n} trial{'s' if n > 1 else ''}: {reason}", file=sys.stderr)
+        raise _skipped.no_usable(str(args.data), messages, "trial", args.verbose)
     result = {"data": str(args.data), "observe": list(observe), **summarize(demos, skipped)}
     result["realism"] = _realism(args, spec) if "hand" in observe else None
+    frame = suggest_for(demos, spec)
+    result["frame_suggestion"] = None if frame is None else frame.to_dict()
     from sandbox.data.noisefloor import floor_summary, format_floors  # issue 28 item 4
 
     result["noise_floor"] = floor_summary(demos)
@@ -164,7 +182,18 @@ def _summary(args: argparse.Namespace) -> int:
         print(json.dumps(result, indent=2))
     else:
         print("\n".join([format_summary(result), *format_floors(result["noise_floor"])]))
+        if frame is not None:
+            print("\nSuggested placement (the demos' mean meeting point on Baxter's demonstrated "
+                  "one, their reach turned toward the robot; paste into the spec):\n"
+                  + frame_yaml(frame))
     return 0
+
+
+def _reasons(skipped: list[tuple[str, str]]) -> list[tuple[str, int]]:
+    """Each distinct skip reason (its first line) with the number of trials, most first."""
+    from collections import Counter
+
+    return Counter(" ".join(r.split()) for _, r in skipped).most_common()
 
 
 def _export(args: argparse.Namespace) -> int:
@@ -270,7 +299,7 @@ def format_summary(result: dict[str, Any]) -> str:
     dropped = ", ".join(f"{n} ({why})" for why, n in g["rows_dropped"].items()) or "none"
     lines += [f"  rows dropped: {dropped}", ""]
     lines.append("Skipped trials: " + ("none" if not result["skipped"] else ""))
-    lines += [f"  {s['file']}: {s['reason']}" for s in result["skipped"]]
+    lines += [f"  {s['file']}: {' '.join(s['reason'].split())}" for s in result["skipped"]]
     if result.get("realism"):
         from sandbox.data.synthetic.realism import format_realism
 
@@ -286,28 +315,27 @@ def _points(dims: tuple[str, ...]) -> list[tuple[str, ...]]:
     return [dims[i:i + width] for i in range(0, len(dims), width)]
 
 
-def _filter_table(path, columns):
-    """The trial's table if ``check-filter`` can use it: readable, at least 3 rows, times
-    finite, never going backwards and plausible (:func:`sandbox.core.limits.check_duration`);
-    None otherwise."""
+def _filter_table(path, spec, modalities):
+    """The trial's table (time in s, positions in m in the spec's frame, cut as the spec
+    says) if ``check-filter`` can use it: readable, at least 3 rows, times finite, never
+    going backwards and plausible (:func:`sandbox.core.limits.check_duration`); else None."""
     import numpy as np
 
     from sandbox.data.limits import check_duration
-    from sandbox.data.recorded import TrialError, read_trial_table
+    from sandbox.data.recorded import TrialError
+    from sandbox.data.spec_read import cut_rows, read_spec_table
 
     try:
-        table, _ = read_trial_table(path, columns)
-    except TrialError:
+        table, extra, _ = read_spec_table(path, spec, modalities, lambda column: "")
+        t = table[:, 0]
+        ok = np.isfinite(t) & np.r_[True, np.diff(t) >= 0]
+        if ok.sum() < 3 or not ok.all():
+            return None
+        table, _ = cut_rows(spec, table, extra, sum(m.size for m in modalities))
+        check_duration(np.unique(table[:, 0]))
+    except (TrialError, ValueError):
         return None
-    t = table[:, 0]
-    ok = np.isfinite(t) & np.r_[True, np.diff(t) >= 0]
-    if ok.sum() < 3 or not ok.all():
-        return None
-    try:
-        check_duration(np.unique(t))
-    except ValueError:
-        return None
-    return table
+    return table if table.shape[0] >= 3 else None
 
 
 def _check_filter(args: argparse.Namespace) -> int:
@@ -316,7 +344,7 @@ def _check_filter(args: argparse.Namespace) -> int:
     from sandbox.data.filtercheck import holdout_errors
     from sandbox.data.filtering import FilterConfig
     from sandbox.data.glitches import find_glitches
-    from sandbox.data.recorded import Columns, find_trials
+    from sandbox.data.recorded import trial_list
 
     settings = {"accel_std": args.accel_std, "noise_std": args.noise_std,
                 "time_jitter_std": args.jitter_std, "gate_prob": args.gate_prob}
@@ -326,13 +354,13 @@ def _check_filter(args: argparse.Namespace) -> int:
               for cols in _points(m.dims)]
     if not points:
         raise ValueError("--observe: check-filter needs a position modality (hand, arm)")
-    columns = Columns(tuple(c for cols in points for c in cols), spec.robot, spec.time)
+    mods = [m for m in spec.observed(_split(args.observe)) if m.kind == "position"]
     smooth, causal, frames, rejected, trials = [], [], 0, 0, 0
-    for _, path in find_trials(args.data, _split(args.tasks)):
-        table = _filter_table(path, columns)
+    for _, path in trial_list(args.data, _split(args.tasks), spec):
+        table = _filter_table(path, spec, mods)
         if table is None:
             continue
-        t = table[:, 0] * spec.time_scale
+        t = table[:, 0]
         start = 1
         for cols in points:
             human = table[:, start:start + len(cols)]

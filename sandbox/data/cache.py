@@ -58,7 +58,8 @@ from sandbox.data.demonstration import Demonstration
 FORMAT = 2
 #: Modules whose source is part of every key.
 _CODE = ("cache", "demonstration", "filtering", "glitches", "kalman", "limits", "preprocess",
-         "recorded", "signals", "spec", "trialfile")
+         "recorded", "segment", "signals", "spec", "spec_frame", "spec_layout", "spec_read",
+         "trialfile")
 _ARRAYS = ("times", "human", "robot", "modality_measured")
 #: Bytes hashed per read of a source file.
 _CHUNK = 2**20

@@ -27,9 +27,12 @@ the rows are collapsed to one per time stamp (the last row of each):
         (weights of metres), a bridged one does not.
 
 ``"signal"`` (activity, raw units, e.g. EMG)
-    :func:`sandbox.data.signals.preprocess_signal`: rectified, then a low-pass
-    envelope, causal and thinned to ``signal_rate_hz`` for ``"causal"``,
-    zero-phase at every row for ``"smooth"``. Amplitude normalisation is not
+    :func:`sandbox.data.signals.preprocess_signal`: by default (``envelope``,
+    what EMG needs) rectified, then a low-pass envelope, causal and thinned to
+    ``signal_rate_hz`` for ``"causal"``, zero-phase at every row for
+    ``"smooth"``; a spec's ``modalities.NAME.preprocess`` may choose
+    ``lowpass`` (the same filter without rectifying: a signed force or torque
+    keeps its sign) or ``none`` (the values as they come). Amplitude normalisation is not
     done here: the model fits it on its training demonstrations only.
 """
 
@@ -146,6 +149,8 @@ def preprocess_human(
     human: FloatArray,
     modalities: Sequence[Modality],
     preprocess: str,
+    *,
+    signal_filters: dict[str, str] | None = None,
     **options: Any,
 ) -> tuple[FloatArray, np.ndarray, dict[str, dict]]:
     """Preprocess every modality by its kind and keep one row per time stamp.
@@ -158,6 +163,10 @@ def preprocess_human(
         The modalities' columns one after the other, NaN where missing.
     modalities : sequence of Modality
     preprocess : {"none", "causal", "smooth"}
+    signal_filters : dict, optional
+        Per signal modality name, its filter (:data:`sandbox.data.signals.FILTERS`:
+        ``envelope``, the default, ``lowpass`` or ``none``; a spec's
+        ``modalities.NAME.preprocess``).
     **options
         Those of :data:`DEFAULTS` (``config``, ``freeze_s``, ``max_fill_s``,
         ``jump_m``, ``excursion_m`` for positions; ``signal_cutoff_hz``,
@@ -188,7 +197,8 @@ def preprocess_human(
             raw = cols[last]                       # raw frames; (0, 0, 0) is no measurement
             c = {**c, "jitter_m": track_jitter(times[last], raw, ~(raw == 0).all(axis=1))}
         else:
-            out, meas, c = _signal(times, cols, preprocess, opts, last)
+            how = (signal_filters or {}).get(m.name, "envelope")
+            out, meas, c = _signal(times, cols, preprocess, opts, last, how)
         outs.append(out)
         measured.append(meas)
         counts[m.name] = {**c, "measured_samples": int(meas.sum())}
@@ -209,9 +219,9 @@ def _positions(times, values, preprocess, options):
     return np.hstack(outs), measured, total
 
 
-def _signal(times, values, preprocess, opts, last):
+def _signal(times, values, preprocess, opts, last, how="envelope"):
     out, meas, c = preprocess_signal(times, values, preprocess, cutoff_hz=opts["signal_cutoff_hz"],
-                                     rate_hz=opts["signal_rate_hz"])
+                                     rate_hz=opts["signal_rate_hz"], filter=how)
     group = np.cumsum(np.r_[True, np.diff(times) > 0]) - 1
     finite = np.isfinite(out).all(axis=1)
     pick = last.copy()                  # per time stamp: its last row with an output, if any

@@ -11,6 +11,11 @@ the paper; the built-ins add ``arm``, the same side's elbow and shoulder, and
 What the loader does with a trial (everything it does is counted in
 ``demo.meta["report"]``, see :func:`load_trial`):
 
+0. The spec's layout (:mod:`sandbox.data.spec_read`): the trial's files are
+   read and joined, the time made (``rate_hz``) or converted, positions
+   converted to metres (``units``) and moved to the robot's base frame
+   (``frame``); after step 1, the rows are cut to the handover (``segment``,
+   times restarting at 0) and thinned (``resample_hz``).
 1. Rows without a time or with a missing robot value are dropped, rows whose
    time goes backwards are dropped. Missing human values stay NaN.
 2. Rows that share their time stamp with the previous row (about 40 % of the
@@ -37,7 +42,8 @@ rows that carry a new, accepted sample of each modality; ``meta["human_measured"
 from __future__ import annotations
 
 import warnings
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Sequence
+from functools import partial
 from os import PathLike
 from pathlib import Path
 from typing import Any
@@ -58,10 +64,19 @@ from sandbox.data.preprocess import (  # noqa: F401 - preprocess_rows/_demonstra
     summary_counts,
 )
 from sandbox.data.spec import HAND, ROBOT_COLUMNS, TIME_COLUMN, DataSpec  # noqa: F401
+from sandbox.data.spec_read import (  # noqa: F401 - find_trials, count_trials re-exported
+    count_trials,
+    cut_rows,
+    find_trials,
+    layout_trials,
+    read_spec_table,
+    trial_list,
+)
 from sandbox.data.trialfile import (  # noqa: F401 - re-exported: the loader's public names
     HUMAN_COLUMNS,
     Columns,
     TrialError,
+    _fix,
     check_plausible,
     read_trial_table,
 )
@@ -103,7 +118,7 @@ def load_trial(
     Parameters
     ----------
     path : str or Path
-        The CSV file.
+        The CSV file (a trial folder with the spec's ``files``).
     task : str, optional
         Task label; defaults to the name of the file's folder.
     spec : DataSpec, optional
@@ -217,16 +232,20 @@ def _spec(spec: DataSpec | None, columns: Columns | None) -> DataSpec:
 
 def _load_trial(path: Path, task: str, spec: DataSpec, modalities: Sequence[Modality],
                 preprocess: str, max_duration: float, options: dict[str, Any]) -> Demonstration:
-    columns = Columns.from_spec(spec, modalities)
+    columns = _named(Columns.from_spec(spec, modalities), spec)
     owners = {c: m.name for m in modalities for c in m.dims}
-    table, notes = read_trial_table(path, columns, owners)
-    table[:, 0] *= spec.time_scale            # the time column in seconds
+    fix = partial(_fix, columns=columns, owners=owners)
+    table, extra, notes = read_spec_table(path, spec, modalities, fix)
     n_rows = table.shape[0]
     p = len(columns.human)
     keep, dropped = _usable_rows(table, p)
     if notes["truncated_last_row"]:
         dropped["truncated last row"] = 1
-    table = table[keep]
+    if notes.get("unequal_files"):
+        dropped["files of unequal length"] = int(notes["unequal_files"])
+    n_kept = int(keep.sum())
+    table, cut = cut_rows(spec, table[keep], extra[keep], p)
+    n_rows -= n_kept - table.shape[0]                # rows left out by segment/resample_hz
     times, human, robot = table[:, 0], table[:, 1 : 1 + p], table[:, 1 + p :]
     last = np.flatnonzero(np.r_[np.diff(times) > 0, True]) if times.size else times.astype(int)
     if last.size < 2:
@@ -236,12 +255,15 @@ def _load_trial(path: Path, task: str, spec: DataSpec, modalities: Sequence[Moda
             + (f" ({why})" if why else "")
         )
     check_plausible(times[last], human, robot, columns, max_duration)
-    out, measured, counts = preprocess_human(times, human, modalities, preprocess, **options)
+    out, measured, counts = preprocess_human(
+        times, human, modalities, preprocess,
+        signal_filters={m.name: spec.layout.signal_filter(m.name) for m in modalities},
+        **options)
     _check_usable(modalities, measured, counts)
     report = {
         "file": str(path), "task": task, "preprocess": preprocess, "rows": n_rows,
         "rows_dropped": dropped, "repeated_timestamps": int(times.size - last.size),
-        "samples": int(last.size), "duration_s": float(times[-1] - times[0]),
+        "samples": int(last.size), "duration_s": float(times[-1] - times[0]), **cut,
         **summary_counts(counts, modalities),
     }
     return Demonstration(
@@ -249,6 +271,17 @@ def _load_trial(path: Path, task: str, spec: DataSpec, modalities: Sequence[Moda
         robot_names=columns.robot, source=str(path), robot_space=spec.robot_space,
         meta={"report": report, **measured_meta(measured)},
     )
+
+
+def _named(columns: Columns, spec: DataSpec) -> Columns:
+    """With ``files``: the robot columns without their ``part.`` (the joints' own names, for
+    their limits and the model), unless two parts share a name."""
+    if not spec.layout.files:
+        return columns
+    bare = tuple(c.partition(".")[2] for c in columns.robot)
+    if len(set(bare)) < len(bare) or set(bare) & {*columns.human, columns.time}:
+        return columns
+    return Columns(columns.human, bare, columns.time)
 
 
 def _check_usable(modalities, measured, counts) -> None:
@@ -264,33 +297,6 @@ def _check_usable(modalities, measured, counts) -> None:
                     f"fewer than 2 valid samples of {m.name!r} ({c['missing_rows']} rows "
                     f"missing, {c['zero_rows']} rows (0, 0, 0), {c['stale_rows']} repeated)")
             raise TrialError(f"fewer than 2 valid samples of {m.name!r}")
-
-
-def find_trials(root: str | Path, tasks: Sequence[str] | None = None) -> list[tuple[str, Path]]:
-    """List ``(task, file)`` of ``<root>/<task>/<trial>.csv``, sorted by task then file.
-
-    Raises ``ValueError`` if ``root`` is not a folder in that layout or a requested
-    task is not there (the message lists the tasks that are).
-    """
-    root = _path(root, "data")
-    if tasks is not None:
-        if isinstance(tasks, (str, bytes)) or not isinstance(tasks, Iterable):
-            raise ValueError(f"tasks: expected a list of task names, got {tasks!r}")
-        tasks = list(tasks)
-        if not all(isinstance(t, str) for t in tasks):
-            raise ValueError(f"tasks: expected a list of task names, got {tasks!r}")
-    if not root.is_dir():
-        raise ValueError(f"data: expected a folder <root>/<task>/<trial>.csv, got {str(root)!r}")
-    found = {d.name: sorted(d.glob("*.csv")) for d in sorted(root.iterdir()) if d.is_dir()}
-    found = {k: v for k, v in found.items() if v}
-    if not found:
-        raise ValueError(f"data: no <task>/<trial>.csv files under {str(root)!r}")
-    if tasks is not None:
-        unknown = [t for t in tasks if t not in found]
-        if unknown:
-            raise ValueError(f"tasks: expected some of {sorted(found)}, got unknown {unknown}")
-        found = {t: found[t] for t in dict.fromkeys(tasks)}
-    return [(task, f) for task, files in found.items() for f in files]
 
 
 def load_recorded(
@@ -335,8 +341,11 @@ def load_recorded(
     spec = _spec(spec, columns)
     spec.observed(observe)
     store = resolve_cache(cache)
-    demos, skipped = [], []
-    for task, path in find_trials(root, tasks):
+    demos: list[Demonstration] = []
+    trials, skipped = layout_trials(root, tasks, spec)
+    for file, reason in skipped:
+        warnings.warn(f"skipped {file}: {reason}", SkippedTrialWarning, stacklevel=2)
+    for task, path in trials:
         try:
             demos.append(load_trial(path, task=task, spec=spec, observe=observe,
                                     preprocess=preprocess, max_duration=max_duration,

@@ -5,7 +5,9 @@ EMG channels ``emg0``..``emg7`` of the recorded handovers: non-negative raw
 units in the hundreds, rows at ~100 rows/s in bursts (many rows share their
 time stamp) and many rows re-sending the previous sample. Numpy only.
 
-Three preprocessing modes (:func:`preprocess_signal`):
+Three preprocessing modes (:func:`preprocess_signal`), here with the default
+``envelope`` filter (``lowpass`` skips the rectification, for signed signals
+such as a force or a torque; ``none`` keeps the values):
 
 - ``"none"``: the values unchanged; the rows carrying a new sample are marked.
 - ``"causal"`` (live test streams): rectified, causal envelope, output only at
@@ -69,6 +71,9 @@ from sandbox.validation import FloatArray, check_array, check_choice, check_posi
 
 #: Preprocessing modes of :func:`preprocess_signal`.
 MODES = ("none", "causal", "smooth")
+#: Filters of :func:`preprocess_signal` (a spec's ``modalities.NAME.preprocess``): the
+#: first, what EMG needs, is the default.
+FILTERS = ("envelope", "lowpass", "none")
 
 
 def _check_times(times: ArrayLike) -> FloatArray:
@@ -229,6 +234,32 @@ def decimate(times: ArrayLike, keep: ArrayLike, rate_hz: float) -> np.ndarray:
     return out
 
 
+def _filtered(t: FloatArray, x: FloatArray, fresh: np.ndarray, mode: str, filter: str,
+              rate_hz: float, options: dict) -> tuple[FloatArray, np.ndarray]:
+    """The output (T, C) and measured rows (T,) of :func:`preprocess_signal`."""
+    if mode == "none":
+        return x.copy(), fresh
+    measured = decimate(t, fresh, rate_hz) if mode == "causal" else fresh
+    if filter == "none":
+        out = _held(x, fresh)
+    else:
+        source = rectify(x) if filter == "envelope" else x
+        out = envelope(t, source, causal=mode == "causal", use=fresh, **options)
+    if mode == "causal":
+        out[~measured] = np.nan
+    return out, measured
+
+
+def _held(x: FloatArray, fresh: np.ndarray) -> FloatArray:
+    """Each row's last new sample (rows before the first are NaN), shape of ``x``."""
+    idx = np.flatnonzero(fresh)
+    out = np.full(x.shape, np.nan)
+    if idx.size:
+        last = np.searchsorted(idx, np.arange(x.shape[0]), side="right") - 1
+        out[last >= 0] = x[idx[last[last >= 0]]]
+    return out
+
+
 def _counts(x: FloatArray, fresh: np.ndarray, out: FloatArray) -> dict:
     """JSON-ready row counts of a signal and its preprocessed output."""
     missing = ~np.isfinite(x).all(axis=1)
@@ -252,6 +283,7 @@ def preprocess_signal(
     rate_hz: float = 30.0,
     stages: int = 2,
     min_dt: float = 0.02,
+    filter: str = "envelope",
 ) -> tuple[FloatArray, np.ndarray, dict]:
     """Preprocess a signal column group for training (``"smooth"``) or a live stream (``"causal"``).
 
@@ -265,6 +297,12 @@ def preprocess_signal(
         Envelope settings (:func:`envelope`).
     rate_hz : float
         Highest output rate of ``"causal"`` (Hz, :func:`decimate`).
+    filter : {"envelope", "lowpass", "none"}
+        What ``"causal"`` and ``"smooth"`` do to the values: ``envelope``
+        (default, for EMG) rectifies them, then low-pass filters them;
+        ``lowpass`` filters without rectifying (a signed force or torque keeps
+        its sign); ``none`` keeps the values (``"smooth"``: held from the last
+        new sample; ``"causal"``: the decimated new samples).
 
     Returns
     -------
@@ -282,17 +320,10 @@ def preprocess_signal(
     t = _check_times(times)
     x = _check_values(values, t.size)
     check_choice(mode, "mode", MODES)
+    check_choice(filter, "filter", FILTERS)
     check_positive(rate_hz, "rate_hz")
     _check_filter(cutoff_hz, stages, min_dt)
     options = {"cutoff_hz": cutoff_hz, "stages": stages, "min_dt": min_dt}
     fresh = fresh_rows(x)
-    if mode == "none":
-        out, measured = x.copy(), fresh
-    elif mode == "causal":
-        measured = decimate(t, fresh, rate_hz)
-        out = envelope(t, rectify(x), causal=True, use=fresh, **options)
-        out[~measured] = np.nan
-    else:
-        out = envelope(t, rectify(x), causal=False, use=fresh, **options)
-        measured = fresh
+    out, measured = _filtered(t, x, fresh, mode, filter, rate_hz, options)
     return out, measured, _counts(x, fresh, out)

@@ -17,19 +17,31 @@ emg     ``emg0`` ... ``emg7`` (Myo armband)                             signal  
 own layout once in a spec file, YAML or JSON (``--spec FILE`` on every
 command)::
 
-    time: stamp                      # optional, default t
-    time_unit: ms                    # optional: s (default), ms, us or ns
+    time: {column: stamp, unit: ms}  # optional, default t in s (or: time: stamp, time_unit: ms)
+    rate_hz: 120                     # instead of a time column: row i is at i / 120 s
+    units: mm                        # m (default), cm or mm: positions converted to metres
     robot: [j1, j2, j3, j4, j5, j6, j7]   # optional, default left_s0 ... left_w2
     # or, with the space the robot part is in (default joint: Baxter's 7 arm joints, rad):
     # robot: {columns: [rx, ry, rz], space: task}   # task: positions (m) in the base frame
     observe: [wrist, grip]           # optional default choice, default [hand]
     modalities:                      # added to (or replacing) the built-ins
       wrist: {columns: [wx, wy, wz], kind: position, units: m}
-      grip:  {columns: [f1, f2], kind: signal}
+      grip:  {columns: [f1, f2], kind: signal, preprocess: lowpass}
+    frame: {translation: [0.9, 0.2, -0.1], yaw: 180, up: z}   # world -> robot base
+    files: {giver: giver_RHand_pose.csv}   # one file per part in each trial folder
+    labels: labels.csv               # trial -> task, instead of one folder per task
+    segment: {start: {rule: onset, speed: 0.15}, end: {rule: approach, hold_s: 0.3}}
+    resample_hz: 60                  # thin fast recordings
 
-Every key is checked; a mistake is a ``ValueError`` naming the file, the key
-and what was expected. ``time_unit`` converts the time column to seconds as
-it is read (``--time-unit`` on the commands does the same without a spec).
+Every key is checked; a mistake is a ``ValueError`` naming the file, the key,
+what came and what was expected. ``time_unit`` converts the time column to
+seconds as it is read (``--time-unit`` on the commands does the same without a
+spec). The keys after ``modalities`` are described in
+:mod:`sandbox.data.spec_layout` (``files``, ``labels``, ``units``, a signal's
+``preprocess``), :mod:`sandbox.data.spec_frame` (``frame``, also per modality)
+and :mod:`sandbox.data.segment` (``segment``, ``resample_hz``). A position
+modality's ``units`` is the unit of its columns; once loaded it is in metres
+(``Modality.units == "m"``).
 ``robot.space`` says what the robot columns are: ``joint`` (default; joint
 angles, rad, checked against Baxter's 7-joint arm by the commands) or ``task``
 (a position in the robot's base frame, m, any size, e.g. the receiving hand's
@@ -46,6 +58,7 @@ from pathlib import Path
 from typing import Any
 
 from sandbox.core.modality import Modality, check_modalities, select
+from sandbox.data.spec_layout import Layout, check_columns, parse_layout, parse_time
 
 TIME_COLUMN = "t"
 ROBOT_COLUMNS = ("left_s0", "left_s1", "left_e0", "left_e1", "left_w0", "left_w1", "left_w2")
@@ -59,13 +72,14 @@ ARM = Modality("arm", tuple(f"human_left_{joint}_{axis}" for joint in ("elbow", 
 EMG = Modality("emg", tuple(f"emg{i}" for i in range(8)), "signal", "raw")
 #: The built-in modalities, by name.
 BUILT_IN: dict[str, Modality] = {m.name: m for m in (HAND, ARM, EMG)}
-_KEYS = {"time", "time_unit", "robot", "observe", "modalities"}
+_KEYS = {"time", "time_unit", "robot", "observe", "modalities", "rate_hz", "units", "frame",
+         "files", "labels", "segment", "resample_hz"}
 #: Spaces a robot part may be in (``robot: {columns, space}``).
 ROBOT_SPACES = ("joint", "task")
 _ROBOT_KEYS = {"columns", "space"}
 #: Units a time column may be in, and their length in seconds.
 TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
-_MODALITY_KEYS = {"columns", "kind", "units"}
+_MODALITY_KEYS = {"columns", "kind", "units", "frame", "preprocess"}
 
 
 @dataclass(frozen=True)
@@ -86,6 +100,9 @@ class DataSpec:
     time_unit : {"s", "ms", "us", "ns"}
         Unit of the time column (default seconds); the loaders convert it to
         seconds (:attr:`time_scale`).
+    layout : Layout
+        Everything else a spec file declares (:mod:`sandbox.data.spec_layout`):
+        ``rate_hz``, units, frames, files, labels, segmentation, resampling.
     robot_space : {"joint", "task"}
         What the robot columns are: joint angles (rad, default) or a task-space
         position (m) in the robot's base frame.
@@ -96,6 +113,7 @@ class DataSpec:
     modalities: Mapping[str, Modality] = field(default_factory=lambda: dict(BUILT_IN))
     observe: tuple[str, ...] = ("hand",)
     time_unit: str = "s"
+    layout: Layout = field(default_factory=Layout)
     robot_space: str = "joint"
 
     def __post_init__(self) -> None:
@@ -127,6 +145,29 @@ class DataSpec:
         object.__setattr__(self, "robot", robot)
         object.__setattr__(self, "modalities", mods)
         object.__setattr__(self, "observe", observe)
+        self._check_layout()
+
+    def _check_layout(self) -> None:
+        """The layout's keys against the columns and modalities."""
+        if not isinstance(self.layout, Layout):
+            raise ValueError(f"layout: expected a Layout, got {type(self.layout).__name__}")
+        mods, segment = self.modalities, self.layout.segment
+        columns = {"robot": self.robot, **{f"modalities.{n}.columns": m.dims
+                                           for n, m in mods.items() if BUILT_IN.get(n) != m}}
+        if self.layout.rate_hz is None:
+            columns["time"] = (self.time,)
+        if segment is not None:
+            hand = mods.get(segment.modality)
+            if hand is None or hand.kind != "position" or hand.size != 3:
+                points = sorted(n for n, m in mods.items() if m.kind == "position" and m.size == 3)
+                raise ValueError(f"segment.modality: expected a position modality of 3 columns "
+                                 f"(x, y, z), one of {points}, got {segment.modality!r}")
+            columns["segment"] = segment.columns
+        check_columns(self.layout, columns)
+        for name in self.layout.modality_frames:
+            if mods[name].size % 3:
+                raise ValueError(f"modalities.{name}.frame: expected columns in x, y, z "
+                                 f"triples, got {mods[name].size} columns")
 
     @property
     def time_scale(self) -> float:
@@ -141,7 +182,8 @@ class DataSpec:
         mods = select(self.modalities.values(),
                       self.observe if observe is None else _choice(observe), "observe")
         check_modalities(mods)
-        clash = sorted({c for m in mods for c in m.dims} & {self.time, *self.robot})
+        time = () if self.layout.rate_hz is not None else (self.time,)
+        clash = sorted({c for m in mods for c in m.dims} & {*time, *self.robot})
         if clash:
             raise ValueError(f"observe: columns {clash} are also the time or robot columns")
         return mods
@@ -202,20 +244,38 @@ class DataSpec:
         observe = data.get("observe", ("hand",))
         if isinstance(observe, str):
             observe = [n.strip() for n in observe.split(",") if n.strip()]
+        time, unit, _ = parse_time(data)
+        layout = parse_layout(data, {n: e for n, e in given.items()})
         robot, space = _robot(data.get("robot", ROBOT_COLUMNS))
-        return cls(time=data.get("time", TIME_COLUMN), robot=robot,
-                   modalities=mods, observe=tuple(_names(observe, "observe")),
-                   time_unit=data.get("time_unit", "s"), robot_space=space)
+        return cls(time=TIME_COLUMN if time is None else time,
+                   robot=robot, modalities=mods,
+                   observe=tuple(_names(observe, "observe")),
+                   time_unit="s" if unit is None else unit, layout=layout, robot_space=space)
 
     def to_dict(self) -> dict:
         """JSON-ready form (inverse of :meth:`from_dict`)."""
+        layout = self.layout
         robot: Any = list(self.robot)
         if self.robot_space != "joint":
             robot = {"columns": robot, "space": self.robot_space}
-        return {"time": self.time, "time_unit": self.time_unit, "robot": robot,
-                "observe": list(self.observe),
-                "modalities": {n: {"columns": list(m.dims), "kind": m.kind, "units": m.units}
-                               for n, m in self.modalities.items()}}
+        out = {"robot": robot, "observe": list(self.observe),
+               "modalities": {n: _entry(m, layout) for n, m in self.modalities.items()},
+               **layout.to_dict()}
+        if layout.rate_hz is None:
+            out["time"] = {"column": self.time, "unit": self.time_unit}
+        return out
+
+
+def _entry(m: Modality, layout: Layout) -> dict:
+    """A modality's spec entry (position units: those of its columns, see the layout)."""
+    out: dict[str, Any] = {"columns": list(m.dims), "kind": m.kind, "units": m.units}
+    if m.kind == "position":
+        out["units"] = layout.modality_units.get(m.name, layout.units)
+        if m.name in layout.modality_frames:
+            out["frame"] = layout.modality_frames[m.name].to_dict()
+    elif m.name in layout.signal_filters:
+        out["preprocess"] = layout.signal_filters[m.name]
+    return out
 
 
 def _kind(value: Any) -> str:
@@ -266,6 +326,8 @@ def _modality(name: str, entry: Any) -> Modality:
     units = entry.get("units", "") or ""
     if not isinstance(units, str):
         raise ValueError(f"modalities.{name}.units: expected text such as 'm', got {units!r}")
+    if entry.get("kind", "position") == "position":
+        units = "m"                   # converted to metres as read (Layout.length_scale)
     try:
         return Modality(name, _names(entry["columns"], f"modalities.{name}.columns"),
                         entry.get("kind", "position"), units)

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import csv
 import difflib
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -98,10 +98,11 @@ def _clean_name(name: str) -> str:
     return name.replace("\ufeff", "").strip().strip("\"'").strip()
 
 
-def _column_index(header: list[str], columns: Columns, owners: dict | None = None) -> list[int]:
+def _column_index(header: list[str], wanted: Sequence[str], fix: Callable[[str], str]
+                  ) -> list[int]:
     names = [_clean_name(h) for h in header]
     index = []
-    for col in columns.all:
+    for col in wanted:
         hits = [i for i, n in enumerate(names) if n == col]
         if len(hits) > 1:
             raise TrialError(f"column {col!r} appears {len(hits)} times (columns {hits})")
@@ -110,7 +111,7 @@ def _column_index(header: list[str], columns: Columns, owners: dict | None = Non
             close = [lower[c] for c in difflib.get_close_matches(col.lower(), list(lower), n=2,
                                                                  cutoff=0.75)]
             hint = f" (did you mean {' or '.join(map(repr, close))}?)" if close else ""
-            raise TrialError(f"missing column {col!r}{hint}{_fix(col, columns, owners)}")
+            raise TrialError(f"missing column {col!r}{hint}{fix(col)}")
         index.append(hits[0])
     return index
 
@@ -122,7 +123,8 @@ def _fix(col: str, columns: Columns, owners: dict | None) -> str:
         return (f"; it is a column of modality {owner!r}: name the file's columns in a spec "
                 f"(--spec FILE) or leave {owner!r} out of --observe")
     if col == columns.time:
-        return "; name the time column in a spec (--spec FILE, key 'time')"
+        return ("; name the time column in a spec (--spec FILE, key 'time'), or give rate_hz "
+                "for files without one")
     if col in columns.robot:
         return "; name the robot columns with --robot-columns or a spec (--spec FILE, key 'robot')"
     return "; name the human columns with --human-columns or a spec (--spec FILE)"
@@ -146,17 +148,34 @@ def _to_float(cells: list[list[str]], names: Sequence[str], first_row: int) -> F
 
 def read_trial_table(path: str | Path, columns: Columns = Columns(),
                      owners: dict | None = None) -> tuple[FloatArray, dict]:
+    """Read the time, human and robot columns of one trial file as floats.
+
+    As :func:`read_columns` with ``columns.all``; ``owners`` maps human
+    columns to their modality's name, for the message of a missing column.
+    """
+    return read_columns(path, columns.all, lambda col: _fix(col, columns, owners))
+
+
+def read_columns(path: str | Path, names: Sequence[str],
+                 fix: Callable[[str], str] = lambda col: "") -> tuple[FloatArray, dict]:
     """Read the chosen columns of one trial file as floats.
+
+    Parameters
+    ----------
+    path : str or Path
+        The CSV file.
+    names : sequence of str
+        The columns to read, in the order of the table.
+    fix : callable, optional
+        ``fix(column)``: what the message of a missing column adds (the option
+        that names it).
 
     Returns
     -------
-    table : ndarray, shape (n_rows, 1 + P + Q)
-        Time, human and robot columns in that order; NaN for empty cells.
+    table : ndarray, shape (n_rows, len(names))
+        The columns in that order; NaN for empty cells.
     notes : dict
         ``{"truncated_last_row": bool}``.
-
-    ``owners`` maps human columns to their modality's name, for the message
-    of a missing column.
 
     Raises
     ------
@@ -176,16 +195,16 @@ def read_trial_table(path: str | Path, columns: Columns = Columns(),
             raise TrialError(f"file of {size} bytes, expected at most {MAX_FILE_BYTES} "
                              f"(sandbox.data.limits.MAX_FILE_BYTES)")
         with path.open(newline="", encoding="utf-8", errors="replace") as fh:
-            body, truncated = _read_rows(_rows(csv.reader(_lines(fh))), columns, owners)
+            body, truncated = _read_rows(_rows(csv.reader(_lines(fh))), tuple(names), fix)
     except csv.Error as error:
         raise TrialError(f"malformed CSV ({error}; a stray quote?)") from None
     except OSError as error:
         raise TrialError(f"cannot read the file ({type(error).__name__}: {error})") from None
-    table = _to_float(body, columns.all, 2) if body else np.empty((0, len(columns.all)))
+    table = _to_float(body, names, 2) if body else np.empty((0, len(names)))
     return table, {"truncated_last_row": truncated}
 
 
-def _read_rows(rows: Iterator[list[str]], columns: Columns, owners: dict | None
+def _read_rows(rows: Iterator[list[str]], names: tuple[str, ...], fix: Callable[[str], str]
                ) -> tuple[list[list[str]], bool]:
     """The chosen cells of every data row, and whether a short last row was left out.
 
@@ -195,7 +214,7 @@ def _read_rows(rows: Iterator[list[str]], columns: Columns, owners: dict | None
     header = next(rows, None)
     if header is None:
         raise TrialError("empty file")
-    index = _column_index(header, columns, owners)
+    index = _column_index(header, names, fix)
     body: list[list[str]] = []
     short: list[str] | None = None
     for n, row in enumerate(rows, start=2):
