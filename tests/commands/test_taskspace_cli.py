@@ -169,3 +169,30 @@ def test_data_summary_reports_the_jitter_and_the_floor(taskspace, capsys):
     assert hand["jitter_m"] == pytest.approx(0.001, rel=0.2) and hand["floor_m"] == 0.02
     assert main(["data", "summary", "--data", str(data), "--spec", str(spec)]) == 0
     assert "hand noise floor 20.0 mm (noise_floor); raw jitter" in capsys.readouterr().out
+
+
+def test_the_mocap_layout_with_the_receiving_hand_as_a_task_space_robot(tmp_path, capsys):
+    """Issue 28's target layout (mm, Z-up world frame, 120 Hz, files, labels, long windows),
+    the taker's hand as the robot part: its units and frame apply to it as to the hand."""
+    from sandbox.core import IProMP
+    from tests.data.mocap_fixture import SPEC, write_mocap_set
+
+    write_mocap_set(tmp_path / "set", n_per_task=3)
+    joints = ("robot: [robot.left_s0, robot.left_s1, robot.left_e0, robot.left_e1,\n"
+              "        robot.left_w0, robot.left_w1, robot.left_w2]")
+    assert joints in SPEC
+    spec = tmp_path / "task.yaml"
+    spec.write_text(SPEC.replace("  robot: baxter_left_arm.csv", "  taker: taker_RHand_pose.csv")
+                    .replace(joints, "robot: {columns: [taker.x, taker.y, taker.z], space: task}"))
+    assert main(["fit", "--data", str(tmp_path / "set"), "--spec", str(spec), "--n-basis", "11",
+                 "--out", str(tmp_path / "m.npz")]) == 0, capsys.readouterr().err
+    model = IProMP.load(tmp_path / "m.npz")
+    assert model.robot_space == "task"
+    robot = model.task_models[0].weights.mean.reshape(6, 11)[3:]     # robot x, y, z weights
+    assert np.all(np.abs(robot) < 1.5)            # metres in Baxter's base frame, not mm
+    out = tmp_path / "r.json"
+    assert main(["evaluate", "--data", str(tmp_path / "set"), "--spec", str(spec),
+                 "--out", str(out), "--config", str(n_basis(tmp_path)), *FAST]) == 0
+    report = json.loads(out.read_text())
+    assert report["dynamic"]["0.5"]["mean"]["e_q"] is None
+    assert 0.0 < report["dynamic"]["0.5"]["mean"]["e_p"] < 0.1
