@@ -218,12 +218,21 @@ def _load_motion(task: str, path: str) -> HumanMotion:
     from sandbox.data.recorded import load_trial
 
     causal = _load_causal(task, path)
-    smooth = load_trial(path, task=task, preprocess="smooth")
+    return motion_of(load_trial(path, task=task, preprocess="smooth"), causal)
+
+
+def motion_of(smooth, causal) -> HumanMotion:
+    """The replay of one recorded trial: the ``hand`` of ``smooth`` (its smoothed version) as
+    the true motion, ``causal``'s as measured, its other body modalities as observed.
+
+    Both are the same trial loaded with the two preprocessings (same time stamps).
+    """
     times = causal.times - causal.times[0]
-    true = np.column_stack([_fill(times, smooth.human[:, j]) for j in range(3)])
-    return HumanMotion(times=times, true=true, measured=causal.select("hand").human, task=task,
-                       source=path, meta={"report": causal.meta["report"]},
-                       body=demo_body(causal))
+    hand = smooth.select("hand").human
+    true = np.column_stack([_fill(times, hand[:, j]) for j in range(3)])
+    return HumanMotion(times=times, true=true, measured=causal.select("hand").human,
+                       task=causal.task, source=causal.source,
+                       meta={"report": causal.meta["report"]}, body=demo_body(causal))
 
 
 def _load_causal(task: str, path: str):

@@ -23,6 +23,7 @@ name                   range               unit    why
 ``noise_floor``        [1e-12, 1]          m       a floor of 1 m hides the whole workspace
 ``signal_floor``       [1e-12, 100]        -       normalised units (training std)
 ``noise_floors``       [1e-12, 100]        -       per modality: m or normalised units
+``jitter_floor``       (0, 1e6]            -       relative: k x the data's jitter, or null
 ``settle_tol``         (0, 10]             rad     or null
 ``arrive_tol``         (0, 10]             m       or null
 ``blend_rate``         [0.1, 1e6]          1/s     sigmoid rate of the blending: its span
@@ -153,6 +154,7 @@ BOUNDS: dict[str, Bound] = {
     "noise_floor": Bound(1e-12, 1.0, unit="m"),
     "signal_floor": Bound(1e-12, 100.0),
     "noise_floors": Bound(1e-12, 100.0),
+    "jitter_floor": Bound(0, 1e6, open_low=True),
     "settle_tol": Bound(0, 10.0, open_low=True, unit="rad"),
     "arrive_tol": Bound(0, 10.0, open_low=True, unit="m"),
     "blend_rate": Bound(0.1, 1e6, unit="1/s"),

@@ -124,7 +124,7 @@ def _parses(parser: argparse.ArgumentParser, words: list[str], option: str, text
 
 SETTINGS = ("n_basis", "n_candidates", "refine_steps", "subsample", "regularizer", "noise_scale",
             "noise_floor", "signal_floor", "blend_rate", "blend_delay", "end_prob",
-            "settle_tol", "arrive_tol")
+            "settle_tol", "arrive_tol", "jitter_floor")
 
 
 @pytest.mark.parametrize("name", SETTINGS)
@@ -257,7 +257,7 @@ def test_scripted_scenarios_agree_with_the_table(tmp_path, keys):
 
 
 MODEL = ("n_basis", "regularizer", "noise_scale", "noise_floor", "signal_floor", "settle_tol",
-         "arrive_tol")
+         "arrive_tol", "jitter_floor")
 
 
 @pytest.mark.parametrize("name", MODEL)

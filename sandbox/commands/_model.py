@@ -65,7 +65,12 @@ BAXTER_JOINTS = 7
 
 
 def baxter(model) -> None:
-    """``ValueError`` unless the model drives Baxter's seven left-arm joints."""
+    """``ValueError`` unless the model drives Baxter's seven left-arm joints (in joint space)."""
+    if getattr(model, "robot_space", "joint") == "task":
+        raise ValueError("--model: its robot part is in task space (a position, m); the "
+                         "environments drive Baxter's 7 joints and following a task-space "
+                         "plan needs inverse kinematics onto the arm (issue 23, not built "
+                         "yet): fit a joint-space model to drive the arm")
     if model.n_robot != BAXTER_JOINTS:
         raise ValueError(f"--model: the model drives {model.n_robot} robot dims, the "
                          f"environments' Baxter arm has {BAXTER_JOINTS} joints")

@@ -4,7 +4,8 @@
 :mod:`sandbox.data.spec`); ``--observe hand,arm,emg`` chooses the modalities
 (names from the built-ins or the spec; default the spec's, ``hand``);
 ``--human-columns`` and ``--robot-columns`` are shorthands that rename the
-hand's and the robot's columns of that spec; ``--session S`` draws a synthetic
+hand's and the robot's columns of that spec (a joint-space robot part must be
+Baxter's 7 arm joints: :func:`check_robot`); ``--session S`` draws a synthetic
 set's recording session (:mod:`sandbox.data.synthetic.session`).
 """
 
@@ -75,9 +76,25 @@ def data_spec(args: argparse.Namespace):
     from sandbox.data.spec import resolve
 
     _columns_need_a_folder(args)
-    return resolve(args.spec, human_columns=split(getattr(args, "human_columns", None)),
+    spec = resolve(args.spec, human_columns=split(getattr(args, "human_columns", None)),
                    robot_columns=split(getattr(args, "robot_columns", None)),
                    time_unit=getattr(args, "time_unit", None))
+    check_robot(spec)
+    return spec
+
+
+#: Joints of the arm the commands evaluate and drive (Baxter's left arm).
+ARM_JOINTS = 7
+
+
+def check_robot(spec) -> None:
+    """Refuse a joint-space robot part that is not Baxter's 7-joint arm (``ValueError``):
+    its forward kinematics (e_p) and the environments need exactly those joints."""
+    if spec.robot_space == "joint" and len(spec.robot) != ARM_JOINTS:
+        raise ValueError(f"robot: expected the {ARM_JOINTS} joint angles (rad) of Baxter's arm "
+                         f"for a joint-space robot part, got {len(spec.robot)} columns "
+                         f"{list(spec.robot)}; a position (m) is 'robot: {{columns: [...], "
+                         f"space: task}}' in a spec file")
 
 
 def _columns_need_a_folder(args: argparse.Namespace) -> None:

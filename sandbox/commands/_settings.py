@@ -7,6 +7,7 @@ predictor options, the names of :class:`~sandbox.eval.loocv.EvalConfig`::
     n_basis: 21              # model (IProMP) options
     regularizer: 0.001
     noise_floor: 0.02        # m
+    jitter_floor: 15         # opt-in: position floors max(2 mm, 15 x the data's raw jitter)
     settle_tol: 0.05         # rad, or null: the whole recording is the motion
     likelihood: joint        # predictor options: joint | marginal
     window_mode: all         # all | latest
@@ -31,7 +32,7 @@ from typing import Any
 
 #: Options of the model (:class:`~sandbox.core.IProMP`).
 MODEL_KEYS = ("n_basis", "regularizer", "noise_scale", "noise_floor", "signal_floor",
-              "noise_floors", "settle_tol", "arrive_tol")
+              "noise_floors", "jitter_floor", "settle_tol", "arrive_tol")
 #: Options of the predictor (:class:`~sandbox.core.DynamicPredictor`).
 PREDICTOR_KEYS = ("likelihood", "window_mode", "n_candidates", "refine_steps", "blend_rate",
                   "blend_delay", "until_end", "end_prob", "subsample")
@@ -45,8 +46,8 @@ CHOICES = {"likelihood": ("joint", "marginal"), "window_mode": ("all", "latest")
 #: (``None`` allowed for the tolerances: "not used").
 NUMBERS = ("n_basis", "n_candidates", "refine_steps", "subsample", "regularizer", "noise_scale",
            "noise_floor", "signal_floor", "blend_rate", "blend_delay", "end_prob",
-           "settle_tol", "arrive_tol")
-OPTIONAL = ("settle_tol", "arrive_tol")
+           "settle_tol", "arrive_tol", "jitter_floor")
+OPTIONAL = ("settle_tol", "arrive_tol", "jitter_floor")
 
 
 def add_argument(parser: argparse.ArgumentParser) -> None:

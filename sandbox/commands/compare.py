@@ -109,7 +109,9 @@ def run(args) -> int:
                                      cache=_observation.cache(args),
                                      progress=not args.no_progress)
     if not train:
-        raise ValueError(f"--data {args.data}: no usable trial ({len(skipped)} skipped)")
+        from sandbox.data.skipped import no_usable
+
+        raise no_usable(f"--data {args.data}", skipped)
     check_tasks([d.task for d in train], args.holdout)
     comparison = run_compare(train, test, config, out, workers=args.workers,
                              progress=not args.no_progress, dataset=str(args.data),

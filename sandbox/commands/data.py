@@ -174,10 +174,14 @@ def _summary(args: argparse.Namespace) -> int:
     result["realism"] = _realism(args, spec) if "hand" in observe else None
     frame = suggest_for(demos, spec)
     result["frame_suggestion"] = None if frame is None else frame.to_dict()
+    from sandbox.data.noisefloor import floor_summary, format_floors  # issue 28 item 4
+
+    result["noise_floor"] = floor_summary(demos)
+    result["robot_space"] = spec.robot_space
     if args.json:
         print(json.dumps(result, indent=2))
     else:
-        print(format_summary(result))
+        print("\n".join([format_summary(result), *format_floors(result["noise_floor"])]))
         if frame is not None:
             print("\nSuggested placement (the demos' mean meeting point on Baxter's demonstrated "
                   "one, their reach turned toward the robot; paste into the spec):\n"
@@ -206,14 +210,19 @@ def _export(args: argparse.Namespace) -> int:
     if env_id not in sandbox.envs.ENV_IDS + sandbox.envs.LEGACY_IDS:
         raise ValueError(f"--env-id: expected one of {sandbox.envs.ENV_IDS}, got {env_id!r}")
     spec = _observation.data_spec(args)
+    if spec.robot_space == "task":      # the datasets' actions are the environments' joints
+        raise ValueError("--spec: expected a joint-space robot part for a Minari dataset (its "
+                         "actions are Baxter's joint targets), got robot.space task")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", SkippedTrialWarning)
         demos = load_dataset(args.data, spec=spec, observe=_observation.observe(args, spec),
                              seed=args.seed, tasks=_split(args.tasks),
                              n_per_task=args.n_per_task, preprocess=args.preprocess)
     if not demos:
-        raise ValueError(f"--data: no usable demonstration in {args.data} "
-                         f"({len(caught)} skipped)")
+        from sandbox.data.skipped import no_usable
+
+        raise no_usable(f"--data {args.data}", [str(w.message) for w in caught],
+                        "demonstration")
     dataset = export_demonstrations(demos, args.minari_id, env_id=env_id,
                                     preprocess=args.preprocess, data=str(args.data),
                                     force=args.force)

@@ -64,6 +64,10 @@ def add_arguments(parser) -> None:
     parser.add_argument("--train-session", type=_types.SEED, default=None, metavar="A",
                         help="with --session: fit the model on synthetic session A instead "
                              "(the object rides at A's learned meeting geometry)")
+    parser.add_argument("--spec", default=None, metavar="FILE",
+                        help="scenario recorded: YAML/JSON file naming the time, robot and "
+                             "modality columns of the recorded sets (default: the Baxter "
+                             "recordings' layout); its modalities must include the hand")
     parser.add_argument("--observe", default=None, metavar="NAMES",
                         help="modalities the policies observe: hand, arm, emg (default: the "
                              "hand; synthetic scenarios: the model's); recorded: every "
@@ -99,6 +103,7 @@ def run(args) -> int:
 
     check_new([("--json", args.json)], args.force)
     _check_data(args)
+    _spec(args)                                   # refused before any episode runs
     out = {name: _run_policy(name, args) for name in policies}
     config = next(iter(out.values())).get("config")
     if config is not None:
@@ -135,7 +140,7 @@ def _run_policy(name: str, args) -> dict:
     results = run_scenario(args.scenario, name, n_episodes=args.episodes, seed=args.seed,
                            dow_t=args.dow, ratio=args.ratio, data=args.data, test=args.test,
                            observe=args.observe, session=args.session,
-                           train_session=args.train_session)
+                           train_session=args.train_session, spec=_spec(args))
     episodes = [{"seed": r.seed, "task": r.task, "final_task": r.final_task,
                  "success": r.success, "handover_time": r.handover_time,
                  "min_distance": r.min_distance, "final_distance": r.final_distance,
@@ -149,6 +154,22 @@ def _run_policy(name: str, args) -> dict:
         entry["per_session"] = {s: _summary([r for r in results if r.replay["session"] == s])
                                 for s in sorted(sessions)}
     return entry
+
+
+def _spec(args):
+    """The :class:`~sandbox.data.spec.DataSpec` of ``--spec`` (None without it); only with
+    ``--scenario recorded``, and a robot part of Baxter's 7 joints."""
+    if args.spec is None:
+        return None
+    if args.scenario != "recorded":
+        raise ValueError(f"--spec: expected with --scenario recorded (it describes recorded "
+                         f"sets), got --scenario {args.scenario}")
+    from sandbox.commands._observation import check_robot
+    from sandbox.data.spec import DataSpec
+
+    spec = DataSpec.load(args.spec)
+    check_robot(spec)
+    return spec
 
 
 def _jsonable(options: dict) -> dict:
@@ -178,7 +199,8 @@ def _config(args, results) -> dict:
 
     mode = results[0].replay["mode"]
     config = {"scenario": args.scenario, "mode": mode,
-              "observe": split(args.observe) or ["hand"]}
+              "observe": split(args.observe) or ["hand"],
+              **({"spec": str(args.spec)} if args.spec else {})}
     if mode == "leave-one-session-out":
         config["sessions"] = [p.name for p in find_sessions(args.data, "--data")]
     elif mode == "cross-session":

@@ -267,12 +267,13 @@ def _summary(report: dict) -> None:
             for name, section in (("static", report["static"]), ("dynamic", report["dynamic"]))
             for key, entry in section.items()]
     width = max([len("oracle")] + [len(label) for label, _ in rows])   # the labels line up
+    from sandbox.eval.report import fmt  # e_q: "n/a" for a task-space robot part
     print(f"\n{'':{width}s} {'e_p (m)':>9} {'e_q (rad)':>9} {'e_phi (s)':>9} {'recog':>6} "
           f"{'share':>6}   (recognition: task-averaged, and the share of trials)")
     print(f"{'oracle':{width}s} {report['oracle']['mean']['e_p']:9.3f} "
-          f"{report['oracle']['mean']['e_q']:9.3f} {0:9.3f}")
+          f"{fmt(report['oracle']['mean']['e_q']):>9} {0:9.3f}")
     for label, m in rows:
-        print(f"{label:{width}s} {m['e_p']:9.3f} {m['e_q']:9.3f} {m['e_phi']:9.3f} "
+        print(f"{label:{width}s} {m['e_p']:9.3f} {fmt(m['e_q']):>9} {m['e_phi']:9.3f} "
               f"{m['recognition']:6.2f} {m.get('recognition_share', float('nan')):6.2f}")
     _sessions_summary(report)
 

@@ -96,6 +96,7 @@ def run(args: argparse.Namespace) -> int:
     out.parent.mkdir(parents=True, exist_ok=True)       # missing folders are made, as by play
     model.save(out)
     summary = _summary(model, args, out, len(demos), skipped)
+    summary["noise_floor"] = _floors(model, demos)
     print(json.dumps(summary, indent=2) if args.json else _format(summary))
     return 0
 
@@ -124,7 +125,7 @@ def _summary(model, args: argparse.Namespace, out: Path, n_demos: int, skipped: 
         "data": str(args.data), "session": args.session, "out": str(out),
         "preprocess": args.preprocess,
         "n_basis": model.basis.n_basis, "demos": n_demos, "skipped": skipped,
-        "observe": [m.name for m in model.modalities],
+        "observe": [m.name for m in model.modalities], "robot_space": model.robot_space,
         "noise_std": {m.name: [float(s) for s in np.sqrt(model.noise[sl]) * model.scale[sl]]
                       for m, sl in zip(model.modalities, _slices(model))},
         "units": {m.name: m.units for m in model.modalities},
@@ -135,6 +136,20 @@ def _summary(model, args: argparse.Namespace, out: Path, n_demos: int, skipped: 
                            "alpha_std": t.alpha_std} for t in model.task_models},
         "meeting_geometry": _geometry(model),
     }
+
+
+def _floors(model, demos) -> dict:
+    """Each position modality's raw jitter and the floor the fit used
+    (:mod:`sandbox.data.noisefloor`)."""
+    from sandbox.core.modality import slices
+    from sandbox.data.noisefloor import floor_summary
+
+    out = floor_summary(demos, noise_floor=model.noise_floor, jitter_floor=model.jitter_floor,
+                        noise_floors=model.noise_floors)
+    where = slices(model.modalities)
+    for name, entry in out.items():
+        entry["floor_m"] = float(model.floors_used[where[name]][0])
+    return out
 
 
 def _geometry(model) -> dict:
@@ -173,6 +188,13 @@ def _format(s: dict) -> str:
         else:
             values, unit = ", ".join(f"{v:.3g}" for v in noise), s["units"][name]
         lines.append(f"  {name} observation noise ({unit}): {values}")
+    if "noise_floor" in s:
+        from sandbox.data.noisefloor import format_floors
+
+        lines += format_floors(s["noise_floor"])
+    if s["robot_space"] == "task":
+        lines.append("  robot part in task space (m): e_p is measured on it directly, e_q "
+                     "does not apply; episodes and play need a joint-space model")
     geometry = s["meeting_geometry"]
     if "note" in geometry:
         lines.append(f"  meeting geometry: {geometry['note']}")

@@ -46,6 +46,10 @@ def add_arguments(parser) -> None:
                              "(type, dow_t or ratio, options), model (demos, seed, options, "
                              "file); README 'Scenario files' gives each one's meaning and "
                              "default")
+    parser.add_argument("--spec", default=None, metavar="FILE",
+                        help="scenario with a recorded human: the recorded set's spec file "
+                             "(YAML/JSON: its time, robot and modality columns), as the file's "
+                             "human.spec")
     parser.add_argument("--out", type=_types.output_file_in_new_folder, default=None,
                         help="scenario replay (HTML; default: <file name>.html here)")
     parser.add_argument("--summary", type=_types.output_file_in_new_folder, default=None,
@@ -142,6 +146,8 @@ def run(args) -> int:
     args.record = _recorder(args)
     if args.scenario is not None:
         return _scenario(args)
+    if args.spec is not None:
+        raise ValueError("--spec: expected with --scenario FILE whose human is recorded")
     from sandbox.validation import check_positive
     from sandbox.viz.server import check_host
 
@@ -233,7 +239,7 @@ def _scenario(args) -> int:
     scenario = load_scenario(args.scenario, observe=_settings.observe(args.observe, settings),
                              model=args.model,
                              options=_settings.predictor_options(settings),
-                             model_options=_settings.model_options(settings))
+                             model_options=_settings.model_options(settings), spec=args.spec)
     html = Path(args.out or f"{scenario.path.stem}.html")
     summary_path = Path(args.summary or f"{scenario.path.stem}.summary.json")
     if summary_path.suffix.lower() != ".json":

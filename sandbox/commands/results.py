@@ -177,6 +177,8 @@ def _readme_text(readme) -> str:
 
 
 def _summary_table(reports: dict) -> str:
+    from sandbox.eval.report import fmt  # "n/a" for e_q in task space
+
     rows = ["| data | formulation | e_p (m) | e_q (rad) | e_phi (s) | recognition "
             "(task-averaged) |",
             "|---|---|---|---|---|---|"]
@@ -188,7 +190,7 @@ def _summary_table(reports: dict) -> str:
                              ("dynamic, dow_t 1.0 s", rep["dynamic"]["1.0"]["mean"])):
             rec = f"{entry['recognition']:.2f}" if "recognition" in entry else "(true task)"
             rows.append(f"| {rep['dataset']} | {label} | {entry['e_p']:.3f} | "
-                        f"{entry['e_q']:.3f} | {entry['e_phi']:.3f} | {rec} |")
+                        f"{fmt(entry['e_q'])} | {entry['e_phi']:.3f} | {rec} |")
     return "\n".join(rows)
 
 
@@ -261,6 +263,8 @@ def _evaluate(train, test, config, data, workers, label: str) -> dict:
 
 
 def _table(reports: dict, window: float) -> str:
+    from sandbox.eval.report import fmt  # "n/a" for e_q in task space
+
     rows = ["| observe | e_p (m) | e_q (rad) | e_phi (s) | recognition at 30 % (share of "
             "trials) | at the end | late decay (peak - end) | wall (s) |",
             "|---|---|---|---|---|---|---|---|"]
@@ -268,7 +272,8 @@ def _table(reports: dict, window: float) -> str:
     for label, rep in reports.items():
         d, c = rep["dynamic"][w]["mean"], rep["recognition_over_time_ci"][w]
         at = list(rep["recognition_over_time"]["fractions"]).index(0.3)
-        cells = [f"{d[k]:.3f} [{d[k + '_ci'][0]:.3f}, {d[k + '_ci'][1]:.3f}]"
+        cells = [fmt(d[k]) if d[k] is None else
+                 f"{d[k]:.3f} [{d[k + '_ci'][0]:.3f}, {d[k + '_ci'][1]:.3f}]"
                  for k in ("e_p", "e_q", "e_phi")]
         cells += [f"{c['mean'][at]:.2f} [{c['lo'][at]:.2f}, {c['hi'][at]:.2f}]",
                   f"{c['mean'][-1]:.2f} [{c['lo'][-1]:.2f}, {c['hi'][-1]:.2f}]",

@@ -85,6 +85,9 @@ class DemoFit:
     moments : ndarray, shape (3, P)
         Count, sum and sum of squares of each human dim's valid samples (for
         the scale of signal modalities).
+    jitter : ndarray, shape (P,), optional
+        Jitter (m) of each position dim's raw samples, NaN where unknown
+        (:func:`sandbox.core.jitter.demo_jitter`).
     """
 
     task: str
@@ -93,6 +96,7 @@ class DemoFit:
     dof: FloatArray
     duration: float
     moments: FloatArray
+    jitter: FloatArray | None = None
 
 
 def motion_end(times, robot, settle_tol: float | None, human=None,
@@ -154,7 +158,8 @@ def settle_index(robot, tol: float | None, start: int = 0) -> int:
 
 
 def fit_one(task: str, times: FloatArray, human: FloatArray, robot: FloatArray,
-            basis: GaussianBasis, ridge: float, robot_end: int | None = None) -> DemoFit:
+            basis: GaussianBasis, ridge: float, robot_end: int | None = None,
+            jitter: FloatArray | None = None) -> DemoFit:
     """:class:`DemoFit` of one demonstration's motion (cut at :func:`motion_end`).
 
     Parameters
@@ -179,6 +184,8 @@ def fit_one(task: str, times: FloatArray, human: FloatArray, robot: FloatArray,
         robot settles to 0.01 rad 12 % of the motion's duration later (median):
         predicted in a slightly shorter time, the settled pose costs e_q 0.001
         rad and takes 1 mm off e_p (leave-one-out, hand, dow_t 0.2 s).
+    jitter : ndarray, shape (P,), optional
+        Kept as :attr:`DemoFit.jitter`.
     """
     T = len(human)
     n = basis.n_basis
@@ -195,7 +202,7 @@ def fit_one(task: str, times: FloatArray, human: FloatArray, robot: FloatArray,
     return DemoFit(str(task), np.vstack([wh, wr]).ravel(),   # eq. 6: concatenated dim after dim
                    (np.where(ok, err, 0.0) ** 2).sum(axis=0),
                    np.maximum(ok.sum(axis=0) - n, 1).astype(float),
-                   float(times[T - 1] - times[0]), moments)
+                   float(times[T - 1] - times[0]), moments, jitter)
 
 
 def by_task(fits: Sequence[DemoFit]) -> tuple[dict[str, list], dict[str, FloatArray]]:
@@ -346,6 +353,13 @@ def check_fits(fits, n_basis: int) -> None:
     if len(sizes) != 1 or next(iter(sizes))[1] % n_basis:
         raise ValueError(f"fits: expected one layout (P, D*N with N={n_basis}), "
                          f"got {sorted(sizes)}")
+
+def check_robot_space(value) -> str:
+    """``"joint"`` or ``"task"``: what a demonstration's robot dims are (``ValueError`` else)."""
+    if value not in ("joint", "task"):
+        raise ValueError(f"robot_space: expected 'joint' or 'task', got {value!r}")
+    return str(value)
+
 
 def task_priors(tasks: Sequence[str], spec: Mapping[str, float] | None) -> FloatArray:
     """Normalised task priors p(k), shape (K,); uniform without ``spec``."""

@@ -58,7 +58,7 @@ import os
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -110,6 +110,7 @@ def save_model(model: IProMP, path: str | os.PathLike) -> None:
         "n_robot": model.n_robot,
         "modalities": [m.to_dict() for m in model.modalities],
         "robot_names": list(model.robot_names),
+        "robot_space": getattr(model, "robot_space", "joint"),
         "tasks": [
             {
                 "name": t.name,
@@ -122,6 +123,8 @@ def save_model(model: IProMP, path: str | os.PathLike) -> None:
             for t, p in zip(model.task_models, model.priors)
         ],
     }
+    if getattr(model, "jitter_floor", None) is not None:
+        meta["hyperparameters"]["jitter_floor"] = model.jitter_floor
     arrays = {"noise": model.noise, "scale": model.scale}
     cal = getattr(model, "calibration", None)
     if cal is not None:
@@ -320,3 +323,32 @@ def _metadata(archive, path: Path) -> dict:
     except (ValueError, RecursionError):
         raise ValueError("metadata is not valid JSON") from None
     return check_metadata(meta, path)
+
+
+def model_from_file(cls, f: ModelFile):
+    """The fitted model (an instance of ``cls``, :class:`~sandbox.core.model.IProMP`) a
+    checked :class:`ModelFile` describes."""
+    from sandbox.core.fitting import TaskModel
+
+    meta = f.meta
+    v1: dict[str, Any] = ({"settle_tol": None, "arrive_tol": None}
+                          if meta["format_version"] == 1 else {})
+    basis = meta["basis"]
+    model = cls(n_basis=basis["n_basis"], basis_width=basis["width"],
+                basis_margin=basis["margin"], normalized_basis=basis["normalized"], **v1,
+                **meta["hyperparameters"])
+    model.task_models = tuple(
+        TaskModel(t["name"], w, t["nominal_duration"], t["alpha_mean"], t["alpha_std"],
+                  t["n_demos"]) for t, w in zip(meta["tasks"], f.weights))
+    model.noise = f.noise
+    model.scale = f.scale
+    model.modalities = meta["modalities"]
+    model.n_human, model.n_robot = meta["n_human"], meta["n_robot"]
+    model.human_names = tuple(d for m in meta["modalities"] for d in m.dims)
+    model.robot_names = tuple(meta["robot_names"])
+    model.robot_space = meta["robot_space"]
+    model.priors = np.array([t["prior"] for t in meta["tasks"]], dtype=np.float64)
+    model.calibration = f.calibration
+    model.session = dict(meta["session"])
+    model._fitted = True
+    return model

@@ -38,7 +38,11 @@ Choices this project makes (DESIGN.md section 3):
   measure how far a track departs from a smooth N-basis curve (sensor noise,
   30 Hz steps, jitter); the floor stands for what a live track departs from
   the model by, which smoothed training demos cannot show. Both defaults were
-  chosen by leave-one-out on the recorded handovers.
+  chosen by leave-one-out on the recorded handovers. With ``jitter_floor=k`` a
+  position modality's floor is ``max(MIN_JITTER_FLOOR, k x jitter)`` instead,
+  the jitter measured on the demos' raw samples (:mod:`sandbox.core.jitter`).
+* The robot part is joint angles (rad) or, ``robot_space == "task"`` (taken from
+  the demos), a position (m); the core treats both alike (tolerances in its units).
 * The regulariser :math:`\\Lambda` (see :mod:`sandbox.core.promp`) is relative:
   for a robot dim, ``regularizer`` x the mean variance of its weights across
   the task's demos; for the human dims of modality m the same overall size
@@ -70,11 +74,12 @@ from sandbox.core.demos import (
 from sandbox.core.fitting import (
     DemoFit,
     DemonstrationLike,
-    TaskModel,
+    TaskModel,  # noqa: F401 - re-exported (sandbox.core)
     by_task,
     check_fits,
     check_floor,
     check_floor_names,
+    check_robot_space,
     check_tolerance,
     fit_one,
     motion_end,
@@ -84,7 +89,8 @@ from sandbox.core.fitting import (
     task_models,
     task_priors,
 )
-from sandbox.core.io import ModelFile, read_model, save_model
+from sandbox.core.io import model_from_file, read_model, save_model
+from sandbox.core.jitter import demo_jitter, jitter_floors
 from sandbox.core.limits import (
     MAX_DURATION_S,
     MAX_RELATIVE,
@@ -99,6 +105,9 @@ if TYPE_CHECKING:
 
 #: Default noise floor of signal modalities, in their normalised units (see IProMP).
 SIGNAL_FLOOR = 1.0
+#: The lowest floor (m) ``jitter_floor`` may give a position modality: 2 mm, twice a
+#: motion-capture system's jitter, as no model follows a live track closer than that.
+MIN_JITTER_FLOOR = 0.002
 
 
 class IProMP:
@@ -128,11 +137,14 @@ class IProMP:
         Multiplies the estimated observation noise :math:`\\Sigma_y`.
     noise_floor : float
         Lower bound of :math:`\\sigma_p` of position modalities (m). Default 2 cm,
-        chosen by leave-one-out on the recorded handovers: smoothed training
-        demos leave ~1 mm residuals, but a live, causally filtered track departs
-        from what the model can explain by ~2 cm (tracker jumps and occlusions,
-        motion the demos do not span); trusting observations more made every
-        prediction worse, including the oracle's.
+        chosen by leave-one-out on the recorded handovers: a live, causally filtered
+        track departs from what the model can explain by ~2 cm (tracker jumps and
+        occlusions, motion the demos do not span); trusting observations more made
+        every prediction worse, including the oracle's.
+    jitter_floor : float or None
+        k: a position modality's floor becomes ``max(MIN_JITTER_FLOOR, k x its
+        jitter)`` (:mod:`sandbox.core.jitter`) instead of ``noise_floor``; None (the
+        default) keeps ``noise_floor``. ``noise_floors`` still wins.
     signal_floor : float
         Lower bound of :math:`\\sigma_p` of signal modalities, in normalised units
         (fractions of the training demos' standard deviation).
@@ -187,6 +199,7 @@ class IProMP:
         noise_floor: float = 0.02,
         signal_floor: float = SIGNAL_FLOOR,
         noise_floors: Mapping[str, float] | None = None,
+        jitter_floor: float | None = None,
         settle_tol: float | None = 0.05,
         arrive_tol: float | None = 0.02,
         robot_tol: float | None = 0.01,
@@ -202,6 +215,8 @@ class IProMP:
         self.signal_floor = check_floor(signal_floor, "signal_floor", "signal_floor")
         self.noise_floors = {k: check_floor(v, f"noise_floors[{k!r}]", "noise_floors")
                              for k, v in check_mapping(noise_floors, "noise_floors").items()}
+        self.jitter_floor = (None if jitter_floor is None else BOUNDS["jitter_floor"].check(
+            jitter_floor, "jitter_floor", or_null=True))
         self.settle_tol = check_tolerance(settle_tol, "settle_tol")
         self.arrive_tol = check_tolerance(arrive_tol, "arrive_tol")
         self.robot_tol = None if robot_tol is None else check_positive(robot_tol, "robot_tol")
@@ -216,6 +231,7 @@ class IProMP:
         #: What a recording session taught besides the model (JSON-able; e.g. the meeting
         #: geometry of :mod:`sandbox.data.geometry`): saved and loaded, never interpreted here.
         self.session: dict[str, Any] = {}
+        self.robot_space = "joint"   #: what the robot dims are: "joint" (rad) or "task" (m)
 
     # ------------------------------------------------------------------ fit
     def fit(self, demos: Sequence[DemonstrationLike]) -> IProMP:
@@ -247,8 +263,9 @@ class IProMP:
         """
         times, human, robot = check_demo(demo, "demo", self.max_duration)
         end = self.motion_end(times, robot, human)
+        jitter = demo_jitter(demo, times, human, modalities_of(demo, human.shape[1]))
         return fit_one(str(demo.task), times, human[:end + 1], robot, self.basis, self.ridge,
-                       settle_index(robot, self.robot_tol, end))
+                       settle_index(robot, self.robot_tol, end), jitter)
 
     def motion_end(self, times, robot, human) -> int:
         """:func:`motion_end` with this model's tolerances."""
@@ -268,7 +285,8 @@ class IProMP:
         modalities = modalities_of(names_from, P)
         check_floor_names(self.noise_floors, modalities)
         scale = signal_scale(modalities, np.sum([f.moments for f in fits], axis=0))
-        sigma2 = observation_noise(fits, scale, self.floors(modalities), self.noise_scale)
+        self.floors_used = self.floors(modalities, fits)
+        sigma2 = observation_noise(fits, scale, self.floors_used, self.noise_scale)
         divide = np.r_[scale, np.ones(Q)].repeat(self.basis.n_basis)
         arrays = {k: np.array(v) / divide for k, v in weights.items()}
         for k, w in arrays.items():
@@ -276,13 +294,17 @@ class IProMP:
         self._set_fit(arrays, durations, sigma2, P, Q, names_from, modalities, scale)
         return self
 
-    def floors(self, modalities: Sequence[Modality]) -> FloatArray:
-        """Noise floor of every human dim (normalised units), shape (P,)."""
-        out = []
-        for m in modalities:
-            default = self.noise_floor if m.kind == "position" else self.signal_floor
-            out += [self.noise_floors.get(m.name, default)] * m.size
-        return np.array(out)
+    def floors(self, modalities: Sequence[Modality], fits: Sequence[DemoFit] = ()) -> FloatArray:
+        """Noise floor of every human dim (normalised units), shape (P,); with
+        ``jitter_floor``, a position modality's from the jitter of ``fits``."""
+        out = np.array([self.noise_floor if m.kind == "position" else self.signal_floor
+                        for m in modalities for _ in range(m.size)])
+        if self.jitter_floor is not None and fits:
+            jitters = np.array([np.full(out.size, np.nan) if f.jitter is None else f.jitter
+                                for f in fits])
+            out = jitter_floors(jitters, modalities, self.jitter_floor, MIN_JITTER_FLOOR, out)
+        given = [self.noise_floors.get(m.name) for m in modalities for _ in range(m.size)]
+        return np.array([f if g is None else g for f, g in zip(out, given)])
 
     def _set_fit(self, weights, durations, sigma2, P, Q, first, modalities, scale) -> None:
         tasks = task_models(weights, durations, sigma2, modalities, self.regularizer,
@@ -294,6 +316,7 @@ class IProMP:
         self.n_human, self.n_robot = P, Q
         self.human_names = tuple(d for m in self.modalities for d in m.dims)
         self.robot_names = tuple(getattr(first, "robot_names", ()) or ())
+        self.robot_space = check_robot_space(getattr(first, "robot_space", "joint"))
         self.priors = task_priors([t.name for t in tasks], self._prior_spec)
         self.calibration = None          # of a previous fit, if any: no longer valid
         self.session = {}                # likewise
@@ -361,34 +384,9 @@ class IProMP:
         """Load a model saved by :meth:`save`; refuses corrupt or foreign files (``ValueError``)."""
         content = read_model(path)
         try:
-            return cls._from_file(content)
+            return model_from_file(cls, content)
         except ValueError as error:   # hyperparameters the constructor refuses
             raise ValueError(f"model file {str(path)!r}: {error}") from None
-
-    @classmethod
-    def _from_file(cls, f: ModelFile) -> IProMP:
-        """The fitted model a checked :class:`~sandbox.core.io.ModelFile` describes."""
-        meta = f.meta
-        v1: dict[str, Any] = ({"settle_tol": None, "arrive_tol": None}
-                              if meta["format_version"] == 1 else {})
-        basis = meta["basis"]
-        model = cls(n_basis=basis["n_basis"], basis_width=basis["width"],
-                    basis_margin=basis["margin"], normalized_basis=basis["normalized"], **v1,
-                    **meta["hyperparameters"])
-        model.task_models = tuple(
-            TaskModel(t["name"], w, t["nominal_duration"], t["alpha_mean"], t["alpha_std"],
-                      t["n_demos"]) for t, w in zip(meta["tasks"], f.weights))
-        model.noise = f.noise
-        model.scale = f.scale
-        model.modalities = meta["modalities"]
-        model.n_human, model.n_robot = meta["n_human"], meta["n_robot"]
-        model.human_names = tuple(d for m in meta["modalities"] for d in m.dims)
-        model.robot_names = tuple(meta["robot_names"])
-        model.priors = np.array([t["prior"] for t in meta["tasks"]], dtype=np.float64)
-        model.calibration = f.calibration
-        model.session = dict(meta["session"])
-        model._fitted = True
-        return model
 
     def __repr__(self) -> str:
         if not self._fitted:

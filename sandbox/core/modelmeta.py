@@ -34,9 +34,11 @@ READABLE_VERSIONS = (1, 2)
 HYPERPARAMETERS = {
     1: {"regularizer", "noise_scale", "noise_floor", "min_alpha_std", "ridge"},
     2: {"regularizer", "noise_scale", "noise_floor", "signal_floor", "noise_floors",
-        "settle_tol", "arrive_tol", "min_alpha_std", "ridge"},
+        "jitter_floor", "settle_tol", "arrive_tol", "min_alpha_std", "ridge"},
 }
 TASK_KEYS = {"name", "nominal_duration", "alpha_mean", "alpha_std", "n_demos", "prior"}
+#: Spaces a model's robot dims may be in: joint angles (rad) or a task-space position (m).
+ROBOT_SPACES = ("joint", "task")
 #: How far from 1 the stored priors may sum.
 PRIOR_TOLERANCE = 1e-6
 #: How far from 1 a stored ``alpha_mean`` may be (a fit writes exactly 1).
@@ -63,6 +65,7 @@ def check_metadata(meta, path: Path) -> dict:
             "hyperparameters": _hyperparameters(meta["hyperparameters"], version),
             "n_human": P, "n_robot": Q, "modalities": _modalities(meta, P),
             "robot_names": _names(meta["robot_names"], "robot_names", (0, Q)),
+            "robot_space": _space(meta.get("robot_space", "joint")),
             "tasks": _tasks(meta["tasks"], _min_alpha_std(meta["hyperparameters"])),
             "familiarity": meta.get("familiarity"),
             "session": _session(meta.get("session", {}))}
@@ -91,6 +94,14 @@ def _check_speed(where: str, nominal: float, a_mean: float, a_std: float, n_demo
                          f"[{min_alpha_std:g}, {high:.4g}] (min_alpha_std to what {n_demos} "
                          f"demonstrations can give, limits.MAX_ALPHA_STD {MAX_ALPHA_STD:g}), "
                          f"got {a_std:g}")
+
+
+def _space(value) -> str:
+    """``robot_space``: what the robot dims are (absent in files before it: ``joint``)."""
+    if value not in ROBOT_SPACES:
+        raise ValueError(f"metadata robot_space: expected one of {list(ROBOT_SPACES)}, "
+                         f"got {str(value)[:40]!r}")
+    return value
 
 
 def _session(entry) -> dict:

@@ -286,7 +286,7 @@ def _reason(error: BaseException) -> str:
 
 def _info(demo: Demonstration) -> dict:
     return {"task": demo.task, "source": demo.source, "human_names": list(demo.human_names),
-            "robot_names": list(demo.robot_names),
+            "robot_names": list(demo.robot_names), "robot_space": demo.robot_space,
             "modalities": [[m.name, list(m.dims), m.kind, m.units] for m in demo.modalities],
             "report": demo.meta["report"]}
 
@@ -299,7 +299,8 @@ def _demo(z: dict[str, np.ndarray], info: dict) -> Demonstration:
         times=z["times"], human=z["human"], robot=z["robot"], task=info["task"],
         human_names=tuple(info["human_names"]), robot_names=tuple(info["robot_names"]),
         modalities=tuple(Modality(n, tuple(d), k, u) for n, d, k, u in info["modalities"]),
-        source=info["source"], meta={"report": info["report"], **measured_meta(measured)})
+        source=info["source"], meta={"report": info["report"], **measured_meta(measured)},
+        robot_space=info.get("robot_space", "joint"))
 
 
 def resolve_cache(cache: TrialCache | bool | str | Path | None) -> TrialCache | None:

@@ -35,7 +35,8 @@ class Demonstration:
         the left hand x, y, z in Baxter's base frame, m). NaN marks a missing
         sample (tracker dropout).
     robot : array_like, shape (T, Q)
-        Robot dims (rad), e.g. Baxter's seven left-arm joints. Must be finite.
+        Robot dims, e.g. Baxter's seven left-arm joints (rad), or a task-space
+        position (m, ``robot_space="task"``). Must be finite.
     task : str
         Task label.
     human_names, robot_names : sequence of str, optional
@@ -48,6 +49,9 @@ class Demonstration:
         Where it came from (file path, generator and seed).
     meta : mapping, optional
         Anything else worth keeping (e.g. what preprocessing did).
+    robot_space : {"joint", "task"}
+        What the robot dims are: joint angles (rad, default) or a position in
+        the robot's base frame (m) (:data:`sandbox.data.spec.ROBOT_SPACES`).
 
     The arrays are copied and made read-only, so a demonstration never changes
     and never aliases the caller's arrays.
@@ -62,6 +66,7 @@ class Demonstration:
     modalities: tuple[Modality, ...] = ()
     source: str = ""
     meta: Mapping[str, Any] = field(default_factory=dict)
+    robot_space: str = "joint"
 
     def __post_init__(self) -> None:
         times = check_times(self.times, "times")
@@ -73,6 +78,8 @@ class Demonstration:
                 f"expected at least one human and one robot dim, got P={human.shape[1]}, "
                 f"Q={robot.shape[1]}"
             )
+        if self.robot_space not in ("joint", "task"):
+            raise ValueError(f"robot_space: expected 'joint' or 'task', got {self.robot_space!r}")
         if not isinstance(self.task, str) or not self.task:
             raise ValueError(f"task: expected a non-empty string, got {self.task!r}")
         mods = tuple(self.modalities)
@@ -104,6 +111,15 @@ class Demonstration:
     def duration(self) -> float:
         """Recorded span ``times[-1] - times[0]`` (s): the ground-truth duration."""
         return float(self.times[-1] - self.times[0])
+
+    @property
+    def jitter(self) -> dict[str, float]:
+        """Jitter (m) of each position modality's raw tracker frames, by name, as the
+        loader measured it before any filter (``meta["report"]``; :mod:`sandbox.core.jitter`);
+        empty when not measured (e.g. a demonstration never preprocessed)."""
+        counts = (self.meta.get("report") or {}).get("modalities") or {}
+        return {name: float(c["jitter_m"]) for name, c in counts.items()
+                if isinstance(c, dict) and c.get("jitter_m") is not None}
 
     @property
     def n_steps(self) -> int:
@@ -142,6 +158,7 @@ class Demonstration:
             "modalities": self.modalities,
             "source": self.source,
             "meta": self.meta,
+            "robot_space": self.robot_space,
         }
         fields.update(changes)
         return Demonstration(**fields)

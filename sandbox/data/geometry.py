@@ -23,7 +23,8 @@ Per task, :class:`TaskGeometry` keeps the mean offset, its covariance and the
 count of demonstrations.
 
 Only demonstrations whose robot part is Baxter's seven left-arm joints
-(:data:`~sandbox.robot.ARM_JOINTS`) and that do not say
+(:data:`~sandbox.robot.ARM_JOINTS`), or a task-space position x, y, z (m; the
+fingertip is then that position, no kinematics), and that do not say
 ``meta["robot_meets_hand"] = False`` (the ``two_task`` generator's robot is a
 fixed function of the hand, not a reach to it) carry a geometry. Data with none
 keeps :data:`DEFAULT_OFFSET`, and says so (:func:`geometry_of`).
@@ -180,10 +181,22 @@ class MeetingGeometry:
 
 
 def carries_geometry(demo) -> bool:
-    """Whether ``demo``'s robot part is Baxter's left arm reaching to the hand."""
+    """Whether ``demo``'s robot part is Baxter's left arm reaching to the hand, or a
+    task-space position (x, y, z, m) that does (the receiving hand's, say)."""
     meta = getattr(demo, "meta", None) or {}
-    return (tuple(getattr(demo, "robot_names", ()) or ()) == ARM_JOINTS
-            and meta.get("robot_meets_hand", True) is not False)
+    if getattr(demo, "robot_space", "joint") == "task":
+        arm = np.shape(demo.robot)[1] == 3
+    else:
+        arm = tuple(getattr(demo, "robot_names", ()) or ()) == ARM_JOINTS
+    return arm and meta.get("robot_meets_hand", True) is not False
+
+
+def _tip(demo, kinematics) -> FloatArray:
+    """The robot's fingertip (T, 3) m over a demo: forward kinematics of its joints at
+    :data:`~sandbox.robot.TIP_LINK`, or its task-space robot part as it is."""
+    if getattr(demo, "robot_space", "joint") == "task":
+        return np.asarray(demo.robot, dtype=np.float64)
+    return kinematics.fk(demo.robot, link=TIP_LINK)
 
 
 def meeting_offset(times, hand, robot, kinematics=None,
@@ -290,7 +303,7 @@ def learn_geometry(demos: Sequence, *, max_offset: float = MAX_OFFSET_M) -> Meet
     by_task: dict[str, list] = {}
     for d in usable:
         by_task.setdefault(str(d.task), []).append(d)
-    offsets = {task: task_offsets([(_hand(d), kin.fk(d.robot, link=TIP_LINK),
+    offsets = {task: task_offsets([(_hand(d), _tip(d, kin),
                                     motion_end(d.times, d.robot, SETTLE_TOL, _hand(d), ARRIVE_TOL))
                                    for d in group])
                for task, group in by_task.items()}

@@ -43,6 +43,7 @@ from typing import Any
 
 import numpy as np
 
+from sandbox.core.jitter import track_jitter
 from sandbox.core.modality import Modality, default_modalities
 from sandbox.data.demonstration import Demonstration
 from sandbox.data.filtering import FilterConfig, filter_track, smooth_track
@@ -178,7 +179,11 @@ def preprocess_human(
     measured : ndarray of bool, shape (T', n_modalities)
         Time stamps at which each modality received a new (accepted) sample.
     counts : dict
-        Per modality name, its glitch and filter counts (JSON-ready).
+        Per modality name, its glitch and filter counts (JSON-ready); a position
+        modality's ``jitter_m`` is the jitter (m) of its raw frames, (0, 0, 0) rows left
+        out (:func:`sandbox.core.jitter.track_jitter`, robust to the other glitches; the
+        glitch filter's accepted frames would clip the noise of a noisy tracker at
+        ``jump_m``; None if too few).
     """
     opts = check_options(preprocess, **options)
     position = {k: opts[k] for k in ("config", "freeze_s", "max_fill_s", "jump_m", "excursion_m")}
@@ -189,6 +194,8 @@ def preprocess_human(
         start += m.size
         if m.kind == "position":
             out, meas, c = _positions(times, cols, preprocess, position)
+            raw = cols[last]                       # raw frames; (0, 0, 0) is no measurement
+            c = {**c, "jitter_m": track_jitter(times[last], raw, ~(raw == 0).all(axis=1))}
         else:
             how = (signal_filters or {}).get(m.name, "envelope")
             out, meas, c = _signal(times, cols, preprocess, opts, last, how)

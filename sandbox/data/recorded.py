@@ -268,7 +268,7 @@ def _load_trial(path: Path, task: str, spec: DataSpec, modalities: Sequence[Moda
     }
     return Demonstration(
         times=times[last], human=out, robot=robot[last], task=task, modalities=modalities,
-        robot_names=columns.robot, source=str(path),
+        robot_names=columns.robot, source=str(path), robot_space=spec.robot_space,
         meta={"report": report, **measured_meta(measured)},
     )
 

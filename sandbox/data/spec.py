@@ -21,6 +21,8 @@ command)::
     rate_hz: 120                     # instead of a time column: row i is at i / 120 s
     units: mm                        # m (default), cm or mm: positions converted to metres
     robot: [j1, j2, j3, j4, j5, j6, j7]   # optional, default left_s0 ... left_w2
+    # or, with the space the robot part is in (default joint: Baxter's 7 arm joints, rad):
+    # robot: {columns: [rx, ry, rz], space: task}   # task: positions (m) in the base frame
     observe: [wrist, grip]           # optional default choice, default [hand]
     modalities:                      # added to (or replacing) the built-ins
       wrist: {columns: [wx, wy, wz], kind: position, units: m}
@@ -40,6 +42,11 @@ spec). The keys after ``modalities`` are described in
 and :mod:`sandbox.data.segment` (``segment``, ``resample_hz``). A position
 modality's ``units`` is the unit of its columns; once loaded it is in metres
 (``Modality.units == "m"``).
+``robot.space`` says what the robot columns are: ``joint`` (default; joint
+angles, rad, checked against Baxter's 7-joint arm by the commands) or ``task``
+(a position in the robot's base frame, m, any size, e.g. the receiving hand's
+x, y, z): a model fitted on it predicts that position directly, e_p is measured
+on it without forward kinematics and e_q does not apply.
 """
 
 from __future__ import annotations
@@ -67,6 +74,9 @@ EMG = Modality("emg", tuple(f"emg{i}" for i in range(8)), "signal", "raw")
 BUILT_IN: dict[str, Modality] = {m.name: m for m in (HAND, ARM, EMG)}
 _KEYS = {"time", "time_unit", "robot", "observe", "modalities", "rate_hz", "units", "frame",
          "files", "labels", "segment", "resample_hz"}
+#: Spaces a robot part may be in (``robot: {columns, space}``).
+ROBOT_SPACES = ("joint", "task")
+_ROBOT_KEYS = {"columns", "space"}
 #: Units a time column may be in, and their length in seconds.
 TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
 _MODALITY_KEYS = {"columns", "kind", "units", "frame", "preprocess"}
@@ -93,6 +103,9 @@ class DataSpec:
     layout : Layout
         Everything else a spec file declares (:mod:`sandbox.data.spec_layout`):
         ``rate_hz``, units, frames, files, labels, segmentation, resampling.
+    robot_space : {"joint", "task"}
+        What the robot columns are: joint angles (rad, default) or a task-space
+        position (m) in the robot's base frame.
     """
 
     time: str = TIME_COLUMN
@@ -101,6 +114,7 @@ class DataSpec:
     observe: tuple[str, ...] = ("hand",)
     time_unit: str = "s"
     layout: Layout = field(default_factory=Layout)
+    robot_space: str = "joint"
 
     def __post_init__(self) -> None:
         if not isinstance(self.time, str) or not self.time:
@@ -108,6 +122,9 @@ class DataSpec:
         if not isinstance(self.time_unit, str) or self.time_unit not in TIME_UNITS:
             raise ValueError(f"time_unit: expected one of {list(TIME_UNITS)}, "
                              f"got {self.time_unit!r}")
+        if not isinstance(self.robot_space, str) or self.robot_space not in ROBOT_SPACES:
+            raise ValueError(f"robot.space: expected one of {list(ROBOT_SPACES)}, "
+                             f"got {self.robot_space!r}")
         robot = _names(self.robot, "robot")
         repeated = sorted({c for c in robot if robot.count(c) > 1})
         if repeated:
@@ -229,15 +246,19 @@ class DataSpec:
             observe = [n.strip() for n in observe.split(",") if n.strip()]
         time, unit, _ = parse_time(data)
         layout = parse_layout(data, {n: e for n, e in given.items()})
+        robot, space = _robot(data.get("robot", ROBOT_COLUMNS))
         return cls(time=TIME_COLUMN if time is None else time,
-                   robot=data.get("robot", ROBOT_COLUMNS), modalities=mods,
+                   robot=robot, modalities=mods,
                    observe=tuple(_names(observe, "observe")),
-                   time_unit="s" if unit is None else unit, layout=layout)
+                   time_unit="s" if unit is None else unit, layout=layout, robot_space=space)
 
     def to_dict(self) -> dict:
         """JSON-ready form (inverse of :meth:`from_dict`)."""
         layout = self.layout
-        out = {"robot": list(self.robot), "observe": list(self.observe),
+        robot: Any = list(self.robot)
+        if self.robot_space != "joint":
+            robot = {"columns": robot, "space": self.robot_space}
+        out = {"robot": robot, "observe": list(self.observe),
                "modalities": {n: _entry(m, layout) for n, m in self.modalities.items()},
                **layout.to_dict()}
         if layout.rate_hz is None:
@@ -278,6 +299,18 @@ def _names(values: Any, what: str) -> tuple[str, ...]:
     if not names or not all(isinstance(v, str) and v.strip() for v in names):
         raise ValueError(f"{what}: expected non-empty names, got {list(names)!r}")
     return tuple(v.strip() for v in names)
+
+
+def _robot(entry: Any) -> tuple[Any, str]:
+    """``robot:`` as given: a list of columns (joint space), or ``{columns, space}``."""
+    if not isinstance(entry, Mapping):
+        return entry, "joint"
+    unknown = sorted(map(str, set(entry) - _ROBOT_KEYS))
+    if unknown:
+        raise ValueError(f"robot: unknown keys {unknown}; expected some of {sorted(_ROBOT_KEYS)}")
+    if "columns" not in entry:
+        raise ValueError("robot: 'columns' is missing")
+    return entry["columns"], entry.get("space", "joint")
 
 
 def _modality(name: str, entry: Any) -> Modality:

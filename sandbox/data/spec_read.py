@@ -25,6 +25,7 @@ from sandbox.core.modality import Modality
 from sandbox.data.limits import MAX_FILE_BYTES
 from sandbox.data.segment import bounds, thin
 from sandbox.data.spec import DataSpec
+from sandbox.data.spec_layout import LENGTH_UNITS
 from sandbox.data.trialfile import TrialError, read_columns
 from sandbox.validation import FloatArray
 
@@ -115,6 +116,8 @@ def read_spec_table(path: Path, spec: DataSpec, modalities: Sequence[Modality], 
         blocks.append(_points(cols, layout.length_scale(m.name), layout.frame_of(m.name))
                       if m.kind == "position" else cols)
     robot = values[:, start:start + len(spec.robot)]
+    if spec.robot_space == "task":        # a position: the spec's units and frame apply too
+        robot = _task_points(robot, layout)
     rest = values[:, start + len(spec.robot):]
     if segment is not None:
         rest = rest.copy()
@@ -125,8 +128,19 @@ def read_spec_table(path: Path, spec: DataSpec, modalities: Sequence[Modality], 
     return table, rest, notes
 
 
-def robot_points(robot: FloatArray) -> FloatArray:
-    """Baxter's gripper tip (n, 3) m, base frame, for the robot columns (n, 7) rad."""
+def _task_points(robot: FloatArray, layout) -> FloatArray:
+    """A task-space robot part (n, k) in metres and, with a global frame, the base frame."""
+    if layout.frame is not None and robot.shape[1] % 3:
+        raise TrialError(f"robot: a frame moves x, y, z columns; got {robot.shape[1]} "
+                         f"task-space robot columns")
+    return _points(robot, LENGTH_UNITS[layout.units], layout.frame)
+
+
+def robot_points(robot: FloatArray, space: str = "joint") -> FloatArray:
+    """Baxter's gripper tip (n, 3) m, base frame, for the robot columns (n, 7) rad; a
+    task-space part of x, y, z (m, base frame) as it is."""
+    if space == "task" and robot.shape[1] == 3:
+        return robot
     if robot.shape[1] != 7:
         raise TrialError(f"segment.end: rule approach needs the robot part's position, the "
                          f"forward kinematics of Baxter's 7 joints; got {robot.shape[1]} robot "
@@ -149,7 +163,8 @@ def cut_rows(spec: DataSpec, table: FloatArray, extra: FloatArray, n_human: int
     layout, segment = spec.layout, spec.layout.segment
     report: dict[str, Any] = {}
     if segment is not None and table.shape[0] > 1:
-        robot = robot_points(table[:, 1 + n_human:]) if segment.needs_robot else None
+        robot = (robot_points(table[:, 1 + n_human:], spec.robot_space) if segment.needs_robot
+                 else None)
         columns = dict(zip(segment.columns, extra[:, 3:].T, strict=True))
         try:
             first, last, found = bounds(segment, table[:, 0], extra[:, :3], robot, columns)

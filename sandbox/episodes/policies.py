@@ -42,7 +42,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sandbox.core import DynamicPredictor, IProMP, StaticPredictor
-from sandbox.episodes.policy import Beliefs
+from sandbox.episodes.policy import Beliefs, check_joint_model
 from sandbox.robot import TIP_LINK, joint_speed_limits
 from sandbox.validation import check_array, check_positive
 
@@ -242,6 +242,7 @@ class IProMPPolicy(_Steering):
 
     def _setup(self, model, observe, control_hz: float, close_radius: float,
                max_velocity) -> None:
+        check_joint_model(model)
         self.observe, self._required = _observed(model, observe)
         self._setup_steering(control_hz, close_radius, max_velocity)
         self.subsample = max(1, int(round(float(control_hz) / PREDICTOR_HZ)))

@@ -157,3 +157,17 @@ def beliefs_of(policy: Any) -> Beliefs:
     if isinstance(beliefs, Beliefs):
         return beliefs
     return Beliefs(task=str(getattr(policy, "task", "")))
+
+
+def check_joint_model(model) -> None:
+    """Refuse (``ValueError``, one line) a model that does not plan Baxter's 7 arm joints:
+    a task-space robot part would need inverse kinematics onto the arm (the any-arm
+    issue 23), which is not built."""
+    if getattr(model, "robot_space", "joint") == "task":
+        raise ValueError("the model's robot part is in task space (a position, m): the "
+                         "environments drive Baxter's 7 arm joints and following a task-space "
+                         "plan needs inverse kinematics onto the arm (issue 23, not built "
+                         "yet); fit a joint-space model for episodes and play")
+    if getattr(model, "n_robot", 7) != 7:          # an unfitted model: its own error later
+        raise ValueError(f"the model drives {model.n_robot} robot dims, the environments' "
+                         f"Baxter arm has 7 joints")

@@ -100,6 +100,7 @@ class _Set(NamedTuple):
     name: str
     folder: Path
     demos: list
+    spec: Any = None           # a DataSpec: the environment replays motions loaded with it
 
 
 def replay_mode(data: str | Path, test: str | Path | None = None, *,
@@ -127,7 +128,7 @@ def replay_mode(data: str | Path, test: str | Path | None = None, *,
 
 def plan_replays(data: str | Path, n: int, seed: int, *, test: str | Path | None = None,
                  observe: Sequence[str] | None = None,
-                 options: Mapping[str, Any] | None = None) -> list[Replay]:
+                 options: Mapping[str, Any] | None = None, spec=None) -> list[Replay]:
     """The ``n`` episodes replaying recorded trials, in the mode :func:`replay_mode` says.
 
     Parameters
@@ -144,6 +145,11 @@ def plan_replays(data: str | Path, n: int, seed: int, *, test: str | Path | None
         The modalities the models are fitted on (default the hand).
     options : mapping, optional
         Extra ``reset`` options for every episode.
+    spec : DataSpec, optional
+        The sets' layout (:mod:`sandbox.data.spec`); the replayed motion (its ``hand``
+        and the body modalities it has) is then loaded with it and given to the
+        environment as its ``motion``. Its robot part must be Baxter's 7 joints:
+        a task-space one would need inverse kinematics onto the arm (issue 23).
 
     Returns
     -------
@@ -156,41 +162,50 @@ def plan_replays(data: str | Path, n: int, seed: int, *, test: str | Path | None
         have none of (named); a ``test`` that is not one set.
     """
     mode = replay_mode(data, test)
-    observe = tuple(observe or ("hand",))
+    if spec is not None and spec.robot_space == "task":
+        raise ValueError("spec: the robot part is in task space (a position, m); replaying "
+                         "it on Baxter's arm needs inverse kinematics (issue 23, not built "
+                         "yet): episodes need a joint-space robot part")
+    observe = tuple(observe or (spec.observe if spec is not None else ("hand",)))
     options = dict(options or {})
     if mode == LEAVE_ONE_OUT:
-        return _leave_one_out(_load(Path(data), str(data), observe), n, seed, options)
-    fit = _load_sets(Path(data), observe)
+        return _leave_one_out(_load(Path(data), str(data), observe, spec=spec), n, seed,
+                              options)
+    fit = _load_sets(Path(data), observe, spec)
     if test is not None:                    # cross-session
-        replayed = _load(Path(test), str(test), observe, "test")
+        replayed = _load(Path(test), str(test), observe, "test", spec)
         return _cross_session(fit, str(data), replayed, n, seed, options)
     return _leave_one_session_out(fit, n, seed, options)
 
 
-def _load(folder: Path, name: str, observe, option: str = "data") -> _Set:
-    """The usable trials of one set; ``ValueError`` if it has none."""
-    from sandbox.data.recorded import load_recorded
+def _load(folder: Path, name: str, observe, option: str = "data", spec=None) -> _Set:
+    """The usable trials of one set; ``ValueError`` (one line) if it has none."""
+    import warnings
+
+    from sandbox.data.recorded import SkippedTrialWarning, load_recorded
 
     try:
-        demos, skipped = load_recorded(folder, observe=observe)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", SkippedTrialWarning)   # counted in the error
+            demos, skipped = load_recorded(folder, observe=observe, spec=spec)
     except ValueError as error:
         raise ValueError(f"{option}: {str(error).removeprefix('data: ')}") from None
     if not demos:
-        reasons = sorted({reason for _, reason in skipped})
-        raise ValueError(f"{option}: no usable trial in {str(folder)!r} ({len(skipped)} "
-                         f"skipped: {'; '.join(reasons)[:200]})")
-    return _Set(name, folder, demos)
+        from sandbox.data.skipped import no_usable
+
+        raise no_usable(f"{option} {folder}", [f"skipped {f}: {r}" for f, r in skipped])
+    return _Set(name, folder, demos, spec)
 
 
-def _load_sets(root: Path, observe) -> list[_Set]:
+def _load_sets(root: Path, observe, spec=None) -> list[_Set]:
     """The sessions of a folder of sessions (sorted by name), or ``root`` as one set."""
     from sandbox.data.sessions import find_sessions
 
     sessions = find_sessions(root, "data")
     if not sessions:
-        return [_load(root, str(root), observe)]
-    return [_load(folder, folder.name, observe, f"data session {folder.name}") for folder in
-            sessions]
+        return [_load(root, str(root), observe, spec=spec)]
+    return [_load(folder, folder.name, observe, f"data session {folder.name}", spec)
+            for folder in sessions]
 
 
 def _picks(size: int, n: int, seed: int) -> list[int]:
@@ -211,9 +226,37 @@ def _fit(demos: list):
 def _replay(seed: int, model, held_out, replayed: _Set, options: dict,
             provenance: dict) -> Replay:
     """The episode replaying ``held_out`` (a trial of ``replayed``) with ``model``."""
-    opts = {**grasp_options(model), **options, "source": str(replayed.folder),
-            "task": held_out.task, "trial": Path(held_out.source).name}
+    if replayed.spec is None:
+        opts = {**grasp_options(model), **options, "source": str(replayed.folder),
+                "task": held_out.task, "trial": Path(held_out.source).name}
+    else:                           # the environment cannot read the layout: give it the motion
+        opts = {**grasp_options(model), **options, "motion": _motion(held_out, replayed.spec)}
     return Replay(seed, model, opts, held_out, {**provenance, "session": replayed.name})
+
+
+def _motion(held_out, spec):
+    """The environment's motion of a trial loaded with ``spec`` (:func:`spec_motion`)."""
+    return spec_motion(held_out.source, held_out.task, spec,
+                       [m.name for m in held_out.modalities], smooth=held_out)
+
+
+def spec_motion(path, task: str, spec, observe, smooth=None):
+    """The environment's replay (``HumanMotion``) of the trial ``path`` of a set described
+    by ``spec``: its smoothed ``hand`` as the true motion, its causal stream as measured
+    (:func:`sandbox.envs.sources.motion_of`); ``smooth``: the smoothed trial if loaded.
+
+    ``ValueError`` if ``observe`` has no ``hand`` (the environment's human is driven by it).
+    """
+    from sandbox.data.recorded import load_trial
+    from sandbox.envs.sources import motion_of
+
+    if "hand" not in list(observe):
+        raise ValueError("spec: expected the observed modalities to include 'hand' (x, y, z, "
+                         "m): the environment's human is driven by it")
+    if smooth is None:
+        smooth = load_trial(path, task=task, spec=spec, observe=list(observe))
+    causal = load_trial(path, task=task, spec=spec, observe=list(observe), preprocess="causal")
+    return motion_of(smooth, causal)
 
 
 def _leave_one_out(data: _Set, n: int, seed: int, options: dict) -> list[Replay]:

@@ -24,6 +24,7 @@ A scenario file is one mapping (YAML needs PyYAML; paths are relative to the fil
     #   recorded: ../data/birl-handover-20180329      # 3. a recorded trial replayed
     #   task: pencil_box
     #   trial: 3                    #    index among the task's trials or file name
+    #   spec: layout.yaml           #    the set's spec file (play --spec), if not the built-in
     policy:
       type: dynamic                 # dynamic (dow_t) | static (ratio)
       dow_t: 0.2
@@ -65,7 +66,7 @@ ENV_MODALITIES = ("hand", "arm", "emg")
 SYNTHETIC_MODALITIES = ("hand", "arm")
 HUMAN_KEYS = {"synthetic": ("task", "switch_to", "switch_phase"),
               "waypoints": ("waypoints", "task", "tracker"),
-              "recorded": ("recorded", "task", "trial")}
+              "recorded": ("recorded", "task", "trial", "spec")}
 POLICY_KEYS = {"dynamic": ("type", "dow_t", "options"), "static": ("type", "ratio", "options")}
 MODEL_KEYS = ("demos", "seed", "file", "options")
 #: Folder of the example scenarios shipped with the package.
@@ -163,20 +164,25 @@ def _exists(path: Path, kind: str) -> bool:
 
 def load_scenario(path: str | Path, *, observe: list[str] | str | None = None,
                   model: str | Path | None = None, options: Mapping | None = None,
-                  model_options: Mapping | None = None) -> Scenario:
+                  model_options: Mapping | None = None, spec: str | Path | None = None) -> Scenario:
     """Read and validate a scenario file (or a shipped example by name).
 
     ``observe`` (e.g. ``"hand,arm"``), if given, replaces the file's ``observe:``;
     ``model`` (a saved model's path, relative to the working folder) its
     ``model.file``. ``options`` (predictor) and ``model_options`` (IProMP) fill
     in what the file's ``policy.options`` and ``model.options`` do not set
-    (``play --config``).
+    (``play --config``). ``spec`` (a spec file, relative to the working folder) is the
+    recorded human's ``human.spec`` (``play --spec``); refused for another human.
     """
     path = resolve(path)
     check = _Checker(path)
     data = check.keys(read_mapping(path), "top level", TOP_KEYS)
     if observe is not None:
         data["observe"] = observe
+    if spec is not None:
+        if not isinstance(data.get("human"), Mapping) or "recorded" not in data["human"]:
+            check.fail("human", "a recorded human (human.recorded) with --spec", data.get("human"))
+        data["human"] = {**data["human"], "spec": str(Path(spec).resolve())}
     data = _fill_in(check, data, model, options, model_options)
     for key in ("human", "policy"):
         if key not in data:
@@ -189,18 +195,19 @@ def load_scenario(path: str | Path, *, observe: list[str] | str | None = None,
         obj = check.choice(obj, "object", urdf.OBJECTS)
     seed = check.bounded(data.get("seed", 0), "seed", "seed")
     kind, human = _human(check, data["human"], family, path.parent, seed)
-    spec = _model(check, data.get("model"), path.parent)
-    names = _observe(check, data.get("observe", default_observe(spec, ENV_MODALITIES)))
-    if "file" in spec:
-        check_model_file(check, spec["file"], names, human_tasks(kind, human, family))
-    if kind != "recorded" and "file" not in spec and not set(names) <= set(SYNTHETIC_MODALITIES):
+    model_spec = _model(check, data.get("model"), path.parent)
+    names = _observe(check, data.get("observe", default_observe(model_spec, ENV_MODALITIES)))
+    if "file" in model_spec:
+        check_model_file(check, model_spec["file"], names, human_tasks(kind, human, family))
+    synthetic_model = kind != "recorded" and "file" not in model_spec
+    if synthetic_model and not set(names) <= set(SYNTHETIC_MODALITIES):
         check.fail("observe", f"modalities of the synthetic model {list(SYNTHETIC_MODALITIES)} "
                               "(EMG is not simulated: use a recorded human or a model file)",
                    list(names))
     return Scenario(
         path=path, name=str(data.get("name", path.stem)), family=family,
         seed=seed, human_kind=kind, human=human,
-        policy=_policy(check, data["policy"]), model=spec,
+        policy=_policy(check, data["policy"]), model=model_spec,
         object=obj, speed=check.bounded(data.get("speed", 1.0), "speed", "speed"),
         time_limit=check.bounded(data.get("time_limit", 6.0), "time_limit", "time_limit"),
         observe=names)
@@ -269,7 +276,25 @@ def _human(check: _Checker, data: Any, family: str, folder: Path,
         if trial is not None and not isinstance(trial, (int, str)) or isinstance(trial, bool):
             check.fail("human.trial", "an index or a file name", trial)
         human.update(_pick_recorded(check, root, human.get("task"), trial, seed))
+        if human.get("spec") is not None:
+            human["spec"] = _spec(check, folder / check.text(human["spec"], "human.spec"))
     return kind, human
+
+
+def _spec(check: _Checker, path: Path):
+    """A recorded human's spec file, checked: Baxter's 7 joints in joint space."""
+    from sandbox.data.spec import DataSpec
+
+    try:
+        spec = DataSpec.load(path)
+        if spec.robot_space == "task":
+            raise ValueError("the robot part is in task space (a position, m); following it "
+                             "on Baxter's arm needs inverse kinematics (issue 23, not built)")
+        if len(spec.robot) != 7:
+            raise ValueError(f"expected Baxter's 7 arm joints as robot, got {list(spec.robot)}")
+    except ValueError as error:
+        raise ValueError(f"scenario {check.path}: human.spec: {error}") from None
+    return spec
 
 
 def _pick_recorded(check: _Checker, root: Path, task, trial, seed: int) -> dict:

@@ -25,10 +25,19 @@ def build_model(scenario: Scenario):
         return IProMP.load(scenario.model["file"])
     options = scenario.model.get("options", {})
     if scenario.human_kind == "recorded":
-        from sandbox.data.recorded import load_recorded
+        import warnings
+
+        from sandbox.data.recorded import SkippedTrialWarning, load_recorded
+        from sandbox.data.skipped import no_usable
 
         held_out = Path(scenario.human["file"]).resolve()
-        demos, _ = load_recorded(scenario.human["recorded"], observe=scenario.observe)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", SkippedTrialWarning)      # counted in the error
+            demos, skipped = load_recorded(scenario.human["recorded"], observe=scenario.observe,
+                                           spec=scenario.human.get("spec"))
+        if not demos:
+            raise no_usable(f"human.recorded {scenario.human['recorded']}",
+                            [f"skipped {f}: {r}" for f, r in skipped])
         # Any: a Demonstration is frozen, the core's DemonstrationLike declares plain attributes
         others: list[Any] = [d for d in demos if Path(d.source).resolve() != held_out]
         return attach_geometry(IProMP(**options).fit(others), others)
@@ -89,6 +98,10 @@ def reset_options(scenario: Scenario, model=None) -> dict[str, Any]:
     human = scenario.human
     if scenario.human_kind == "synthetic":
         opts.update({k: human[k] for k in HUMAN_KEYS["synthetic"] if human.get(k) is not None})
+    elif scenario.human_kind == "recorded" and human.get("spec") is not None:
+        from sandbox.episodes.replays import spec_motion  # a layout the env cannot read
+
+        opts["motion"] = spec_motion(human["file"], human["task"], human["spec"], scenario.observe)
     elif scenario.human_kind == "recorded":
         opts.update(source=human["recorded"], task=human.get("task"), trial=human.get("trial"))
     else:

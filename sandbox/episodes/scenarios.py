@@ -115,7 +115,7 @@ def run_scenario(scenario: str = "diverging", policy: str | Callable = "dynamic"
                  data: str | Path | None = None, test: str | Path | None = None, env=None,
                  model=None, options: Mapping[str, Any] | None = None,
                  observe: Sequence[str] | str | None = None, session: int | None = None,
-                 train_session: int | None = None) -> list[EpisodeResult]:
+                 train_session: int | None = None, spec=None) -> list[EpisodeResult]:
     """Run ``n_episodes`` seeded episodes of ``scenario`` with ``policy``; a list of
     :class:`EpisodeResult`, one per episode.
 
@@ -154,12 +154,14 @@ def run_scenario(scenario: str = "diverging", policy: str | Callable = "dynamic"
         ``session``, the model is fitted on ``train_session``'s demos (default the
         same) and ``recorded_robot`` replays each motion's own robot
         (:mod:`sandbox.episodes.sessions`).
+    spec : DataSpec, optional
+        ``recorded`` only: the sets' layout (:func:`~sandbox.episodes.replays.plan_replays`).
     """
     sessions = (session, train_session)
     observe = _check_run(scenario, policy, n_episodes, data, observe, test, sessions)
     make_policy = _policy_factory(policy, dow_t, ratio, observe)
     episodes = _episodes(scenario, int(n_episodes), int(seed), data, model, options or {},
-                         observe, test, sessions)
+                         observe, test, sessions, spec)
     own_env = env is None
     env = _make_env(scenario) if own_env else env
     try:
@@ -299,10 +301,14 @@ def _policy_factory(policy, dow_t: float, ratio: float, observe) -> Callable:
 
 
 def _episodes(scenario, n, seed, data, model, options, observe, test=None,
-              sessions=(None, None)) -> list[Replay]:
+              sessions=(None, None), spec=None) -> list[Replay]:
     """Every episode's seed, model, reset options, replayed demo (or None) and provenance."""
     if scenario == "recorded":
-        return plan_replays(data, n, seed, test=test, observe=observe, options=options)
+        return plan_replays(data, n, seed, test=test, observe=observe, options=options,
+                            spec=spec)
+    if spec is not None:
+        raise ValueError(f"spec: expected with the recorded scenario (a spec describes "
+                         f"recordings), got scenario {scenario!r}")
     if sessions[0] is not None:
         from sandbox.episodes.sessions import session_episodes
 

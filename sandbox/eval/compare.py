@@ -117,6 +117,7 @@ def evaluate_method_trial(predictor, test, truth, model, fk, curve=CURVE,
     ``truth`` is the trial preprocessed for training: its motion's end is the
     true duration T (as in :func:`~sandbox.eval.loocv.evaluate_trial`).
     """
+    fk = metrics.goal_map(model, fk)          # task space: the positions themselves
     t = test.times - test.times[0]
     q = test.robot
     T = float(t[model.motion_end(t, q, truth.human)])
@@ -310,6 +311,9 @@ def to_markdown(comparison: dict) -> str:
     for method, row in comparison["rows"].items():
         cells = []
         for key, _, digits in COLUMNS:
+            if row[key] is None:          # e_q of a task-space robot part
+                cells.append("n/a")
+                continue
             scale = 1000.0 if key == "update_s_median" else 1.0
             lo, hi = (np.array(row[f"{key}_ci"], dtype=float) * scale).tolist()
             cells.append(f"{row[key] * scale:.{digits}f} [{lo:.{digits}f}, {hi:.{digits}f}]")

@@ -242,11 +242,15 @@ def per_session(trials: list[dict]) -> dict[str, dict]:
     return out
 
 
-def _macro(rows: list[dict], tasks: list[str], get, keys) -> dict[str, float]:
+def _macro(rows: list[dict], tasks: list[str], get, keys) -> dict[str, float | None]:
     """The mean over tasks of each task's mean (as :func:`~sandbox.eval.report.build_report`)."""
     groups = np.array([r["task"] for r in rows])
     out = {}
     for key in keys:
-        values = np.array([get(r)[key] for r in rows], dtype=float)
+        raw = [get(r)[key] for r in rows]
+        if all(v is None for v in raw):       # not applicable (e_q in task space)
+            out[key] = None
+            continue
+        values = np.array(raw, dtype=float)
         out[key] = float(np.mean([values[groups == g].mean() for g in tasks]))
     return out

@@ -45,6 +45,8 @@ def data_token(train, test) -> str:
             digest.update(np.ascontiguousarray(array, dtype=float).tobytes())
         digest.update(repr((demo.task, demo.source, demo.human_names, demo.robot_names,
                             [(m.name, m.kind) for m in demo.modalities])).encode())
+        if getattr(demo, "robot_space", "joint") != "joint":    # joint keeps its old tokens
+            digest.update(f"robot_space {demo.robot_space}".encode())
         for name in sorted(demo.meta):
             value = demo.meta[name]
             digest.update(name.encode())

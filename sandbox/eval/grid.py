@@ -115,6 +115,7 @@ OPTIONS: dict[str, Callable[[str, Any], Any]] = {
     "noise_floors": _floors,
     "settle_tol": _optional("settle_tol"),
     "arrive_tol": _optional("arrive_tol"),
+    "jitter_floor": _optional("jitter_floor"),
     "likelihood": _choice(LIKELIHOODS),
     "window_mode": _choice(WINDOW_MODES),
     "until_end": _flag,

@@ -55,8 +55,8 @@ class EvalConfig:
     likelihood, window_mode, n_candidates, refine_steps, blend_rate, blend_delay, until_end,
     end_prob :
         predictor options (:class:`~sandbox.core.DynamicPredictor`).
-    n_basis, regularizer, noise_scale, noise_floor, signal_floor, noise_floors, settle_tol,
-    arrive_tol, robot_tol :
+    n_basis, regularizer, noise_scale, noise_floor, signal_floor, noise_floors, jitter_floor,
+    settle_tol, arrive_tol, robot_tol :
         model options (:class:`~sandbox.core.IProMP`).
     observe : modalities the models observe (None: all the demonstrations carry).
     goal_tol : distance (m) for time-to-correct.
@@ -80,6 +80,7 @@ class EvalConfig:
     noise_floor: float = 0.02
     signal_floor: float = SIGNAL_FLOOR
     noise_floors: tuple[tuple[str, float], ...] = ()
+    jitter_floor: float | None = None
     settle_tol: float | None = 0.05
     arrive_tol: float | None = 0.02
     robot_tol: float | None = 0.01
@@ -92,6 +93,7 @@ class EvalConfig:
         return IProMP(n_basis=self.n_basis, regularizer=self.regularizer,
                       noise_scale=self.noise_scale, noise_floor=self.noise_floor,
                       signal_floor=self.signal_floor, noise_floors=dict(self.noise_floors),
+                      jitter_floor=self.jitter_floor,
                       settle_tol=self.settle_tol, arrive_tol=self.arrive_tol,
                       robot_tol=self.robot_tol)
 
@@ -120,9 +122,12 @@ def evaluate_trial(model: IProMP, test, config: EvalConfig, fk, truth=None) -> d
     """All measures of one held-out trial (see the module docstring).
 
     ``truth`` is the same trial preprocessed for training (smoothed; default
-    ``test``): its motion's end is the true duration.
+    ``test``): its motion's end is the true duration. ``fk`` maps joints to the
+    gripper position (m); a model whose robot part is in task space is scored on
+    its positions instead (:func:`~sandbox.eval.metrics.goal_map`; e_q None).
     """
     truth = test if truth is None else truth
+    fk = metrics.goal_map(model, fk)
     t = test.times - test.times[0]
     q = test.robot
     T = float(t[model.motion_end(t, q, truth.human)])
@@ -177,8 +182,9 @@ def predictions_at(model, scorer, t_obs, y_obs, times, config, opts) -> dict:
 
 def _score(traj, q, goal, fk, e_phi) -> dict:
     mean, cov = traj
+    e_q = None if fk is metrics.task_goal else metrics.joint_rms(mean, q)   # n/a in task space
     return {"e_p": float(np.linalg.norm(fk(mean[-1]) - goal)),
-            "e_q": metrics.joint_rms(mean, q), "e_phi": float(e_phi),
+            "e_q": e_q, "e_phi": float(e_phi),
             "nll": metrics.gaussian_nll(q, mean, cov), "coverage": metrics.coverage(q, mean, cov)}
 
 

@@ -4,6 +4,8 @@ For a test trial with true robot joints q(t) (T x Q) at times t, true duration T
 
 * :func:`joint_rms` (e_q): RMS over time steps and joints of q_hat(t) - q(t) (rad);
 * :func:`goal_error` (e_p): distance (m) between forward kinematics of q_hat(T) and q(T);
+  for a robot part in task space (a position, m) the distance between the predicted and
+  the true final positions themselves (:func:`goal_map`), and e_q does not apply (None);
 * e_phi: ``|T_hat - T|`` (s);
 * :func:`time_to_correct`: earliest fraction of the motion after which the
   predicted goal stays within ``tol`` of the true goal;
@@ -31,6 +33,17 @@ def joint_rms(q_hat: FloatArray, q: FloatArray) -> float:
 def goal_error(q_hat_end: FloatArray, q_end: FloatArray, fk: Callable) -> float:
     """e_p: distance (m) between ``fk(q_hat_end)`` and ``fk(q_end)``."""
     return float(np.linalg.norm(fk(q_hat_end) - fk(q_end)))
+
+
+def task_goal(x: FloatArray) -> FloatArray:
+    """The goal of a task-space robot part: the position itself (m), shape as given."""
+    return np.asarray(x, dtype=np.float64)
+
+
+def goal_map(model, fk: Callable) -> Callable:
+    """What e_p measures the distance between: ``fk`` (joints -> gripper position, m) for a
+    joint-space model, :func:`task_goal` for one whose robot part is in task space."""
+    return task_goal if getattr(model, "robot_space", "joint") == "task" else fk
 
 
 def time_to_correct(fractions: FloatArray, goal_errors: FloatArray, tol: float = 0.05) -> float:

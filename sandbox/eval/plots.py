@@ -59,11 +59,17 @@ def _direct(report, path):
     windows = _windows(report)
     x = [float(w) for w in windows]
     for ax, (key, label) in zip(axes, MEASURES):
+        if report["dynamic"][windows[0]]["mean"][key] is None:     # e_q in task space
+            ax.text(0.5, 0.5, f"{key}: n/a\n(robot part in task space)", ha="center",
+                    transform=ax.transAxes)
+            ax.set_axis_off()
+            continue
         for task in report["tasks"] + ["mean"]:
-            y = [report["dynamic"][w][task][key] for w in windows]
+            y = np.array([report["dynamic"][w][task][key] for w in windows], dtype=float)
             style = dict(color="k", lw=2.5) if task == "mean" else dict(lw=1.2, alpha=0.8)
             ax.plot(x, y, marker="o", label=task, **style)
-        ci = np.array([report["dynamic"][w]["mean"][key + "_ci"] for w in windows])
+        ci = np.array([report["dynamic"][w]["mean"][key + "_ci"] for w in windows],
+                      dtype=float)                    # None (e_q in task space): not drawn
         ax.fill_between(x, ci[:, 0], ci[:, 1], color="k", alpha=0.12)
         ax.set_xscale("log")
         ax.set_xticks(x, [f"{v:g}" for v in x])
@@ -81,7 +87,7 @@ def _comparative(report, path):
     x = [float(f) for f in ratios]
     for ax, (key, label) in zip(axes, MEASURES):
         for w in _windows(report):
-            y = [report["differences"][f][w][key] for f in ratios]
+            y = np.array([report["differences"][f][w][key] for f in ratios], dtype=float)
             ax.plot(x, y, marker="o", label=f"dow_t = {w} s")
         ax.axhline(0.0, color="k", lw=0.8)
         ax.set_xlabel("static observed ratio f")
@@ -99,7 +105,8 @@ def _average(report, other, path):
         ratios = list(rep["static"])
         x = [float(f) for f in ratios]
         for ax, (key, label) in zip(axes, MEASURES):
-            y = [np.mean([rep["differences"][f][w][key] for w in _windows(rep)]) for f in ratios]
+            y = [np.array([rep["differences"][f][w][key] for w in _windows(rep)],
+                          dtype=float).mean() for f in ratios]
             ax.plot(x, y, marker="o", label=rep["dataset"])
             ax.axhline(0.0, color="k", lw=0.8)
             ax.set_xlabel("static observed ratio f")

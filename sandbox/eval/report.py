@@ -52,9 +52,13 @@ def _section(trials: list[dict], tasks: list[str], get, keys, n_boot: int,
         key_ = (task, groups.tobytes(), n_boot)
         if key_ not in cache:
             cache[key_] = metrics.within_group_draws(groups, n_boot, np.random.default_rng(0))
-        entry = {}
+        entry: dict = {}
         for key in keys:
-            values = np.array([get(r)[key] for r in rows], dtype=float)
+            raw = [get(r)[key] for r in rows]
+            if raw and all(v is None for v in raw):     # not applicable (e_q in task space)
+                entry[key], entry[f"{key}_ci"] = None, [None, None]
+                continue
+            values = np.array(raw, dtype=float)
             if task == "mean":
                 entry[key] = float(np.mean([values[groups == g].mean() for g in tasks]))
             else:
@@ -96,7 +100,7 @@ def build_report(trials: list[dict], config: dict, dataset: str, runtime_s: floa
     }
     report["window_metric"], report["best_window"] = _window_metric(report, windows)
     report["differences"] = {                                   # eq. 19: static - dynamic
-        f: {w: {m: report["static"][f]["mean"][m] - report["dynamic"][w]["mean"][m]
+        f: {w: {m: _minus(report["static"][f]["mean"][m], report["dynamic"][w]["mean"][m])
                 for m in MEASURES} for w in windows} for f in ratios}
     report["static_recognition"] = {
         task: {f: report["static"][f][task]["recognition"] for f in ratios}
@@ -118,6 +122,16 @@ def build_report(trials: list[dict], config: dict, dataset: str, runtime_s: floa
                        for w in windows}
     report["runtime_s"] = round(float(runtime_s), 2)
     return report
+
+
+def _minus(a, b):
+    """``a - b``, None when a measure does not apply (e_q of a task-space robot part)."""
+    return None if a is None or b is None else a - b
+
+
+def fmt(value, spec: str = ".3f") -> str:
+    """A measure in a table: ``format(value, spec)``, "n/a" for None (not applicable)."""
+    return "n/a" if value is None else format(value, spec)
 
 
 def _window_metric(report: dict, windows: list[str]):
@@ -199,7 +213,7 @@ def _sessions_table(report: dict) -> list[str]:
         rows += [(f"ratio {f}", v) for f, v in entry["static"].items()]
         for label, values in rows:
             out.append(f"| {name} | {n} | {label} | "
-                       + " | ".join(f"{values[k]:.3f}" for k in keys) + " |")
+                       + " | ".join(fmt(values[k]) for k in keys) + " |")
     return out + [""]
 
 
@@ -213,7 +227,8 @@ def _table(title: str, rows: dict, keys) -> list[str]:
     head = " | ".join(f"{k} ({units[k]})" if k in units else NAMES.get(k, k) for k in keys)
     out = [f"#### {title}", "", f"| | {head} |", "|---|" + "---|" * len(keys)]
     for name, entry in rows.items():
-        cells = [f"{entry[k]:.3f} [{entry[k + '_ci'][0]:.3f}, {entry[k + '_ci'][1]:.3f}]"
+        cells = [fmt(entry[k]) if entry[k] is None else
+                 f"{entry[k]:.3f} [{entry[k + '_ci'][0]:.3f}, {entry[k + '_ci'][1]:.3f}]"
                  for k in keys]
         out.append(f"| {name} | " + " | ".join(cells) + " |")
     return out + [""]

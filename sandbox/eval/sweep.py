@@ -234,6 +234,10 @@ def sweep(data: str, grid: str | Path, out: str | Path, *, workers: int = 2,
                                              cache=cache)
             for reason in skipped:
                 log(f"skipped ({','.join(obs)}): {reason}")
+            if not train:
+                from sandbox.data.skipped import no_usable
+
+                raise no_usable(str(data), skipped)
             trials[obs] = (train, test)
         return run_sweep(ex, trials, points, out, base=base, data=described,
                          dataset=str(data), force=force, log=log)

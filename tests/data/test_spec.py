@@ -72,3 +72,28 @@ def test_spec_errors():
     with pytest.raises(ValueError, match="more than one modality"):
         DataSpec(modalities={**BUILT_IN, "twin": Modality("twin", HAND.dims)}).observed(
             "hand,twin")
+
+
+# --------------------------------------------------------------- robot part (issue 28 item 2)
+def test_a_robot_part_in_task_space_is_declared_and_kept(tmp_path):
+    spec = DataSpec.from_dict({"robot": {"columns": ["rx", "ry", "rz"], "space": "task"}})
+    assert spec.robot == ("rx", "ry", "rz") and spec.robot_space == "task"
+    assert DataSpec.from_dict(spec.to_dict()) == spec          # the cache key's form
+    assert DataSpec.from_dict({"robot": {"columns": ["a"]}}).robot_space == "joint"
+    assert DataSpec().robot_space == "joint" and DataSpec().to_dict()["robot"][0] == "left_s0"
+    path = tmp_path / "s.yaml"
+    path.write_text("robot: {columns: [rx, ry, rz], space: task}\n")
+    assert resolve(path, robot_columns=["a", "b", "c"]).robot_space == "task"
+
+
+@pytest.mark.parametrize(("robot", "message"), [
+    ({"columns": ["a"], "space": "cartesian"}, r"robot.space: expected one of \['joint', "
+                                               r"'task'\], got 'cartesian'"),
+    ({"columns": ["a"], "frame": "base"}, r"robot: unknown keys \['frame'\]; expected some of "
+                                          r"\['columns', 'space'\]"),
+    ({"space": "task"}, "robot: 'columns' is missing"),
+    ({"columns": "rx", "space": "task"}, "robot: expected a list of names"),
+])
+def test_a_bad_robot_entry_is_one_line_naming_the_key(robot, message):
+    with pytest.raises(ValueError, match=message):
+        DataSpec.from_dict({"robot": robot})
