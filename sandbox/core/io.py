@@ -126,16 +126,7 @@ def save_model(model: IProMP, path: str | os.PathLike) -> None:
     if getattr(model, "jitter_floor", None) is not None:
         meta["hyperparameters"]["jitter_floor"] = model.jitter_floor
     arrays = {"noise": model.noise, "scale": model.scale}
-    cal = getattr(model, "calibration", None)
-    if cal is not None:
-        meta["familiarity"] = {"threshold": cal.threshold, "alpha": cal.alpha,
-                               "likelihood": cal.likelihood, "subsample": cal.subsample,
-                               "dow_t": cal.dow_t, "n_motions": cal.n_motions}
-        arrays.update(familiarity_edges=cal.edges, familiarity_quantiles=cal.quantiles,
-                      familiarity_counts=cal.counts)
-        if cal.extra is not None:
-            meta["familiarity"]["components"] = list(cal.components)
-            arrays["familiarity_extra"] = cal.extra
+    _put_calibration(getattr(model, "calibration", None), meta, arrays)
     if getattr(model, "session", None):
         meta["session"] = model.session     # kept, not interpreted (e.g. the meeting geometry)
     arrays["metadata"] = np.array(json.dumps(meta))
@@ -152,6 +143,20 @@ def save_model(model: IProMP, path: str | os.PathLike) -> None:
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
+
+
+def _put_calibration(cal, meta: dict, arrays: dict) -> None:
+    """Add a familiarity calibration (if any) to the file's metadata and arrays, in place."""
+    if cal is None:
+        return
+    meta["familiarity"] = {"threshold": cal.threshold, "alpha": cal.alpha,
+                           "likelihood": cal.likelihood, "subsample": cal.subsample,
+                           "dow_t": cal.dow_t, "n_motions": cal.n_motions}
+    arrays.update(familiarity_edges=cal.edges, familiarity_quantiles=cal.quantiles,
+                  familiarity_counts=cal.counts)
+    if cal.extra is not None:
+        meta["familiarity"]["components"] = list(cal.components)
+        arrays["familiarity_extra"] = cal.extra
 
 
 def _output_path(path) -> Path:
