@@ -279,14 +279,10 @@ class PredictorBase:
         Returns None if there is nothing to update from. ``t`` earlier than the
         last update is a ``ValueError``: the plan before it may have been executed.
         """
-        if t is None:
-            if not np.isfinite(self._last_time):
-                raise ValueError("update: no observation yet and no time given")
-            t = self._last_time
-        t = self._check_update_time(t)
-        times, values = self._window(t)
-        if times.size == 0:
+        window = self._update_window(t)
+        if window is None:
             return None
+        t, times, values = window
         start = _time.perf_counter()
         stats = self._stats if self._stats is not None and self._stats.count == times.size else None
         first = self.stream.first_time
@@ -295,6 +291,17 @@ class PredictorBase:
                        refine_steps=self.refine_steps, stats=stats,
                        rest=bool(times[0] <= first))   # a later window is no rest (rest.py)
         return self.apply(t, pred, n_observations=int(times.size), started=start)
+
+    def _update_window(self, t: float | None):
+        """``(t, times, values)`` of an update at ``t`` (default: the last observation
+        time), checked against the last update; None if the window holds nothing."""
+        if t is None:
+            if not np.isfinite(self._last_time):
+                raise ValueError("update: no observation yet and no time given")
+            t = self._last_time
+        t = self._check_update_time(t)
+        times, values = self._window(t)
+        return None if times.size == 0 else (t, times, values)
 
     def apply(self, t: float, prediction: Prediction, *, n_observations: int = 0,
               started: float | None = None) -> Update | None:

@@ -100,6 +100,8 @@ class MethodPredictor(DynamicPredictor):
 
     #: The method's name in the registry (:data:`sandbox.methods.METHODS`).
     name = ""
+    #: Per-task filters of a filtering method (BIP, eBIP), fed by :meth:`_feed_filters`.
+    filters: list
 
     def __init__(self, library: DemoLibrary, dow_t: float = 0.2, **options) -> None:
         if not isinstance(library, DemoLibrary):
@@ -119,17 +121,24 @@ class MethodPredictor(DynamicPredictor):
     def update(self, t: float | None = None):
         """Update now (at ``t``, default the last observation time); see
         :meth:`~sandbox.core.DynamicPredictor.update`."""
-        if t is None:
-            if not np.isfinite(self._last_time):
-                raise ValueError("update: no observation yet and no time given")
-            t = self._last_time
-        t = self._check_update_time(t)
-        times, values = self._window(t)
-        if times.size == 0:
+        window = self._update_window(t)
+        if window is None:
             return None
+        t, times, values = window
         start = _time.perf_counter()
         pred = self.estimate(t, times, values)
         return self.apply(t, pred, n_observations=int(times.size), started=start)
+
+    def _feed_filters(self, t: float, times: FloatArray, values: FloatArray) -> None:
+        """Run each task's filter (``self.filters``: ``predict(t)``, ``correct(y)``) over the
+        observations not fed yet, then predict all of them to ``t`` (s)."""
+        for ti, yi in zip(times[self._fed:], values[self._fed:]):
+            for f in self.filters:
+                f.predict(ti)
+                f.correct(yi)
+        self._fed = times.size
+        for f in self.filters:
+            f.predict(t)
 
     def estimate(self, t: float, times: FloatArray, values: FloatArray) -> Prediction:
         """The method's prediction at ``t`` (s) from the observations up to it.

@@ -183,13 +183,7 @@ class BIPPredictor(MethodPredictor):
                                           model.basis))
 
     def estimate(self, t, times, values):
-        for ti, yi in zip(times[self._fed:], values[self._fed:]):
-            for f in self.filters:
-                f.predict(ti)
-                f.correct(yi)
-        self._fed = times.size
-        for f in self.filters:
-            f.predict(t)
+        self._feed_filters(t, times, values)
         return self._from_filters(t)
 
     def _from_filters(self, t: float):

@@ -185,13 +185,7 @@ class EBIPPredictor(MethodPredictor):
                                                self.process_noise * rate**4, model.basis, rng))
 
     def estimate(self, t, times, values):
-        for ti, yi in zip(times[self._fed:], values[self._fed:]):
-            for f in self.filters:
-                f.predict(ti)
-                f.correct(yi)
-        self._fed = times.size
-        for f in self.filters:
-            f.predict(t)
+        self._feed_filters(t, times, values)
         model = self.library.model
         N, PN = model.basis.n_basis, model.n_human * model.basis.n_basis
 
