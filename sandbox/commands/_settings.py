@@ -8,6 +8,7 @@ predictor options, the names of :class:`~sandbox.eval.loocv.EvalConfig`::
     regularizer: 0.001
     noise_floor: 0.02        # m
     jitter_floor: 15         # opt-in: position floors max(2 mm, 15 x the data's raw jitter)
+    shrinkage: auto          # auto | none: task covariances shrunk toward the pooled one
     settle_tol: 0.05         # rad, or null: the whole recording is the motion
     likelihood: joint        # predictor options: joint | marginal
     window_mode: all         # all | latest
@@ -32,7 +33,7 @@ from typing import Any
 
 #: Options of the model (:class:`~sandbox.core.IProMP`).
 MODEL_KEYS = ("n_basis", "regularizer", "noise_scale", "noise_floor", "signal_floor",
-              "noise_floors", "jitter_floor", "settle_tol", "arrive_tol")
+              "noise_floors", "jitter_floor", "shrinkage", "settle_tol", "arrive_tol")
 #: Options of the predictor (:class:`~sandbox.core.DynamicPredictor`).
 PREDICTOR_KEYS = ("likelihood", "window_mode", "n_candidates", "refine_steps", "blend_rate",
                   "blend_delay", "until_end", "end_prob", "subsample")
@@ -41,7 +42,8 @@ KEYS = ("observe", *MODEL_KEYS, *PREDICTOR_KEYS)
 #: Predictor options ``play`` takes from a file (the others are the closed loop's own).
 PLAY_PREDICTOR_KEYS = ("likelihood", "window_mode", "n_candidates", "refine_steps",
                        "blend_rate", "blend_delay", "end_prob")
-CHOICES = {"likelihood": ("joint", "marginal"), "window_mode": ("all", "latest")}
+CHOICES = {"likelihood": ("joint", "marginal"), "window_mode": ("all", "latest"),
+           "shrinkage": ("auto", "none")}
 #: Keys whose values are numbers, each in its range of :data:`sandbox.limits.BOUNDS`
 #: (``None`` allowed for the tolerances: "not used").
 NUMBERS = ("n_basis", "n_candidates", "refine_steps", "subsample", "regularizer", "noise_scale",

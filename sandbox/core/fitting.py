@@ -20,6 +20,7 @@ from sandbox.core.basis import GaussianBasis
 from sandbox.core.limits import MAX_ABS_VALUE, MAX_ALPHA_STD, MIN_NOISE_STD
 from sandbox.core.modality import Modality
 from sandbox.core.promp import WeightDistribution, check_human_conditioning, fit_weights
+from sandbox.core.shrinkage import intensities, pooled_factor, shrink, shrunk_means
 from sandbox.limits import BOUNDS
 from sandbox.validation import FloatArray, check_positive
 
@@ -246,8 +247,9 @@ def observation_noise(fits: Sequence[DemoFit], scale: FloatArray, floors: FloatA
 
 def task_models(weights: Mapping[str, FloatArray], durations: Mapping[str, FloatArray],
                 sigma2: FloatArray, modalities: Sequence[Modality], regularizer: float,
-                n_basis: int, min_alpha_std: float) -> tuple[TaskModel, ...]:
-    """One :class:`TaskModel` per task, in the order of ``weights``.
+                n_basis: int, min_alpha_std: float, shrinkage: str = "none",
+                ) -> tuple[tuple[TaskModel, ...], dict[str, FloatArray]]:
+    """One :class:`TaskModel` per task, in the order of ``weights``, and their shrinkage.
 
     Parameters
     ----------
@@ -264,10 +266,19 @@ def task_models(weights: Mapping[str, FloatArray], durations: Mapping[str, Float
     n_basis : int
     min_alpha_std : float
         Lower bound of the speed prior's standard deviation.
+    shrinkage : {"auto", "none"}
+        Covariance shrinkage toward the pooled one (:mod:`sandbox.core.shrinkage`).
+
+    Returns
+    -------
+    tasks : tuple of TaskModel
+    intensities : dict of str to ndarray, shape (N,)
+        Each task's shrinkage intensity per basis function (0 with ``"none"``).
     """
     P = sigma2.size
     dists = {k: WeightDistribution.from_weights(w, regularizer, n_basis)
              for k, w in weights.items()}
+    dists, intensities = shrunk(weights, dists, shrinkage)
     kappa = np.empty(P)
     start = 0
     for m in modalities:       # one kappa per modality, from its own dims only
@@ -286,7 +297,21 @@ def task_models(weights: Mapping[str, FloatArray], durations: Mapping[str, Float
         check_speed_spread(k, a_std, T)
         check_human_conditioning(dist, sigma2, k)
         tasks.append(TaskModel(k, dist, t_nom, 1.0, max(a_std, min_alpha_std), int(T.size)))
-    return tuple(tasks)
+    return tuple(tasks), intensities
+
+
+def shrunk(weights: Mapping[str, FloatArray], dists: Mapping[str, WeightDistribution],
+           shrinkage: str) -> tuple[dict[str, WeightDistribution], dict[str, FloatArray]]:
+    """``dists`` shrunk toward the pooled covariance (``"auto"``), or as they are, and
+    each task's intensity per basis function (N,) (:mod:`sandbox.core.shrinkage`)."""
+    n_basis = next(iter(dists.values())).n_basis
+    if shrinkage == "none" or len(weights) < 2:
+        return dict(dists), {k: np.zeros(n_basis) for k in dists}
+    pooled = pooled_factor(weights)
+    lams = {k: intensities(w, pooled, n_basis) for k, w in weights.items()}
+    means = shrunk_means(weights, pooled)
+    return ({k: shrink(d, pooled, lams[k], means[k]) for k, d in dists.items()},
+            {k: lam[:n_basis] for k, lam in lams.items()})
 
 
 def check_speed_spread(task: str, alpha_std: float, durations: FloatArray) -> None:

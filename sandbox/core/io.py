@@ -125,6 +125,8 @@ def save_model(model: IProMP, path: str | os.PathLike) -> None:
     }
     if getattr(model, "jitter_floor", None) is not None:
         meta["hyperparameters"]["jitter_floor"] = model.jitter_floor
+    if getattr(model, "shrinkage", "none") != "none":
+        meta["hyperparameters"]["shrinkage"] = model.shrinkage
     arrays = {"noise": model.noise, "scale": model.scale}
     _put_calibration(getattr(model, "calibration", None), meta, arrays)
     if getattr(model, "session", None):
@@ -230,11 +232,14 @@ def _read_model(path: Path) -> ModelFile:
         scale = (_check_scale(_read(archive, "scale", (P,)), meta["modalities"])
                  if meta["format_version"] >= 2 else np.ones(P))
         weights = []
+        shrunk = meta["hyperparameters"].get("shrinkage", "none") != "none"
+        pooled_rank = sum(t["n_demos"] for t in meta["tasks"]) - len(meta["tasks"])
         for i, t in enumerate(meta["tasks"]):
             D = (P + Q) * N
             dist = WeightDistribution(
                 _read(archive, f"task{i}_mean", (D,)),
-                _factor(archive, f"task{i}_factor", D, t["n_demos"]),
+                _factor(archive, f"task{i}_factor", D, t["n_demos"],
+                        pooled_rank if shrunk else None),
                 _positive(_read(archive, f"task{i}_reg", (P + Q,)), f"task{i}_reg", 0.0), N)
             check_robot_definite(dist, P, t["name"])
             check_human_conditioning(dist, noise, t["name"])
@@ -273,18 +278,23 @@ def _calibration(archive, entry, n_tasks: int):
         raise ValueError(f"metadata familiarity: malformed entry {str(entry)[:80]}") from None
 
 
-def _factor(archive, name: str, rows: int, n_demos: int) -> np.ndarray:
+def _factor(archive, name: str, rows: int, n_demos: int,
+            pooled_rank: int | None = None) -> np.ndarray:
     """A task's covariance factor U, shape (rows, r): 1 <= r < n_demos, not all zero.
 
     A fit centres its demos' weights, so n demos give at most n - 1 directions, and
-    refuses demos that do not differ, so at least one.
+    refuses demos that do not differ, so at least one. A covariance shrunk toward the
+    pooled one (:mod:`sandbox.core.shrinkage`) has ``pooled_rank`` more (all demos
+    less the number of tasks).
     """
     arr = _read(archive, name, (rows, None))
     r = arr.shape[1]
-    if not 1 <= r <= n_demos - 1:
+    most = n_demos - 1 + (pooled_rank or 0)
+    if not 1 <= r <= most:
+        held = (f"its task's {n_demos} demonstrations less one" if pooled_rank is None else
+                "its task's demonstrations less one, and all tasks' less the number of tasks")
         raise ValueError(f"member {name!r}: expected a covariance factor of rank 1 to "
-                         f"{n_demos - 1} (its task's {n_demos} demonstrations less one), got "
-                         f"{r} columns")
+                         f"{most} ({held}), got {r} columns")
     if not np.any(arr):
         raise ValueError(f"member {name!r}: expected a covariance factor with a non-zero "
                          f"entry (demos that differ), got all zeros")

@@ -64,13 +64,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from sandbox.core.basis import GaussianBasis
-from sandbox.core.demos import (
-    as_demo_list,
-    check_demo,
-    check_demos,
-    check_spread,
-    modalities_of,
-)
+from sandbox.core.demos import as_demo_list, check_demo, check_demos, check_spread, modalities_of
 from sandbox.core.fitting import (
     DemoFit,
     DemonstrationLike,
@@ -91,12 +85,9 @@ from sandbox.core.fitting import (
 )
 from sandbox.core.io import model_from_file, read_model, save_model
 from sandbox.core.jitter import demo_jitter, jitter_floors
-from sandbox.core.limits import (
-    MAX_DURATION_S,
-    MAX_RELATIVE,
-    check_alpha_std,
-)
+from sandbox.core.limits import MAX_DURATION_S, MAX_RELATIVE, check_alpha_std
 from sandbox.core.modality import Modality
+from sandbox.core.shrinkage import check_shrinkage
 from sandbox.limits import BOUNDS
 from sandbox.validation import FloatArray, check_mapping, check_number, check_positive
 
@@ -161,6 +152,10 @@ class IProMP:
         good, not before the motion's end (None: at it); not stored in model files.
     min_alpha_std : float
         Lower bound of :math:`\\sigma_\\alpha`, in [limits.MIN_ALPHA_STD, limits.MAX_ALPHA_STD].
+    shrinkage : {"auto", "none"}
+        ``"auto"``: each task's weight covariance shrunk toward the tasks' pooled one
+        by an intensity learned from its demos (:mod:`sandbox.core.shrinkage`; used:
+        :attr:`shrinkage_used`); ``"none"``: each task keeps its own.
     ridge : float
         Relative ridge of the per-demo weight fit (eq. 2).
     priors : mapping of str to float, optional
@@ -204,6 +199,7 @@ class IProMP:
         arrive_tol: float | None = 0.02,
         robot_tol: float | None = 0.01,
         min_alpha_std: float = 0.02,
+        shrinkage: str = "none",
         ridge: float = 1e-8,
         priors: Mapping[str, float] | None = None,
         max_duration: float = MAX_DURATION_S,
@@ -221,6 +217,9 @@ class IProMP:
         self.arrive_tol = check_tolerance(arrive_tol, "arrive_tol")
         self.robot_tol = None if robot_tol is None else check_positive(robot_tol, "robot_tol")
         self.min_alpha_std = check_alpha_std(min_alpha_std, "min_alpha_std")
+        self.shrinkage = check_shrinkage(shrinkage)
+        #: By task, the shrinkage intensity in [0, 1] of each basis function (N,) (not saved).
+        self.shrinkage_used: dict[str, FloatArray] = {}
         self.ridge = check_positive(ridge, "ridge", allow_zero=True, high=MAX_RELATIVE)
         self.max_duration = check_positive(max_duration, "max_duration")
         self._prior_spec = (None if priors is None else
@@ -307,8 +306,9 @@ class IProMP:
         return np.array([f if g is None else g for f, g in zip(out, given)])
 
     def _set_fit(self, weights, durations, sigma2, P, Q, first, modalities, scale) -> None:
-        tasks = task_models(weights, durations, sigma2, modalities, self.regularizer,
-                            self.basis.n_basis, self.min_alpha_std)
+        tasks, self.shrinkage_used = task_models(
+            weights, durations, sigma2, modalities, self.regularizer, self.basis.n_basis,
+            self.min_alpha_std, self.shrinkage)
         self.task_models = tasks
         self.noise = sigma2
         self.scale = np.asarray(scale, dtype=np.float64)

@@ -34,7 +34,7 @@ READABLE_VERSIONS = (1, 2)
 HYPERPARAMETERS = {
     1: {"regularizer", "noise_scale", "noise_floor", "min_alpha_std", "ridge"},
     2: {"regularizer", "noise_scale", "noise_floor", "signal_floor", "noise_floors",
-        "jitter_floor", "settle_tol", "arrive_tol", "min_alpha_std", "ridge"},
+        "jitter_floor", "settle_tol", "arrive_tol", "min_alpha_std", "shrinkage", "ridge"},
 }
 TASK_KEYS = {"name", "nominal_duration", "alpha_mean", "alpha_std", "n_demos", "prior"}
 #: Spaces a model's robot dims may be in: joint angles (rad) or a task-space position (m).

@@ -150,10 +150,10 @@ class WeightDistribution:
         factor = (w - mean).T / np.sqrt(max(n - 1, 1))
         var = (factor**2).sum(axis=1).reshape(-1, n_basis).mean(axis=1)
         reg = regularizer * np.maximum(var, max(floor * var.max(), 1e-300))
-        return cls(mean, _thin(factor), reg, n_basis)
+        return cls(mean, thin(factor), reg, n_basis)
 
 
-def _thin(factor: FloatArray) -> FloatArray:
+def thin(factor: FloatArray) -> FloatArray:
     """Drop numerically empty directions of a factor (keeps U U^T exactly)."""
     if factor.shape[1] == 0:
         return factor

@@ -43,6 +43,7 @@ from pathlib import Path
 from typing import Any
 
 from sandbox.core.predictor import LIKELIHOODS, WINDOW_MODES
+from sandbox.core.shrinkage import SHRINKAGE
 from sandbox.eval.loocv import EvalConfig
 from sandbox.eval.tune import RATIO, WINDOW
 from sandbox.limits import BOUNDS, MAX_GRID_POINTS
@@ -116,6 +117,7 @@ OPTIONS: dict[str, Callable[[str, Any], Any]] = {
     "settle_tol": _optional("settle_tol"),
     "arrive_tol": _optional("arrive_tol"),
     "jitter_floor": _optional("jitter_floor"),
+    "shrinkage": _choice(SHRINKAGE),
     "likelihood": _choice(LIKELIHOODS),
     "window_mode": _choice(WINDOW_MODES),
     "until_end": _flag,

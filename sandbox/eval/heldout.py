@@ -21,7 +21,7 @@ from sandbox.eval.loocv import EvalConfig, evaluate_trial, map_trials
 MODE = "test-only"
 #: Options of a fitted model that :class:`EvalConfig` also names (copied into the report).
 MODEL_OPTIONS = ("regularizer", "noise_scale", "noise_floor", "signal_floor", "jitter_floor",
-                 "settle_tol", "arrive_tol")
+                 "shrinkage", "settle_tol", "arrive_tol")
 
 _STATE: dict = {}
 

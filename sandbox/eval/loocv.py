@@ -56,7 +56,7 @@ class EvalConfig:
     end_prob :
         predictor options (:class:`~sandbox.core.DynamicPredictor`).
     n_basis, regularizer, noise_scale, noise_floor, signal_floor, noise_floors, jitter_floor,
-    settle_tol, arrive_tol, robot_tol :
+    shrinkage, settle_tol, arrive_tol, robot_tol :
         model options (:class:`~sandbox.core.IProMP`).
     observe : modalities the models observe (None: all the demonstrations carry).
     goal_tol : distance (m) for time-to-correct.
@@ -81,6 +81,7 @@ class EvalConfig:
     signal_floor: float = SIGNAL_FLOOR
     noise_floors: tuple[tuple[str, float], ...] = ()
     jitter_floor: float | None = None
+    shrinkage: str = "none"
     settle_tol: float | None = 0.05
     arrive_tol: float | None = 0.02
     robot_tol: float | None = 0.01
@@ -93,7 +94,7 @@ class EvalConfig:
         return IProMP(n_basis=self.n_basis, regularizer=self.regularizer,
                       noise_scale=self.noise_scale, noise_floor=self.noise_floor,
                       signal_floor=self.signal_floor, noise_floors=dict(self.noise_floors),
-                      jitter_floor=self.jitter_floor,
+                      jitter_floor=self.jitter_floor, shrinkage=self.shrinkage,
                       settle_tol=self.settle_tol, arrive_tol=self.arrive_tol,
                       robot_tol=self.robot_tol)
 

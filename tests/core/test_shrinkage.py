@@ -1,0 +1,180 @@
+"""Covariance shrinkage toward the pooled one (sandbox.core.shrinkage)."""
+
+import numpy as np
+import pytest
+
+from sandbox.core import IProMP
+from sandbox.core.promp import WeightDistribution
+from sandbox.core.shrinkage import intensities, intensity, pooled_factor, shrink, shrunk_means
+from sandbox.data.synthetic import make_dataset
+
+
+def _dense_intensity(w, target):
+    """Schafer-Strimmer with an arbitrary target, element by element (the definition)."""
+    n = w.shape[0]
+    s = np.sqrt(np.diag(target))
+    z = (w - w.mean(axis=0)) / s
+    t = target / np.outer(s, s)
+    cov = z.T @ z / (n - 1)
+    prods = z[:, :, None] * z[:, None, :]
+    var = n / (n - 1) ** 3 * ((prods - prods.mean(axis=0)) ** 2).sum(axis=0)
+    return float(np.clip(var.sum() / ((cov - t) ** 2).sum(), 0, 1))
+
+
+def _tasks(rng, n, dim=12, scales=(1.0, 1.0)):
+    base = rng.normal(size=(dim, dim)) / np.sqrt(dim)
+    return {f"t{i}": rng.normal(size=(n, dim)) @ (s * base).T + i for i, s in enumerate(scales)}
+
+
+def test_pooled_factor_is_the_pooled_within_task_covariance():
+    rng = np.random.default_rng(0)
+    w = {"a": rng.normal(size=(6, 5)), "b": rng.normal(size=(9, 5)) + 3.0}
+    u = pooled_factor(w)
+    want = (5 * np.cov(w["a"].T) + 8 * np.cov(w["b"].T)) / (15 - 2)
+    np.testing.assert_allclose(u @ u.T, want, atol=1e-12)
+
+
+def test_intensity_matches_the_elementwise_definition():
+    rng = np.random.default_rng(1)
+    w = _tasks(rng, 15, dim=8, scales=(1.0, 2.0))
+    u = pooled_factor(w)
+    for x in w.values():
+        assert intensity(x, u) == pytest.approx(_dense_intensity(x, u @ u.T), rel=1e-10)
+
+
+def test_intensity_does_not_depend_on_units():
+    rng = np.random.default_rng(2)
+    w = _tasks(rng, 15, dim=8, scales=(1.0, 2.0))
+    units = np.exp(rng.normal(size=8) * 3)
+    scaled = {k: v * units for k, v in w.items()}
+    for k in w:
+        assert intensity(scaled[k], pooled_factor(scaled)) == pytest.approx(
+            intensity(w[k], pooled_factor(w)), rel=1e-9)
+
+
+def test_few_demos_of_one_spread_shrink_fully_many_of_different_spreads_do_not():
+    rng = np.random.default_rng(3)
+    same = _tasks(rng, 8, dim=30, scales=(1.0, 1.0))
+    lams = [intensity(x, pooled_factor(same)) for x in same.values()]
+    assert min(lams) > 0.8
+    apart = _tasks(rng, 2000, dim=6, scales=(1.0, 4.0))
+    lams = [intensity(x, pooled_factor(apart)) for x in apart.values()]
+    assert max(lams) < 0.05
+
+
+def test_shrink_gives_the_mixed_covariance_and_keeps_it_definite():
+    rng = np.random.default_rng(4)
+    w = _tasks(rng, 5, dim=9, scales=(1.0, 3.0))
+    pooled = pooled_factor(w)
+    dist = WeightDistribution.from_weights(w["t1"], 1e-3, 3)
+    out = shrink(dist, pooled, 0.3)
+    want = 0.7 * (dist.cov() - np.diag(dist.reg_diag)) + 0.3 * pooled @ pooled.T
+    np.testing.assert_allclose(out.cov(), want + np.diag(dist.reg_diag), atol=1e-12)
+    assert np.all(np.linalg.eigvalsh(out.cov()) > 0)
+    np.testing.assert_array_equal(out.mean, dist.mean)
+    np.testing.assert_array_equal(shrink(dist, pooled, 0.0).cov(), dist.cov())
+
+
+def test_a_vector_of_intensities_mixes_by_congruence():
+    rng = np.random.default_rng(5)
+    w = _tasks(rng, 6, dim=9, scales=(1.0, 2.0))
+    pooled = pooled_factor(w)
+    dist = WeightDistribution.from_weights(w["t0"], 1e-3, 3)
+    lam = rng.uniform(size=9)
+    a, b = np.diag(np.sqrt(1 - lam)), np.diag(np.sqrt(lam))
+    own = dist.cov() - np.diag(dist.reg_diag)
+    want = a @ own @ a + b @ pooled @ pooled.T @ b + np.diag(dist.reg_diag)
+    np.testing.assert_allclose(shrink(dist, pooled, lam).cov(), want, atol=1e-12)
+
+
+def test_intensities_are_those_of_each_basis_band_for_every_dim():
+    rng = np.random.default_rng(6)
+    w = _tasks(rng, 7, dim=12, scales=(1.0, 1.5))        # 2 dims x 6 bases
+    pooled = pooled_factor(w)
+    lam = intensities(w["t1"], pooled, 6, half_width=1)
+    cols = [0, 1, 2, 6, 7, 8]                             # band of basis 1: bases 0-2, both dims
+    assert lam[1] == pytest.approx(intensity(w["t1"][:, cols], pooled[cols]))
+    np.testing.assert_array_equal(lam[:6], lam[6:])
+
+
+def test_means_that_differ_by_sampling_noise_meet_and_distinct_ones_stay():
+    rng = np.random.default_rng(7)
+    shared = {k: rng.normal(size=(10, 40)) for k in "abcd"}
+    pooled = pooled_factor(shared)
+    out = shrunk_means(shared, pooled)
+    raw = np.array([w.mean(axis=0) for w in shared.values()])
+    moved = np.array(list(out.values()))
+    assert np.abs(moved - raw.mean(axis=0)).mean() < 0.5 * np.abs(raw - raw.mean(axis=0)).mean()
+    apart = {k: rng.normal(size=(10, 40)) + 5.0 * i for i, k in enumerate("abcd")}
+    out = shrunk_means(apart, pooled_factor(apart))
+    for k, w in apart.items():
+        np.testing.assert_allclose(out[k], w.mean(axis=0), atol=0.05)
+
+
+def test_the_mean_shrinkage_formula():
+    w = {"a": np.array([[0.0], [2.0]]), "b": np.array([[4.0], [6.0]]), "c": np.array([[1.0], [5.0]])}
+    pooled = pooled_factor(w)                             # within variance (2 + 2 + 8) / 3 = 4
+    spread = ((1 - 3) ** 2 + (5 - 3) ** 2 + (3 - 3) ** 2) / 2    # 4
+    keep = 1 - 4 * 0.5 / spread                                  # v = 4 x 1/2
+    out = shrunk_means(w, pooled)
+    assert out["a"][0] == pytest.approx(3 + keep * (1 - 3))
+    assert out["c"][0] == pytest.approx(3.0)
+
+
+def test_pooling_needs_more_demos_than_tasks():
+    with pytest.raises(ValueError, match="more demos than tasks"):
+        pooled_factor({"a": np.zeros((1, 3)), "b": np.ones((1, 3))})
+
+
+@pytest.fixture(scope="module")
+def demos():
+    return make_dataset("diverging", 8, np.random.default_rng(0))
+
+
+def test_the_model_records_its_intensities_and_none_keeps_each_task_its_own(demos):
+    auto = IProMP(n_basis=11, shrinkage="auto").fit(demos)
+    own = IProMP(n_basis=11).fit(demos)
+    assert own.shrinkage == "none"
+    assert all(np.all(v == 0.0) for v in own.shrinkage_used.values())
+    assert set(auto.shrinkage_used) == set(auto.tasks)
+    assert all(v.shape == (11,) and np.all((0 <= v) & (v <= 1))
+               for v in auto.shrinkage_used.values())
+    for a, o in zip(auto.task_models, own.task_models):
+        assert a.weights.factor.shape[1] > o.weights.factor.shape[1]
+        assert not np.array_equal(a.weights.mean, o.weights.mean)
+        assert np.all(np.linalg.eigvalsh(a.weights.cov()) > 0)
+
+
+def test_shrinkage_is_saved_with_the_model(demos, tmp_path):
+    model = IProMP(n_basis=11, shrinkage="auto").fit(demos)
+    model.save(tmp_path / "m.npz")
+    back = IProMP.load(tmp_path / "m.npz")
+    assert back.shrinkage == "auto"
+    np.testing.assert_array_equal(back.task_models[2].weights.factor,
+                                  model.task_models[2].weights.factor)
+
+
+def test_an_unknown_shrinkage_is_refused():
+    with pytest.raises(ValueError, match="shrinkage"):
+        IProMP(shrinkage="pooled")
+
+
+def test_motion_the_tasks_share_leaves_the_posterior_near_the_prior():
+    """Issue 27: the diverging tasks' common first half says nothing about the task."""
+    from sandbox.core.predictor import DynamicPredictor
+
+    train = make_dataset("diverging", 20, np.random.default_rng(0))
+    fresh = make_dataset("diverging", 1, np.random.default_rng(1))
+    tops = {}
+    for mode in ("none", "auto"):
+        model = IProMP(shrinkage=mode).fit(train)
+        tops[mode] = []
+        for demo in fresh:
+            pred, t, top = DynamicPredictor(model, dow_t=0.2), demo.times - demo.times[0], 0.0
+            for ti, y in zip(t[t <= 0.35 * t[-1]], demo.human):      # before any branch starts
+                if pred.observe(float(ti), y) is not None:
+                    top = max(top, max(pred.task_posterior.values()))
+            tops[mode].append(top)
+    prior = 1.0 / len(fresh)
+    assert max(tops["auto"]) <= prior + 0.2, tops
+    assert max(tops["none"]) > prior + 0.3, tops       # what the tasks' own covariances did
