@@ -136,7 +136,8 @@ def _model_of(args):
     if args.model is None:
         from sandbox.episodes.policies import fit_family_model
 
-        model = fit_family_model("diverging", n_per_task=args.demos, seed=args.seed)
+        model = fit_family_model("diverging", n_per_task=args.demos, seed=args.seed,
+                                 calibrated=True)
     else:
         from sandbox.episodes.scenario_files import SYNTHETIC_MODALITIES
 

@@ -207,7 +207,8 @@ def loo_records(model: IProMP, demos, streams=None, **options) -> list[tuple]:
 
 
 def calibrate(model: IProMP, demos, streams=None, *, alpha: float = 0.05, dow_t: float = 0.2,
-              subsample: int = 2, score: str = "timing", **options) -> Calibration:
+              subsample: int = 2, score: str = "timing", refit: bool = True,
+              **options) -> Calibration:
     """Leave-one-out calibration of the familiarity of ``model`` (fitted on ``demos``).
 
     Sets ``model.calibration`` and returns it. Cost: one stream of every demo
@@ -216,7 +217,8 @@ def calibrate(model: IProMP, demos, streams=None, *, alpha: float = 0.05, dow_t:
     Parameters
     ----------
     model : IProMP
-        Fitted on ``demos`` (the calibration refits without each in turn).
+        Fitted on ``demos`` (the calibration refits without each in turn), or, with
+        ``refit=False``, on other motions.
     demos, streams, **options
         As for :func:`loo_records`.
     alpha : float
@@ -225,9 +227,22 @@ def calibrate(model: IProMP, demos, streams=None, *, alpha: float = 0.05, dow_t:
         The predictor's window (s) and subsampling the familiarity is calibrated for.
     score : {"timing", "mahalanobis"}
         The four statistics (default) or the Mahalanobis term alone (:data:`SCORES`).
+    refit : bool
+        True: ``demos`` are the training demos, each streamed by a model fitted
+        without it. False: ``demos`` are motions the model was not fitted on (a fresh
+        draw of a synthetic family, a held-out set), each streamed by ``model`` itself:
+        no refit, the split-conformal calibration of the same statistics.
     """
-    records = loo_records(model, demos, streams, dow_t=dow_t, subsample=subsample,
-                          score=score, **options)
+    if refit:
+        records = loo_records(model, demos, streams, dow_t=dow_t, subsample=subsample,
+                              score=score, **options)
+    else:
+        streams = demos if streams is None else streams
+        records = []
+        for s in streams:
+            t = np.asarray(s.times, dtype=np.float64)
+            records.append(stream_record(model, t - t[0], s.human, dow_t=dow_t,
+                                         subsample=subsample, score=score, **options))
     mean = float(np.dot(model.priors, [t.mean_duration for t in model.task_models]))
     cal = Calibration.from_records(records, len(model.task_models), alpha=alpha,
                                    edges=np.array(EDGES) * mean,

@@ -20,7 +20,7 @@ from sandbox.core.basis import GaussianBasis
 from sandbox.core.limits import MAX_ABS_VALUE, MAX_ALPHA_STD, MIN_NOISE_STD
 from sandbox.core.modality import Modality
 from sandbox.core.promp import WeightDistribution, check_human_conditioning, fit_weights
-from sandbox.core.shrinkage import intensities, pooled_factor, shrink, shrunk_means
+from sandbox.core.shrinkage import intensity, pooled_factor, shrink
 from sandbox.limits import BOUNDS
 from sandbox.validation import FloatArray, check_positive
 
@@ -248,7 +248,7 @@ def observation_noise(fits: Sequence[DemoFit], scale: FloatArray, floors: FloatA
 def task_models(weights: Mapping[str, FloatArray], durations: Mapping[str, FloatArray],
                 sigma2: FloatArray, modalities: Sequence[Modality], regularizer: float,
                 n_basis: int, min_alpha_std: float, shrinkage: str = "none",
-                ) -> tuple[tuple[TaskModel, ...], dict[str, FloatArray]]:
+                ) -> tuple[tuple[TaskModel, ...], dict[str, float]]:
     """One :class:`TaskModel` per task, in the order of ``weights``, and their shrinkage.
 
     Parameters
@@ -272,8 +272,8 @@ def task_models(weights: Mapping[str, FloatArray], durations: Mapping[str, Float
     Returns
     -------
     tasks : tuple of TaskModel
-    intensities : dict of str to ndarray, shape (N,)
-        Each task's shrinkage intensity per basis function (0 with ``"none"``).
+    intensities : dict of str to float
+        Each task's shrinkage intensity (0 with ``"none"``).
     """
     P = sigma2.size
     dists = {k: WeightDistribution.from_weights(w, regularizer, n_basis)
@@ -301,17 +301,14 @@ def task_models(weights: Mapping[str, FloatArray], durations: Mapping[str, Float
 
 
 def shrunk(weights: Mapping[str, FloatArray], dists: Mapping[str, WeightDistribution],
-           shrinkage: str) -> tuple[dict[str, WeightDistribution], dict[str, FloatArray]]:
+           shrinkage: str) -> tuple[dict[str, WeightDistribution], dict[str, float]]:
     """``dists`` shrunk toward the pooled covariance (``"auto"``), or as they are, and
-    each task's intensity per basis function (N,) (:mod:`sandbox.core.shrinkage`)."""
-    n_basis = next(iter(dists.values())).n_basis
+    each task's intensity (:mod:`sandbox.core.shrinkage`)."""
     if shrinkage == "none" or len(weights) < 2:
-        return dict(dists), {k: np.zeros(n_basis) for k in dists}
+        return dict(dists), {k: 0.0 for k in dists}
     pooled = pooled_factor(weights)
-    lams = {k: intensities(w, pooled, n_basis) for k, w in weights.items()}
-    means = shrunk_means(weights, pooled)
-    return ({k: shrink(d, pooled, lams[k], means[k]) for k, d in dists.items()},
-            {k: lam[:n_basis] for k, lam in lams.items()})
+    lams = {k: intensity(w, pooled) for k, w in weights.items()}
+    return {k: shrink(d, pooled, lams[k]) for k, d in dists.items()}, lams
 
 
 def check_speed_spread(task: str, alpha_std: float, durations: FloatArray) -> None:

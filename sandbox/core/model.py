@@ -218,8 +218,8 @@ class IProMP:
         self.robot_tol = None if robot_tol is None else check_positive(robot_tol, "robot_tol")
         self.min_alpha_std = check_alpha_std(min_alpha_std, "min_alpha_std")
         self.shrinkage = check_shrinkage(shrinkage)
-        #: By task, the shrinkage intensity in [0, 1] of each basis function (N,) (not saved).
-        self.shrinkage_used: dict[str, FloatArray] = {}
+        #: By task, the shrinkage intensity in [0, 1] of the last fit (not saved).
+        self.shrinkage_used: dict[str, float] = {}
         self.ridge = check_positive(ridge, "ridge", allow_zero=True, high=MAX_RELATIVE)
         self.max_duration = check_positive(max_duration, "max_duration")
         self._prior_spec = (None if priors is None else

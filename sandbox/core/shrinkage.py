@@ -34,6 +34,19 @@ Both terms stay factors (:math:`[\\sqrt{1-\\lambda} U_k, \\sqrt{\\lambda} U_{poo
 so the shrunk covariance keeps the :class:`~sandbox.core.promp.WeightDistribution`
 form; its rank is up to :math:`n - K`. Sums over :math:`jl` are taken through
 ``n x n`` Gram matrices, never the ``D*N x D*N`` matrices.
+
+**One intensity per task.** An intensity per stretch of the motion (per basis
+function) mixes by congruence, :math:`A S_k A + B S_{pool} B`, which weakens the
+covariance *between* stretches whose intensities differ, the very coupling by
+which an early hand predicts the late robot; measured on the recorded set it made
+the prediction worse (dynamic e_p 0.050 m against 0.046 m). Shrinking the task
+means too (empirical Bayes per coordinate) helped the diverging family's prefix a
+little and hurt the recorded set's recognition; it is not done.
+
+**Cost.** The rank grows from ``n_k - 1`` to up to ``n - K``, so an update costs
+more (about 2x with the hand alone, where the likelihood works in the human
+block's rank; much more with many observed dims). Hence opt-in
+(``IProMP(shrinkage="auto")``); the measured trade-off is in the docs' method page.
 """
 
 from __future__ import annotations
@@ -45,9 +58,6 @@ import numpy as np
 from sandbox.core.promp import WeightDistribution, thin
 from sandbox.validation import FloatArray, check_choice
 
-#: Bases on each side of a basis function in the band its intensity is measured on: five
-#: bases, a quarter of the motion with the default 21.
-BAND = 2
 #: Choices of ``IProMP(shrinkage=...)``: the learned intensity, or none (each task its own).
 SHRINKAGE = ("auto", "none")
 
@@ -110,84 +120,19 @@ def intensity(weights: FloatArray, pooled: FloatArray) -> float:
     return float(np.clip(noise / gap, 0.0, 1.0))
 
 
-def intensities(weights: FloatArray, pooled: FloatArray, n_basis: int,
-                half_width: int = BAND) -> FloatArray:
-    """Per-coordinate intensities (D*N,): :func:`intensity` of each basis function's band.
-
-    The intensity of basis function n is that of the coordinates of bases
-    ``n - half_width`` to ``n + half_width`` of every dim (a stretch of the motion),
-    and applies to basis n of every dim.
-
-    Parameters
-    ----------
-    weights : ndarray, shape (n_k, D*N)
-        The task's demo weights, dim-major (index ``d * N + n``).
-    pooled : ndarray, shape (D*N, r)
-        :func:`pooled_factor`.
-    n_basis : int
-        N.
-    half_width : int
-        Bases on each side of n in its band (default :data:`BAND`).
-
-    Returns
-    -------
-    ndarray, shape (D*N,)
-        In [0, 1], the same for every dim of one basis function.
-    """
-    w = np.asarray(weights, dtype=np.float64)
-    dims = np.arange(w.shape[1] // n_basis)[:, None] * n_basis
-    lam = np.empty(n_basis)
-    for n in range(n_basis):
-        cols = (dims + np.arange(max(0, n - half_width), min(n_basis, n + half_width + 1))).ravel()
-        lam[n] = intensity(w[:, cols], pooled[cols])
-    return np.tile(lam, dims.size)
-
-
-def shrunk_means(weights: Mapping[str, FloatArray], pooled: FloatArray) -> dict[str, FloatArray]:
-    """Each task's mean weights (D*N,) shrunk toward the tasks' average, coordinate by coordinate.
-
-    The empirical-Bayes estimate of a normal means model (Efron and Morris 1975):
-    :math:`\\bar w_{kj}` is task k's mean of coordinate j, :math:`m_j` their
-    average, :math:`b_j = \\sum_k (\\bar w_{kj} - m_j)^2 / (K - 1)` their spread and
-    :math:`v_j = S_{pool,jj}\\, \\overline{1/n_k}` the part of it sampling explains;
-
-    .. math::  \\hat\\mu_{kj} = m_j + \\max(0, 1 - v_j / b_j)\\,(\\bar w_{kj} - m_j).
-
-    Coordinates where the tasks' means differ by no more than sampling noise (the
-    stretch of motion they share) take the common mean; where they differ, each keeps its own.
-    """
-    means = {k: np.asarray(w, dtype=np.float64).mean(axis=0) for k, w in weights.items()}
-    if len(means) < 2:
-        return means
-    stacked = np.array(list(means.values()))
-    centre = stacked.mean(axis=0)
-    spread = ((stacked - centre) ** 2).sum(axis=0) / (len(means) - 1)
-    noise = (pooled**2).sum(axis=1) * np.mean([1.0 / len(w) for w in weights.values()])
-    keep = np.clip(1.0 - noise / np.maximum(spread, 1e-300), 0.0, 1.0)
-    return {k: centre + keep * (m - centre) for k, m in means.items()}
-
-
-def shrink(dist: WeightDistribution, pooled: FloatArray, lam,
-           mean: FloatArray | None = None) -> WeightDistribution:
-    """``dist`` with the covariance :math:`A S_k A + B S_{pool} B`, A, B diagonal.
-
-    :math:`A = \\mathrm{diag}(\\sqrt{1 - \\lambda})`, :math:`B = \\mathrm{diag}(\\sqrt{\\lambda})`:
-    positive semi-definite for any ``lam`` in [0, 1], :math:`(1 - \\lambda_j) s_{jj} +
-    \\lambda_j t_{jj}` on the diagonal, and the scalar mixture when ``lam`` is one
-    number. The regulariser is kept, and the mean unless ``mean`` is given.
+def shrink(dist: WeightDistribution, pooled: FloatArray, lam: float) -> WeightDistribution:
+    """``dist`` with the covariance :math:`(1 - \\lambda) S_k + \\lambda S_{pool}` (same mean
+    and regulariser); ``lam = 0`` leaves it as it is.
 
     Parameters
     ----------
     dist : WeightDistribution
     pooled : ndarray, shape (D*N, r)
-    lam : float or ndarray, shape (D*N,)
-    mean : ndarray, shape (D*N,), optional
-        A new mean (:func:`shrunk_means`).
+        :func:`pooled_factor`.
+    lam : float
+        In [0, 1].
     """
-    lam = np.broadcast_to(np.asarray(lam, dtype=np.float64), dist.mean.shape)
-    mean = dist.mean if mean is None else mean
-    if not np.any(lam > 0.0):
-        return WeightDistribution(mean, dist.factor, dist.reg, dist.n_basis)
-    factor = thin(np.hstack([np.sqrt(1.0 - lam)[:, None] * dist.factor,
-                             np.sqrt(lam)[:, None] * pooled]))
-    return WeightDistribution(mean, factor, dist.reg, dist.n_basis)
+    if lam <= 0.0:
+        return dist
+    factor = thin(np.hstack([np.sqrt(1.0 - lam) * dist.factor, np.sqrt(lam) * pooled]))
+    return WeightDistribution(dist.mean, factor, dist.reg, dist.n_basis)

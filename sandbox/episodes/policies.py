@@ -123,7 +123,8 @@ def tracker_row(obs: Mapping[str, FloatArray], names, *,
 
 
 def fit_family_model(family: str = "diverging", n_per_task: int = 20, seed: int = 0,
-                     n_basis: int | None = None, observe=("hand",)) -> IProMP:
+                     n_basis: int | None = None, observe=("hand",), *,
+                     calibrated: bool = False) -> IProMP:
     """An IProMP fitted on synthetic demonstrations of ``family`` (cached per arguments).
 
     Parameters
@@ -141,6 +142,9 @@ def fit_family_model(family: str = "diverging", n_per_task: int = 20, seed: int 
     observe : sequence of str or str
         Modalities of the demonstrations: ``"hand"`` (default) or ``"hand,arm"``
         (the synthetic human arm; EMG is not simulated).
+    calibrated : bool
+        Also calibrate its familiarity on a fresh draw of the family
+        (:func:`~sandbox.episodes.sessions.calibrated_synthetic`; a few seconds).
 
     Returns
     -------
@@ -149,9 +153,10 @@ def fit_family_model(family: str = "diverging", n_per_task: int = 20, seed: int 
         demonstrations' meeting geometry (:mod:`sandbox.data.geometry`).
     """
     names = [n.strip() for n in observe.split(",")] if isinstance(observe, str) else observe
-    from sandbox.episodes.sessions import fit_synthetic
+    from sandbox.episodes.sessions import calibrated_synthetic, fit_synthetic
 
-    return fit_synthetic(family, n_per_task, seed, n_basis, tuple(names))
+    fit = calibrated_synthetic if calibrated else fit_synthetic
+    return fit(family, n_per_task, seed, n_basis, tuple(names))
 
 
 class _Steering:

@@ -49,8 +49,9 @@ def fit_family(family: str, demos: int, seed: int, observe, options: Mapping | N
     """An IProMP fitted on ``demos`` synthetic demonstrations per task of ``family``.
 
     ``observe``: modalities (names or ``"a,b"``); ``options``: IProMP options
-    (with none but ``n_basis`` the model is the cached
-    :func:`~sandbox.episodes.policies.fit_family_model`).
+    (with none but ``n_basis`` the model is the cached, calibrated
+    :func:`~sandbox.episodes.policies.fit_family_model`; with others it is fitted
+    here and not calibrated).
     """
     from sandbox.episodes.policies import fit_family_model
 
@@ -58,7 +59,7 @@ def fit_family(family: str, demos: int, seed: int, observe, options: Mapping | N
     names = [n.strip() for n in observe.split(",")] if isinstance(observe, str) else observe
     if set(options) <= {"n_basis"}:
         return fit_family_model(family, n_per_task=demos, seed=seed, observe=names,
-                                n_basis=options.get("n_basis"))
+                                n_basis=options.get("n_basis"), calibrated=True)
     import numpy as np
 
     from sandbox.core import IProMP

@@ -75,6 +75,39 @@ def fit_synthetic(family: str, n_per_task: int, seed: int, n_basis: int | None,
     return remember_demos(attach_geometry(model.fit(demos), demos), demos)
 
 
+#: Fresh motions per task a default model's familiarity is calibrated on (split-conformal:
+#: a draw of the family the model was not fitted on, streamed as a predictor receives it).
+N_CALIBRATION = 10
+#: Entropy added to a model's seed for its calibration draw (independent of the demos and
+#: of the episodes, which use ``seed + i``).
+CALIBRATION_STREAM = 27
+
+
+@functools.lru_cache(maxsize=8)
+def calibrated_synthetic(family: str, n_per_task: int, seed: int, n_basis: int | None,
+                         observe: tuple[str, ...], session: int | None = None):
+    """:func:`fit_synthetic`'s model with its familiarity calibrated (issue 27: the default
+    models' "unsure / unknown motion" warning); cached, do not modify.
+
+    The calibration motions are :data:`N_CALIBRATION` fresh ones per task of the same
+    family and session (``np.random.default_rng([seed, CALIBRATION_STREAM])``),
+    causally preprocessed as a predictor receives them, and streamed by the model
+    itself (``refit=False``: they are not its training demos).
+    """
+    import copy
+
+    from sandbox.data.preprocess import preprocess_demonstration
+    from sandbox.data.synthetic import make_dataset
+
+    fitted = (fit_synthetic(family, n_per_task, seed, n_basis, observe) if session is None
+              else fit_synthetic(family, n_per_task, seed, n_basis, observe, session))
+    model = copy.copy(fitted)         # the same cache key as fit_family_model's: one fit
+    rng = np.random.default_rng([seed, CALIBRATION_STREAM])
+    fresh = make_dataset(family, N_CALIBRATION, rng, observe=observe, session=session)
+    model.calibrate([preprocess_demonstration(d, "causal") for d in fresh], refit=False)
+    return model
+
+
 def session_episodes(family: str, n: int, seed: int, session: int, *,
                      train_session: int | None = None, model=None,
                      options: Mapping[str, Any] | None = None,

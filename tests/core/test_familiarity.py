@@ -316,3 +316,24 @@ def test_tampered_calibration_is_refused(model, tmp_path):
     np.savez(tmp_path / "short.npz", **arrays)
     with pytest.raises(ValueError, match="familiarity_counts"):
         IProMP.load(tmp_path / "short.npz")
+
+
+def test_a_calibration_on_fresh_motions_streams_them_by_the_model_itself(model):
+    """``refit=False`` (the default models' split-conformal calibration): each fresh
+    motion is streamed by the fitted model, no leave-one-out refit."""
+    import copy
+
+    from sandbox.core.familiarity import EDGES
+
+    rng = np.random.default_rng(11)
+    fresh = [noisy(d, rng) for d in synth.demos(rng, n_per_task=6, n_tasks=2)]
+    other = copy.copy(model)
+    cal = other.calibrate(fresh, refit=False, **OPTIONS)
+    assert other.calibration is cal and model.calibration is not cal
+    records = [stream_record(model, d.times - d.times[0], d.human, dow_t=0.2, **OPTIONS)
+               for d in fresh]
+    mean = float(np.dot(model.priors, [t.mean_duration for t in model.task_models]))
+    want = Calibration.from_records(records, 2, alpha=0.05, edges=np.array(EDGES) * mean,
+                                    subsample=OPTIONS["subsample"], dow_t=0.2)
+    np.testing.assert_array_equal(cal.quantiles, want.quantiles)
+    assert cal.threshold == want.threshold

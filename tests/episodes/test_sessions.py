@@ -79,3 +79,16 @@ def test_bad_session_arguments_are_refused(kwargs, match):
     kwargs = {"policy": "dynamic", **kwargs}
     with pytest.raises(ValueError, match=match):
         run_scenario(kwargs.pop("scenario"), kwargs.pop("policy"), n_episodes=1, **kwargs)
+
+
+def test_the_default_models_can_come_calibrated_and_the_cached_fit_stays_as_it_was():
+    """Issue 27: the demo's and play's models carry a familiarity calibration, drawn from
+    fresh motions of their family (split-conformal), not from their training demos."""
+    from sandbox.episodes.policies import fit_family_model
+
+    plain = fit_family_model("two_task", n_per_task=6, seed=4)
+    calibrated = fit_family_model("two_task", n_per_task=6, seed=4, calibrated=True)
+    assert plain.calibration is None
+    assert calibrated.calibration is not None and 0 < calibrated.calibration.threshold < 1
+    assert calibrated.task_models is plain.task_models          # the same fit, calibrated
+    assert fit_family_model("two_task", n_per_task=6, seed=4, calibrated=True) is calibrated
