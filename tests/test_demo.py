@@ -32,6 +32,17 @@ def test_prints_beliefs_over_time_for_both_policies(demo):
     assert "prior mixture" in rows[0]  # the static baseline has not predicted yet
 
 
+def test_the_shared_first_half_leaves_the_belief_near_the_prior(demo):
+    """Issue 27: the diverging tasks' common first half says nothing about the task (five
+    tasks: prior 0.2), so before the switch no task is believed above 0.2 + 0.2."""
+    stdout, _ = demo
+    before = [line for line in stdout.splitlines()
+              if re.match(r"\s+\d+\.\d\d\s+up\s", line)]
+    assert len(before) >= 3
+    beliefs = [float(re.search(r"\(p=(\d\.\d\d)\)", line).group(1)) for line in before]
+    assert max(beliefs) <= 0.4, before
+
+
 def test_dynamic_hands_over_and_static_does_not(demo):
     stdout, _ = demo
     dynamic = next(line for line in stdout.splitlines() if line.strip().startswith("dynamic:")

@@ -46,6 +46,10 @@ def add_arguments(parser) -> None:
 
 
 DEFAULT_OUT = "demo.html"
+#: The demo's model shrinks the tasks' covariances toward the pooled one
+#: (:mod:`sandbox.core.shrinkage`): the diverging tasks share their first half, which
+#: must leave the belief near the prior (issue 27), and their familiarity is calibrated.
+SHRINKAGE = "auto"
 #: How a replay written by :meth:`sandbox.viz.Viewer.save_html` begins (its title).
 REPLAY_TITLE = b"<title>handover-sandbox replay</title>"
 
@@ -137,7 +141,7 @@ def _model_of(args):
         from sandbox.episodes.policies import fit_family_model
 
         model = fit_family_model("diverging", n_per_task=args.demos, seed=args.seed,
-                                 calibrated=True)
+                                 calibrated=True, shrinkage=SHRINKAGE)
     else:
         from sandbox.episodes.scenario_files import SYNTHETIC_MODALITIES
 

@@ -124,7 +124,7 @@ def tracker_row(obs: Mapping[str, FloatArray], names, *,
 
 def fit_family_model(family: str = "diverging", n_per_task: int = 20, seed: int = 0,
                      n_basis: int | None = None, observe=("hand",), *,
-                     calibrated: bool = False) -> IProMP:
+                     calibrated: bool = False, shrinkage: str = "none") -> IProMP:
     """An IProMP fitted on synthetic demonstrations of ``family`` (cached per arguments).
 
     Parameters
@@ -138,13 +138,16 @@ def fit_family_model(family: str = "diverging", n_per_task: int = 20, seed: int 
         Seed of the demonstrations.
     n_basis : int, optional
         Basis functions per dim; default :class:`~sandbox.core.IProMP`'s (all other
-        settings are its defaults too).
+        settings but ``shrinkage`` are its defaults too).
     observe : sequence of str or str
         Modalities of the demonstrations: ``"hand"`` (default) or ``"hand,arm"``
         (the synthetic human arm; EMG is not simulated).
     calibrated : bool
         Also calibrate its familiarity on a fresh draw of the family
         (:func:`~sandbox.episodes.sessions.calibrated_synthetic`; a few seconds).
+    shrinkage : {"none", "auto"}
+        :class:`~sandbox.core.IProMP`'s option (``"auto"``: the tasks' covariances
+        shrunk toward the pooled one, for families whose tasks share motion).
 
     Returns
     -------
@@ -156,7 +159,8 @@ def fit_family_model(family: str = "diverging", n_per_task: int = 20, seed: int 
     from sandbox.episodes.sessions import calibrated_synthetic, fit_synthetic
 
     fit = calibrated_synthetic if calibrated else fit_synthetic
-    return fit(family, n_per_task, seed, n_basis, tuple(names))
+    more = {} if shrinkage == "none" else {"shrinkage": shrinkage}   # one cache key per model
+    return fit(family, n_per_task, seed, n_basis, tuple(names), **more)
 
 
 class _Steering:

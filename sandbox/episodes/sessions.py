@@ -59,9 +59,10 @@ def fit_session_model(family: str, session: int, observe=("hand",), *,
 
 @functools.lru_cache(maxsize=8)
 def fit_synthetic(family: str, n_per_task: int, seed: int, n_basis: int | None,
-                  observe: tuple[str, ...], session: int | None = None):
-    """An IProMP (default options but ``n_basis``) fitted on a synthetic family's demos of
-    ``session`` (None: sessionless), with their meeting geometry; cached, do not modify."""
+                  observe: tuple[str, ...], session: int | None = None, shrinkage: str = "none"):
+    """An IProMP (default options but ``n_basis`` and ``shrinkage``) fitted on a synthetic
+    family's demos of ``session`` (None: sessionless), with their meeting geometry; cached,
+    do not modify."""
     from sandbox.core import IProMP
     from sandbox.data.geometry import attach_geometry
     from sandbox.data.synthetic import make_dataset
@@ -71,7 +72,8 @@ def fit_synthetic(family: str, n_per_task: int, seed: int, n_basis: int | None,
                                     observe=observe, session=session)
     from sandbox.episodes.libraries import remember_demos
 
-    model = IProMP() if n_basis is None else IProMP(n_basis=n_basis)
+    model = IProMP(shrinkage=shrinkage) if n_basis is None else IProMP(n_basis=n_basis,
+                                                                       shrinkage=shrinkage)
     return remember_demos(attach_geometry(model.fit(demos), demos), demos)
 
 
@@ -85,7 +87,8 @@ CALIBRATION_STREAM = 27
 
 @functools.lru_cache(maxsize=8)
 def calibrated_synthetic(family: str, n_per_task: int, seed: int, n_basis: int | None,
-                         observe: tuple[str, ...], session: int | None = None):
+                         observe: tuple[str, ...], session: int | None = None,
+                         shrinkage: str = "none"):
     """:func:`fit_synthetic`'s model with its familiarity calibrated (issue 27: the default
     models' "unsure / unknown motion" warning); cached, do not modify.
 
@@ -99,8 +102,10 @@ def calibrated_synthetic(family: str, n_per_task: int, seed: int, n_basis: int |
     from sandbox.data.preprocess import preprocess_demonstration
     from sandbox.data.synthetic import make_dataset
 
-    fitted = (fit_synthetic(family, n_per_task, seed, n_basis, observe) if session is None
-              else fit_synthetic(family, n_per_task, seed, n_basis, observe, session))
+    more = {} if shrinkage == "none" else {"shrinkage": shrinkage}
+    fitted = (fit_synthetic(family, n_per_task, seed, n_basis, observe, **more)
+              if session is None else
+              fit_synthetic(family, n_per_task, seed, n_basis, observe, session, **more))
     model = copy.copy(fitted)         # the same cache key as fit_family_model's: one fit
     rng = np.random.default_rng([seed, CALIBRATION_STREAM])
     fresh = make_dataset(family, N_CALIBRATION, rng, observe=observe, session=session)
