@@ -19,7 +19,7 @@ from sandbox.core.factor import condition_robot
 from sandbox.core.likelihood import Scorer
 from sandbox.core.phase import ended_probability, estimate_phase
 from sandbox.core.promp import WeightDistribution, trajectory_distribution
-from sandbox.core.recognition import task_posterior
+from sandbox.core.recognition import posterior_unchecked
 from sandbox.core.rest import chosen_task, motion_probability, rest_log_likelihood, with_rest
 from sandbox.core.statistics import StreamStatistics
 from sandbox.validation import FloatArray
@@ -70,7 +70,14 @@ class Prediction:
     def trajectory(self, basis, times) -> tuple[FloatArray, FloatArray]:
         """Robot mean (T, Q) and covariance (T, Q, Q) at ``times`` (s); holds after the end."""
         z = np.clip(np.asarray(times, dtype=np.float64) / self.duration, 0.0, 1.0)
-        return trajectory_distribution(self.robot, basis, z)
+        held = int(np.count_nonzero(z >= 1.0))
+        if held < 2 or not np.all(z[z.size - held:] >= 1.0):
+            return trajectory_distribution(self.robot, basis, z)
+        # After the end the motion holds (z = 1): one step of it, repeated
+        mean, cov = trajectory_distribution(self.robot, basis, z[:z.size - held + 1])
+        rest = held - 1
+        return (np.concatenate([mean, np.repeat(mean[-1:], rest, axis=0)]),
+                np.concatenate([cov, np.repeat(cov[-1:], rest, axis=0)]))
 
     def for_task(self, model: IProMP, k: int, posterior: FloatArray | None = None) -> Prediction:
         """The same estimate with task ``k`` chosen: its robot at its MAP duration.
@@ -123,7 +130,7 @@ def predict(model: IProMP, scorer: Scorer, times: FloatArray, values: FloatArray
     """
     est = estimate_phase(scorer, model.task_models, times, values, n_candidates=n_candidates,
                          width=width, refine_steps=refine_steps, mode=likelihood, stats=stats)
-    post = task_posterior(est.log_likelihood, model.priors)     # eq. 14-15
+    post = posterior_unchecked(est.log_likelihood, model.priors)     # eq. 14-15
     p_motion = 1.0
     if rest:
         still = rest_log_likelihood(values, scorer.sigma2, scorer.start_mean, scorer.start_var,

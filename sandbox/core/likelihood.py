@@ -44,7 +44,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from sandbox.core.factor import b_part, factor_scores
+from sandbox.core.factor import b_parts, factor_scores
 from sandbox.core.interaction import LOG_2PI
 from sandbox.core.promp import WeightDistribution
 from sandbox.core.rest import start_distribution
@@ -157,18 +157,23 @@ class Scorer:
         """Per group: :func:`~sandbox.core.factor.b_part` of the rows observing it and the
         likelihood's constant per dim."""
         present = self.present(values)
-        out: list[tuple | None] = []
-        for g in self.groups:
+        out: list[tuple | None] = [None] * len(self.groups)
+        shared: dict[bytes, list[int]] = {}       # groups observed on the same rows share G
+        for i, g in enumerate(self.groups):
             rows = present[g.modality]
-            s_g = int(rows.sum())
-            if s_g == 0:
-                out.append(None)
-                continue
+            if rows.any():
+                shared.setdefault(rows.tobytes(), []).append(i)
+        for members in shared.values():
+            rows = present[self.groups[members[0]].modality]
             ps = psi[:, rows]
-            y = values[rows][:, g.dims]
             ps_t = ps.transpose(0, 2, 1)
-            parts = b_part(ps_t @ ps, ps_t @ y, np.einsum("sp,sp->p", y, y), g.kappa)
-            out.append((parts, s_g * (LOG_2PI + self.log_sigma2[g.dims])))
+            ys = [values[rows][:, self.groups[i].dims] for i in members]
+            parts = b_parts(ps_t @ ps, [ps_t @ y for y in ys],
+                            [np.einsum("sp,sp->p", y, y) for y in ys],
+                            [self.groups[i].kappa for i in members])
+            for i, part in zip(members, parts):
+                dims = self.groups[i].dims
+                out[i] = (part, int(rows.sum()) * (LOG_2PI + self.log_sigma2[dims]))
         return out
 
     # --------------------------------------------------------------- joint
