@@ -139,7 +139,9 @@ def condition_robot(weights: WeightDistribution, factor: FloatArray, n_human: in
     n_human : int
         P.
     rank : int
-        r of this task (the factor is padded to R >= r).
+        r of this task (the factor is padded to R >= r). Columns of the weights'
+        factor past ``rank`` must have a zero human block
+        (:func:`~sandbox.core.likelihood.compress_human`): they pass unchanged.
 
     Returns
     -------
@@ -152,8 +154,10 @@ def condition_robot(weights: WeightDistribution, factor: FloatArray, n_human: in
     R = factor.shape[0] - 1
     LK = factor[:rank, :rank]
     g = factor[R, :rank]
-    U_r = weights.factor[n_human * N:]
+    U_r = weights.factor[n_human * N:, :rank]
     kinv_e = _lower_solve(LK, g, trans=1)
     new_factor = _lower_solve(LK, U_r.T).T
+    if weights.factor.shape[1] > rank:     # columns the observations do not see (compress_human)
+        new_factor = np.hstack([new_factor, weights.factor[n_human * N:, rank:]])
     mean = weights.mean[n_human * N:] + U_r @ kinv_e          # eq. 8
     return WeightDistribution(mean, new_factor, weights.reg[n_human:], N)

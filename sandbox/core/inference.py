@@ -79,16 +79,19 @@ class Prediction:
         return (np.concatenate([mean, np.repeat(mean[-1:], rest, axis=0)]),
                 np.concatenate([cov, np.repeat(cov[-1:], rest, axis=0)]))
 
-    def for_task(self, model: IProMP, k: int, posterior: FloatArray | None = None) -> Prediction:
+    def for_task(self, model: IProMP, k: int, posterior: FloatArray | None = None, *,
+                 scorer: Scorer | None = None) -> Prediction:
         """The same estimate with task ``k`` chosen: its robot at its MAP duration.
 
         ``posterior`` replaces the task posterior (e.g. one held since the motion
-        ended). Needs :attr:`factors` (joint likelihood).
+        ended). Needs :attr:`factors` (joint likelihood) and the ``Scorer(model)`` that
+        made them (built if not given).
         """
         if self.factors is None:
             raise ValueError("for_task: this prediction kept no factors (marginal likelihood)")
-        robot = condition_robot(model.task_models[k].weights, self.factors[k], model.n_human,
-                                model.task_models[k].weights.factor.shape[1])
+        scorer = Scorer(model) if scorer is None else scorer
+        robot = condition_robot(scorer.weights[k], self.factors[k], model.n_human,
+                                scorer.rank[k])
         return replace(self, task_index=int(k), robot=robot, duration=float(self.durations[k]),
                        task_posterior=self.task_posterior if posterior is None else posterior)
 
@@ -145,7 +148,6 @@ def predict(model: IProMP, scorer: Scorer, times: FloatArray, values: FloatArray
         factor = est.factors[k]
     else:
         factor = scorer.joint_pairs(times, values, np.array([T]), np.array([k]))[1][0]
-    robot = condition_robot(model.task_models[k].weights, factor, model.n_human,
-                            scorer.rank[k])
+    robot = condition_robot(scorer.weights[k], factor, model.n_human, scorer.rank[k])
     return Prediction(k, post, est.alphas, est.durations, est.log_likelihood, robot, T,
                       est.factors, est.grid, int(np.isfinite(values).sum()), p_motion)

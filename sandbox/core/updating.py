@@ -328,7 +328,7 @@ class PredictorBase:
                 return None                      # marginal likelihood: the plan just holds
             last = self.updates[-1]
             prediction = prediction.for_task(self.model, self.model.task_index(last.task),
-                                             last.task_posterior)
+                                             last.task_posterior, scorer=self.scorer)
         elif self.until_end and prediction.ended_probability(t) >= self.end_prob:
             ends = True                          # this update decides; later ones hold it
         k = prediction.task_index
