@@ -10,7 +10,7 @@ optionally normalised so that :math:`\\sum_n \\psi_n(z) = 1`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -49,6 +49,8 @@ class GaussianBasis:
     width: float | None = None
     margin: float = 0.0
     normalized: bool = False
+    _centers: FloatArray = field(init=False, repr=False, compare=False)
+    _neg_half_h: float = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         n = check_integer(self.n_basis, "n_basis", 2, MAX_N_BASIS)

@@ -110,7 +110,8 @@ class Lattice:
         return np.stack([self.j_lo - base, self.j_hi - base + 1], axis=1)
 
 
-def log_alpha_prior(alpha: FloatArray, mean: float, std: float) -> FloatArray:
+def log_alpha_prior(alpha: FloatArray, mean: float | FloatArray,
+                    std: float | FloatArray) -> FloatArray:
     """:math:`\\log\\mathcal{N}(\\alpha; \\mu_\\alpha, \\sigma_\\alpha^2)`."""
     u = (alpha - mean) / std
     return -0.5 * (u * u + LOG_2PI) - np.log(std)

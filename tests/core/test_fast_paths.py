@@ -82,7 +82,7 @@ def test_vectorised_phase_grid_matches_the_per_task_loop(fitted, refine_steps):
     np.testing.assert_allclose(est.log_likelihood, best_ll, rtol=1e-12)
     np.testing.assert_allclose(est.log_prior, best_lp, rtol=1e-12, atol=1e-12)
     np.testing.assert_allclose(est.factors, factors, rtol=1e-12, atol=1e-14)
-    for (T, w), r in zip(est.grid, ref):
+    for (_, w), r in zip(est.grid, ref):
         np.testing.assert_allclose(w, r[4], rtol=1e-10, atol=1e-300)
         assert w.sum() == pytest.approx(1.0, rel=1e-12)
 
