@@ -14,7 +14,7 @@
   that rank reaches N x P (:mod:`sandbox.core.likelihood`).
 
 Every figure is a median over ``repeats`` updates of one predictor fed as the online
-predictor is (:func:`sandbox.bench.core._timed_update`).
+predictor is, as ``update_ms`` of :mod:`sandbox.bench.core`.
 """
 
 from __future__ import annotations
