@@ -126,11 +126,14 @@ def _blend_flops(pred, t: float, N: int, Q: int, r: int) -> float:
     how, prediction = pred._blending, pred.last_prediction
     plan = _prior_plan(pred).blended(t, lambda ts: prediction.trajectory(pred.model.basis, ts),
                                      prediction.duration, how)[0]
-    steps = int(np.count_nonzero(plan.times > t))
+    knots = plan.times[plan.times > t]
+    steps = knots.size
+    # computed steps: up to the predicted end, then held (Prediction.trajectory)
+    moving = min(int(np.count_nonzero(knots < prediction.duration)) + 1, steps)
     # knots blended: until the falling sigmoid is below 1e-12 (plan._blend)
     blended = min(steps, int((how.delay + np.log(1e12) / how.rate) / how.dt) + 1)
-    trajectory = steps * (6 * N + 2 * N * Q + 2 * N * Q * r + 2 * Q * Q * r + 2 * N + Q)
-    interpolate = steps * 4 * (Q * Q + Q)
+    trajectory = moving * (6 * N + 2 * N * Q + 2 * N * Q * r + 2 * Q * Q * r + 2 * N + Q)
+    interpolate = blended * 4 * (Q * Q + Q)
     product = blended * (2 * Q**3 / 3 + 2 * Q * Q * (Q + 2) + 2 * Q**3 + 6 * Q * Q)
     return trajectory + interpolate + product
 
