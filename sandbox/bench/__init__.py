@@ -21,5 +21,14 @@ def print_result(result: dict, as_json: bool, width: int) -> None:
     if as_json:
         print(json.dumps(result, indent=2))
     else:
-        for key, value in result.items():
-            print(f"{key:{width}s} {value}")
+        _print_lines(result, width, "")
+
+
+def _print_lines(result: dict, width: int, indent: str) -> None:
+    """``key value`` lines; a section (a mapping of mappings, e.g. the roofline) is indented."""
+    for key, value in result.items():
+        if isinstance(value, dict) and any(isinstance(v, dict) for v in value.values()):
+            print(f"{indent}{key}")
+            _print_lines(value, width - 2, indent + "  ")
+        else:
+            print(f"{indent}{key:{width}s} {value}")

@@ -31,6 +31,9 @@ Timed, from one run, as medians over ``repeats`` repetitions:
   (:func:`_arm_and_emg`: an elbow and a shoulder offset from the hand, and
   task-dependent activity levels); their realism does not change the
   arithmetic. ``observe_multimodal_ms`` is the statistics' growth per row.
+* ``roofline``: the reference update's flops, time and achieved GFLOP/s per stage, against
+  this machine's batched 45 x 45 Cholesky and matrix-product rates measured in the same
+  run (:mod:`sandbox.bench.roofline`).
 * ``movement_primitives_condition_ms`` (if the package is installed): its ProMP
   over the same 10 dims conditioned by 40 sequential ``condition_position``
   calls, robot dims given a huge variance (it has no masked conditioning).
@@ -43,6 +46,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from sandbox.bench.roofline import roofline
 from sandbox.core import DynamicPredictor, IProMP
 from sandbox.core.blending import blend_unchecked, sigmoid_activations
 from sandbox.core.interaction import condition, log_marginal_likelihood, observation_matrix
@@ -236,6 +240,8 @@ def run_core_benchmarks(repeats: int = 200, seed: int = 0) -> dict:
         },
     }
     out.update(_multimodal_figures(seed, repeats, n_cand, fast))
+    out["roofline"] = roofline(_fed_predictor(model, t200, y200, n_candidates=n_cand), t_update,
+                               repeats=max(repeats // 2, 1))
     mp = movement_primitives_condition(model, times, values, repeats)
     if mp is not None:
         out["movement_primitives_condition_ms"] = round(mp, 4)

@@ -46,10 +46,13 @@ def run(args) -> int:
 
 def _stages(args) -> list:
     """(name, function returning figures) of every benchmark this run measures."""
+    from sandbox.bench.cases import run_case_benchmarks
     from sandbox.bench.core import run_core_benchmarks
 
     stages = [("predictor update",
-               lambda: run_core_benchmarks(repeats=args.repeats, seed=args.seed))]
+               lambda: run_core_benchmarks(repeats=args.repeats, seed=args.seed)),
+              ("many tasks and demos",
+               lambda: run_case_benchmarks(repeats=args.repeats, seed=args.seed))]
     if getattr(args, "methods", False):
         from sandbox.bench.methods import run_method_benchmarks
 

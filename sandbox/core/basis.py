@@ -10,7 +10,7 @@ optionally normalised so that :math:`\\sum_n \\psi_n(z) = 1`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -49,6 +49,8 @@ class GaussianBasis:
     width: float | None = None
     margin: float = 0.0
     normalized: bool = False
+    _centers: FloatArray = field(init=False, repr=False, compare=False)
+    _neg_half_h: float = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         n = check_integer(self.n_basis, "n_basis", 2, MAX_N_BASIS)
@@ -61,6 +63,9 @@ class GaussianBasis:
         object.__setattr__(self, "width", width)
         object.__setattr__(self, "margin", margin)
         object.__setattr__(self, "normalized", check_bool(self.normalized, "normalized"))
+        # the hot path's constants, computed once (evaluate runs at every update)
+        object.__setattr__(self, "_centers", self.centers)
+        object.__setattr__(self, "_neg_half_h", -0.5 / self.h)
 
     @property
     def centers(self) -> FloatArray:
@@ -93,8 +98,8 @@ class GaussianBasis:
 
     def evaluate(self, z: FloatArray) -> FloatArray:
         """Like ``__call__`` without conversion (hot path; ``z`` is a float array)."""
-        d = z[..., None] - self.centers            # eq. 3: row t of Psi is psi(z_t)^T
-        e = d * d * (-0.5 / self.h)
+        d = z[..., None] - self._centers           # eq. 3: row t of Psi is psi(z_t)^T
+        e = d * d * self._neg_half_h
         if not self.normalized:
             return np.exp(e)
         e -= e.max(axis=-1, keepdims=True)   # stable far outside [0, 1]

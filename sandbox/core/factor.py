@@ -18,21 +18,46 @@ from sandbox.validation import FloatArray
 
 
 def b_part(G: FloatArray, beta: FloatArray, yy: FloatArray, kappa: float):
-    """Per candidate: log|A|, W = G - kappa G A^-1 G, A^-1 beta, y^T(I+kappa Psi Psi^T)^-1 y."""
+    """Per candidate: log|A|, W = G - kappa G A^-1 G, A^-1 beta, y^T(I+kappa Psi Psi^T)^-1 y.
+
+    Parameters
+    ----------
+    G : ndarray, shape (C, N, N)
+        :math:`\\Psi^T\\Psi` of the rows observing the group, per candidate.
+    beta : ndarray, shape (C, N, Pg)
+        :math:`\\Psi^T y_p` per dim of the group.
+    yy : ndarray, shape (Pg,)
+        :math:`y_p^T y_p`.
+    kappa : float
+        The group's :math:`\\kappa`; :math:`A = I + \\kappa G`.
+    """
+    return b_parts(G, [beta], [yy], [kappa])[0]
+
+
+def b_parts(G: FloatArray, betas, yys, kappas) -> list:
+    """:func:`b_part` of several groups observed on the same rows (one G): one batched
+    Cholesky of every group's :math:`A = I + \\kappa_g G` instead of one per group."""
     C, N, _ = G.shape
-    A = kappa * G
+    n = len(kappas)
+    Gs = G if n == 1 else np.concatenate([G] * n)
+    kap = np.repeat(np.asarray(kappas, dtype=np.float64), C)[:, None, None]
+    A = kap * Gs
     A[:, np.arange(N), np.arange(N)] += 1.0
     L = np.linalg.cholesky(A)
     ld = 2.0 * np.log(np.diagonal(L, axis1=1, axis2=2)).sum(axis=1)
     Li = np.empty_like(L)
-    for c in range(C):   # triangular inverse of a factor of A >= I: backward stable
+    for c in range(n * C):   # triangular inverse of a factor of A >= I: backward stable
         Li[c] = lapack.dtrtri(L[c], lower=1)[0]
-    Q = Li @ G
-    W = G - kappa * (Q.transpose(0, 2, 1) @ Q)
-    Lb = Li @ beta
-    ab = Li.transpose(0, 2, 1) @ Lb
-    gamma = yy - kappa * (Lb**2).sum(axis=1)
-    return ld, W, ab, gamma
+    Q = Li @ Gs
+    W = Gs - kap * (Q.transpose(0, 2, 1) @ Q)
+    out = []
+    for i in range(n):
+        part = slice(i * C, (i + 1) * C)
+        Lb = Li[part] @ betas[i]
+        ab = Li[part].transpose(0, 2, 1) @ Lb
+        gamma = yys[i] - kappas[i] * (Lb**2).sum(axis=1)
+        out.append((ld[part], W[part], ab, gamma))
+    return out
 
 
 def factor_scores(Kt: FloatArray, eps: FloatArray, gamma_term: FloatArray,
@@ -91,6 +116,16 @@ def _cholesky_one(m: FloatArray) -> FloatArray:
         return L
 
 
+def _lower_solve(L: FloatArray, b: FloatArray, trans: int = 0) -> FloatArray:
+    """:math:`L^{-1} b` (or :math:`L^{-T} b`) for a lower-triangular factor with a positive
+    diagonal: LAPACK's trtrs directly (scipy's checks cost more than these small solves)."""
+    if L.shape[0] == 0:
+        return np.zeros(b.shape)
+    x, info = lapack.dtrtrs(L, b, lower=1, trans=trans)
+    assert info == 0, info          # a Cholesky factor's diagonal is positive
+    return np.asarray(x, dtype=np.float64)
+
+
 def condition_robot(weights: WeightDistribution, factor: FloatArray, n_human: int,
                     rank: int) -> WeightDistribution:
     """Posterior of the robot weights given the observations scored with ``factor``.
@@ -104,7 +139,9 @@ def condition_robot(weights: WeightDistribution, factor: FloatArray, n_human: in
     n_human : int
         P.
     rank : int
-        r of this task (the factor is padded to R >= r).
+        r of this task (the factor is padded to R >= r). Columns of the weights'
+        factor past ``rank`` must have a zero human block
+        (:func:`~sandbox.core.likelihood.compress_human`): they pass unchanged.
 
     Returns
     -------
@@ -117,8 +154,10 @@ def condition_robot(weights: WeightDistribution, factor: FloatArray, n_human: in
     R = factor.shape[0] - 1
     LK = factor[:rank, :rank]
     g = factor[R, :rank]
-    U_r = weights.factor[n_human * N:]
-    kinv_e = scipy.linalg.solve_triangular(LK, g, lower=True, trans="T")
-    new_factor = scipy.linalg.solve_triangular(LK, U_r.T, lower=True).T
+    U_r = weights.factor[n_human * N:, :rank]
+    kinv_e = _lower_solve(LK, g, trans=1)
+    new_factor = _lower_solve(LK, U_r.T).T
+    if weights.factor.shape[1] > rank:     # columns the observations do not see (compress_human)
+        new_factor = np.hstack([new_factor, weights.factor[n_human * N:, rank:]])
     mean = weights.mean[n_human * N:] + U_r @ kinv_e          # eq. 8
     return WeightDistribution(mean, new_factor, weights.reg[n_human:], N)

@@ -19,7 +19,7 @@ from sandbox.core.factor import condition_robot
 from sandbox.core.likelihood import Scorer
 from sandbox.core.phase import ended_probability, estimate_phase
 from sandbox.core.promp import WeightDistribution, trajectory_distribution
-from sandbox.core.recognition import task_posterior
+from sandbox.core.recognition import posterior_unchecked
 from sandbox.core.rest import chosen_task, motion_probability, rest_log_likelihood, with_rest
 from sandbox.core.statistics import StreamStatistics
 from sandbox.validation import FloatArray
@@ -70,18 +70,28 @@ class Prediction:
     def trajectory(self, basis, times) -> tuple[FloatArray, FloatArray]:
         """Robot mean (T, Q) and covariance (T, Q, Q) at ``times`` (s); holds after the end."""
         z = np.clip(np.asarray(times, dtype=np.float64) / self.duration, 0.0, 1.0)
-        return trajectory_distribution(self.robot, basis, z)
+        held = int(np.count_nonzero(z >= 1.0))
+        if held < 2 or not np.all(z[z.size - held:] >= 1.0):
+            return trajectory_distribution(self.robot, basis, z)
+        # After the end the motion holds (z = 1): one step of it, repeated
+        mean, cov = trajectory_distribution(self.robot, basis, z[:z.size - held + 1])
+        rest = held - 1
+        return (np.concatenate([mean, np.repeat(mean[-1:], rest, axis=0)]),
+                np.concatenate([cov, np.repeat(cov[-1:], rest, axis=0)]))
 
-    def for_task(self, model: IProMP, k: int, posterior: FloatArray | None = None) -> Prediction:
+    def for_task(self, model: IProMP, k: int, posterior: FloatArray | None = None, *,
+                 scorer: Scorer | None = None) -> Prediction:
         """The same estimate with task ``k`` chosen: its robot at its MAP duration.
 
         ``posterior`` replaces the task posterior (e.g. one held since the motion
-        ended). Needs :attr:`factors` (joint likelihood).
+        ended). Needs :attr:`factors` (joint likelihood) and the ``Scorer(model)`` that
+        made them (built if not given).
         """
         if self.factors is None:
             raise ValueError("for_task: this prediction kept no factors (marginal likelihood)")
-        robot = condition_robot(model.task_models[k].weights, self.factors[k], model.n_human,
-                                model.task_models[k].weights.factor.shape[1])
+        scorer = Scorer(model) if scorer is None else scorer
+        robot = condition_robot(scorer.weights[k], self.factors[k], model.n_human,
+                                scorer.rank[k])
         return replace(self, task_index=int(k), robot=robot, duration=float(self.durations[k]),
                        task_posterior=self.task_posterior if posterior is None else posterior)
 
@@ -123,7 +133,7 @@ def predict(model: IProMP, scorer: Scorer, times: FloatArray, values: FloatArray
     """
     est = estimate_phase(scorer, model.task_models, times, values, n_candidates=n_candidates,
                          width=width, refine_steps=refine_steps, mode=likelihood, stats=stats)
-    post = task_posterior(est.log_likelihood, model.priors)     # eq. 14-15
+    post = posterior_unchecked(est.log_likelihood, model.priors)     # eq. 14-15
     p_motion = 1.0
     if rest:
         still = rest_log_likelihood(values, scorer.sigma2, scorer.start_mean, scorer.start_var,
@@ -138,7 +148,6 @@ def predict(model: IProMP, scorer: Scorer, times: FloatArray, values: FloatArray
         factor = est.factors[k]
     else:
         factor = scorer.joint_pairs(times, values, np.array([T]), np.array([k]))[1][0]
-    robot = condition_robot(model.task_models[k].weights, factor, model.n_human,
-                            scorer.rank[k])
+    robot = condition_robot(scorer.weights[k], factor, model.n_human, scorer.rank[k])
     return Prediction(k, post, est.alphas, est.durations, est.log_likelihood, robot, T,
                       est.factors, est.grid, int(np.isfinite(values).sum()), p_motion)

@@ -44,7 +44,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from sandbox.core.factor import b_part, factor_scores
+from sandbox.core.factor import b_parts, factor_scores
 from sandbox.core.interaction import LOG_2PI
 from sandbox.core.promp import WeightDistribution
 from sandbox.core.rest import start_distribution
@@ -119,15 +119,17 @@ class Scorer:
         self.sigma2 = np.asarray(model.noise, dtype=np.float64)
         self.log_sigma2 = np.log(self.sigma2)
         self.start_mean, self.start_var = start_distribution(model)   # the rest hypothesis
-        self.rank = [t.weights.factor.shape[1] for t in model.task_models]
+        #: Each task's weights with the factor's columns turned so that the human block
+        #: spans the first ``rank[k]`` (:func:`compress_human`); the same distribution.
+        self.weights, self.rank = zip(*[compress_human(t.weights, P) for t in model.task_models])
         self.R = max(self.rank)
         self.reg_h = np.array([t.weights.reg[:P] for t in model.task_models])  # (K, P)
         sizes = [m.size for m in model.modalities]
         self.modality_dims = np.split(np.arange(P), np.cumsum(sizes)[:-1])
         pad = np.zeros((self.K, N, P, self.R + 1))
         raw = []
-        for k, t in enumerate(model.task_models):
-            ut = _human_block(t.weights, P, N)                    # (P, N, r+1): [U_h, mu_h]
+        for k in range(self.K):
+            ut = _human_block(self.weights[k], P, N, self.rank[k])   # (P, N, r+1): [U_h, mu_h]
             raw.append(ut)
             scaled = (ut / np.sqrt(self.sigma2)[:, None, None]).transpose(1, 0, 2)
             pad[k, :, :, : self.rank[k]] = scaled[..., :-1]
@@ -157,18 +159,23 @@ class Scorer:
         """Per group: :func:`~sandbox.core.factor.b_part` of the rows observing it and the
         likelihood's constant per dim."""
         present = self.present(values)
-        out: list[tuple | None] = []
-        for g in self.groups:
+        out: list[tuple | None] = [None] * len(self.groups)
+        shared: dict[bytes, list[int]] = {}       # groups observed on the same rows share G
+        for i, g in enumerate(self.groups):
             rows = present[g.modality]
-            s_g = int(rows.sum())
-            if s_g == 0:
-                out.append(None)
-                continue
+            if rows.any():
+                shared.setdefault(rows.tobytes(), []).append(i)
+        for members in shared.values():
+            rows = present[self.groups[members[0]].modality]
             ps = psi[:, rows]
-            y = values[rows][:, g.dims]
             ps_t = ps.transpose(0, 2, 1)
-            parts = b_part(ps_t @ ps, ps_t @ y, np.einsum("sp,sp->p", y, y), g.kappa)
-            out.append((parts, s_g * (LOG_2PI + self.log_sigma2[g.dims])))
+            ys = [values[rows][:, self.groups[i].dims] for i in members]
+            parts = b_parts(ps_t @ ps, [ps_t @ y for y in ys],
+                            [np.einsum("sp,sp->p", y, y) for y in ys],
+                            [self.groups[i].kappa for i in members])
+            for i, part in zip(members, parts):
+                dims = self.groups[i].dims
+                out[i] = (part, int(rows.sum()) * (LOG_2PI + self.log_sigma2[dims]))
         return out
 
     # --------------------------------------------------------------- joint
@@ -292,8 +299,37 @@ class Scorer:
         return (-0.5 * (dims.size * LOG_2PI + logdet + (w**2).sum(axis=2))).sum(axis=1)
 
 
-def _human_block(weights: WeightDistribution, P: int, N: int) -> FloatArray:
-    U = weights.factor[: P * N].reshape(P, N, -1)
+def compress_human(weights: WeightDistribution, P: int) -> tuple[WeightDistribution, int]:
+    """The same weight distribution with the human block's factor in the fewest columns.
+
+    The likelihood's r x r matrices (step 2 of the module docstring) have the rank r of
+    the factor U (demos - 1), but only its human block :math:`U_h` (N P x r) enters
+    them: with many demos (r > N P) :math:`U_h` has rank m <= N P. Turning the factor's
+    columns by the orthogonal :math:`V` of the SVD :math:`U_h = A S V^T` (so
+    :math:`(UV)(UV)^T = UU^T`) leaves the human block in the first m columns and zeros
+    after them; the likelihood and the conditioning (:func:`~sandbox.core.factor.condition_robot`)
+    then factor m x m matrices instead of r x r, exactly.
+
+    Returns
+    -------
+    weights : WeightDistribution
+        ``weights`` itself when r <= N P (nothing to gain), else the turned one.
+    m : int
+        Columns the human block spans (r when unchanged).
+    """
+    N, U = weights.n_basis, weights.factor
+    r = U.shape[1]
+    if r <= P * N:
+        return weights, r
+    _, sv, vt = np.linalg.svd(U[: P * N], full_matrices=True)
+    m = int(np.count_nonzero(sv > sv.max() * 1e-12)) if sv.size and sv.max() > 0 else 0
+    turned = U @ vt.T
+    turned[: P * N, m:] = 0.0                   # U_h V beyond its rank: round-off only
+    return WeightDistribution(weights.mean, turned, weights.reg, N), m
+
+
+def _human_block(weights: WeightDistribution, P: int, N: int, rank: int) -> FloatArray:
+    U = weights.factor[: P * N, :rank].reshape(P, N, -1)
     mu = weights.mean[: P * N].reshape(P, N, 1)
     return np.concatenate([U, mu], axis=2)
 

@@ -110,7 +110,8 @@ class Lattice:
         return np.stack([self.j_lo - base, self.j_hi - base + 1], axis=1)
 
 
-def log_alpha_prior(alpha: FloatArray, mean: float, std: float) -> FloatArray:
+def log_alpha_prior(alpha: FloatArray, mean: float | FloatArray,
+                    std: float | FloatArray) -> FloatArray:
     """:math:`\\log\\mathcal{N}(\\alpha; \\mu_\\alpha, \\sigma_\\alpha^2)`."""
     u = (alpha - mean) / std
     return -0.5 * (u * u + LOG_2PI) - np.log(std)
@@ -141,37 +142,45 @@ def estimate_phase(scorer: Scorer, tasks, times: FloatArray, values: FloatArray,
     nominal = np.array([t.nominal_duration for t in tasks])
     a_mean = np.array([t.alpha_mean for t in tasks])
     a_std = np.array([t.alpha_std for t in tasks])
-    score = scorer.joint if mode == "joint" else scorer.marginal
     if stats is not None and mode == "joint":
-        lattice = stats.lattice
-        durations, spans = stats.durations, lattice.spans()
-        scores = stats.scores(spans)
+        durations, spans = stats.durations, stats.spans
+        loglik, pair_factors = stats.packed_scores()      # every task's pairs, one batch
     else:
         lattice = Lattice.for_tasks(tasks, n_candidates, width)
         durations, spans = lattice.durations, lattice.spans()
-        scores = score(times, values, durations, spans)
-    K = len(tasks)
-    best_T, best_ll, best_lp = np.empty(K), np.empty(K), np.empty(K)
-    factors = np.empty((K, scorer.R + 1, scorer.R + 1)) if mode == "joint" else None
-    brackets = []
-    grid = []
-    for k in range(K):
-        T = durations[spans[k, 0]:spans[k, 1]]
-        lp = log_alpha_prior(T / nominal[k], a_mean[k], a_std[k])   # eq. 10: alpha = T / T_nom
-        f = scores.loglik[k] + lp                 # eq. 11: log posterior (eq. 12 + prior)
-        i = int(np.argmax(f))                     # eq. 13
-        w = np.exp(f - f[i])
-        grid.append((T, w / w.sum()))
-        best_T[k], best_ll[k], best_lp[k] = T[i], scores.loglik[k][i], lp[i]
-        if factors is not None:
-            factors[k] = scores.factors[k][i]
-        brackets.append(_bracket(T, f, i))
+        scores = (scorer.joint if mode == "joint" else scorer.marginal)(times, values,
+                                                                         durations, spans)
+        loglik = np.concatenate(scores.loglik)
+        pair_factors = None if scores.factors is None else np.concatenate(scores.factors)
+    lengths = spans[:, 1] - spans[:, 0]
+    starts = np.concatenate([[0], np.cumsum(lengths)[:-1]])
+    task_of = np.repeat(np.arange(len(tasks)), lengths)
+    T = durations[np.arange(loglik.size) - np.repeat(starts - spans[:, 0], lengths)]
+    lp = log_alpha_prior(T / nominal[task_of], a_mean[task_of], a_std[task_of])  # eq. 10
+    f = loglik + lp                               # eq. 11: log posterior (eq. 12 + prior)
+    best = _argmax_per_task(f, starts, lengths)   # eq. 13
+    w = np.exp(f - np.repeat(f[best], lengths))
+    w /= np.repeat(np.add.reduceat(w, starts), lengths)
+    grid = list(zip(np.split(T, starts[1:]), np.split(w, starts[1:])))
+    best_T, best_ll, best_lp = T[best], loglik[best], lp[best]
+    factors = None if pair_factors is None else pair_factors[best]
+    brackets = [None if i in (a, a + n - 1) else
+                (T[i - 1], T[i], T[i + 1], f[i - 1], f[i], f[i + 1])
+                for i, a, n in zip(best.tolist(), starts.tolist(), lengths.tolist())]
     pairs = scorer.joint_pairs if mode == "joint" else _marginal_pairs(scorer)
     for _ in range(refine_steps):
         brackets = _refine(pairs, times, values, tasks, brackets, nominal, a_mean, a_std,
                            best_T, best_ll, best_lp, factors)
-    return PhaseEstimate(best_T, best_T / nominal, best_ll, best_lp, factors,
-                         spans[:, 1] - spans[:, 0], grid)
+    return PhaseEstimate(best_T, best_T / nominal, best_ll, best_lp, factors, lengths, grid)
+
+
+def _argmax_per_task(f: FloatArray, starts: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    """Index in ``f`` of each segment's first maximum (as ``np.argmax`` of each segment)."""
+    top = np.maximum.reduceat(f, starts)
+    if not np.all(np.isfinite(top)):              # NaN or -inf scores: one segment at a time
+        return np.array([a + int(np.argmax(f[a:a + n])) for a, n in zip(starts, lengths)])
+    hits = np.flatnonzero(f == np.repeat(top, lengths))
+    return hits[np.searchsorted(hits, starts)]
 
 
 def ended_probability(grid, t: float) -> FloatArray:
@@ -180,13 +189,6 @@ def ended_probability(grid, t: float) -> FloatArray:
     ``grid`` is :attr:`PhaseEstimate.grid` (the mass of the candidate durations <= t).
     """
     return np.array([w[T <= t].sum() for T, w in grid])
-
-
-def _bracket(T: FloatArray, f: FloatArray, i: int):
-    """(T_left, T_mid, T_right, f_left, f_mid, f_right) around the best point, or None."""
-    if i == 0 or i == T.size - 1:
-        return None
-    return (T[i - 1], T[i], T[i + 1], f[i - 1], f[i], f[i + 1])
 
 
 def _vertex(br) -> float | None:

@@ -154,11 +154,13 @@ class Plan:
                     f"an update at {t:g} s, planning to {end:g} s,", how.dt)
         new_t = np.arange(first, end + how.dt, how.dt)
         new_t = new_t[new_t > t + 1e-9]
-        old_mean, old_cov = self.interpolate(np.concatenate([[t], new_t]))
+        fall, rise, n = _activations(new_t, t + how.delay, how.rate)
+        # the old plan matters only where it is blended (the jump reads its first knot)
+        n_old = n if how.blend else 0
+        old_mean, old_cov = self.interpolate(np.concatenate([[t], new_t[:max(n_old, 1)]]))
         mean, cov = new(new_t)
         if how.blend:
-            mean, cov = _blend(new_t, (old_mean[1:], old_cov[1:]), (mean, cov),
-                               t + how.delay, how.rate)
+            mean, cov = _blend((old_mean[1:], old_cov[1:]), (mean, cov), fall, rise, n)
         jump = float(np.linalg.norm(mean[0] - old_mean[1])) if new_t.size else 0.0
         plan = Plan(np.concatenate([self.times[keep], [t], new_t]),
                     np.concatenate([self.mean[keep], old_mean[:1], mean]),
@@ -166,15 +168,20 @@ class Plan:
         return plan, jump
 
 
-def _blend(times: FloatArray, old: tuple[FloatArray, FloatArray],
-           new: tuple[FloatArray, FloatArray], center: float,
-           rate: float) -> tuple[FloatArray, FloatArray]:
-    """Product of the old (falling) and new (rising) distributions at ``times`` (eq. 16-18)."""
+def _activations(times: FloatArray, center: float, rate: float):
+    """Falling and rising sigmoids at ``times`` (eq. 18) and the number of leading knots
+    blended: past the falling sigmoid's numerically irrelevant tail (< 1e-12; it only
+    falls) the product is the new distribution."""
     fall, rise = sigmoid_activations(times, center, rate)                  # eq. 18
-    # Past the falling sigmoid's numerically irrelevant tail (< 1e-12; it only
-    # falls) the product is the new distribution: blend only the steps before.
     n = int(np.searchsorted(-fall, -1e-12))
     rise[rise < 1e-12] = 0.0
+    return fall, rise, n
+
+
+def _blend(old: tuple[FloatArray, FloatArray], new: tuple[FloatArray, FloatArray],
+           fall: FloatArray, rise: FloatArray, n: int) -> tuple[FloatArray, FloatArray]:
+    """Product of the old (falling) and new (rising) distributions at the knots (eq. 16-18);
+    ``old`` is needed at the first ``n`` knots only (:func:`_activations`)."""
     mean, cov = new
     head = blend_unchecked(np.stack([old[0][:n], mean[:n]]),             # eq. 16-17
                            np.stack([old[1][:n], cov[:n]]),

@@ -32,7 +32,12 @@ def task_posterior(log_likelihood: FloatArray, priors: FloatArray) -> FloatArray
     p = check_array(priors, "priors", 1, shape=(ll.size,))
     if np.any(p < 0) or p.sum() <= 0:
         raise ValueError(f"priors: expected non-negative values with a positive sum, got {p}")
+    return posterior_unchecked(ll, p)
+
+
+def posterior_unchecked(log_likelihood: FloatArray, priors: FloatArray) -> FloatArray:
+    """:func:`task_posterior` of float arrays already checked (the update's inner loop)."""
     with np.errstate(divide="ignore"):
-        score = ll + np.log(p)          # eq. 14 (ll: eq. 15 at the MAP speed)
+        score = log_likelihood + np.log(priors)   # eq. 14 (ll: eq. 15 at the MAP speed)
     weights = np.exp(score - score.max())
     return weights / weights.sum()

@@ -30,6 +30,10 @@ so :math:`\\tilde K` and :math:`\\epsilon` grow by rank-P terms of
 :math:`x_{kp} = \\tilde U_{kp}^T v/(\\sqrt d\\,\\sigma_p)`. A window update then
 only assembles and factors the r x r matrices. The results equal the batch
 computation (:meth:`~sandbox.core.likelihood.Scorer.joint`) to round-off.
+
+:math:`\\tilde K` and :math:`\\epsilon` are kept only for the (candidate, task) pairs
+the lattice scores (each task's span), packed task after task (:attr:`StreamStatistics.pairs`):
+an update factors them all in one batched Cholesky without gathering them first.
 """
 
 from __future__ import annotations
@@ -72,14 +76,22 @@ class StreamStatistics:
         self.lattice = lattice
         self.durations = lattice.durations
         self.flush_every = int(flush_every)
+        spans = lattice.spans()
+        self.spans = spans
+        #: Task and candidate of every packed pair, shape (2, M): task k's candidates in order.
+        self.pairs = np.array([(k, c) for k, (a, b) in enumerate(spans) for c in range(a, b)],
+                              dtype=np.int64).reshape(-1, 2).T
+        self.cuts = np.cumsum(spans[:, 1] - spans[:, 0])[:-1]
         self.reset()
 
     def reset(self) -> None:
         """Forget every observation."""
         sc, C = self.scorer, self.durations.size
         self.groups = [_GroupStats(C, sc.N, g.dims.size) for g in sc.groups]
-        self.Kt = np.zeros((C, sc.K, sc.R + 1, sc.R + 1))
-        self.eps = np.zeros((C, sc.K, sc.R + 1))
+        M = self.pairs.shape[1]
+        self.Kt = np.zeros((M, sc.R + 1, sc.R + 1))     # packed pairs (module docstring)
+        self.eps = np.zeros((M, sc.R + 1))
+        self._work = np.empty_like(self.Kt)
         self.count = 0
         self._x: list[np.ndarray] = []
         self._coef: list[np.ndarray] = []
@@ -120,22 +132,19 @@ class StreamStatistics:
     def _flush(self) -> None:
         if not self._x:
             return
-        C, K, R1 = self.durations.size, self.scorer.K, self.scorer.R + 1
-        x = np.concatenate(self._x, axis=2).reshape(C * K, -1, R1)         # rows (obs, dim)
-        coef = np.concatenate(self._coef, axis=1)                         # (C, rows)
-        coef = np.broadcast_to(coef[:, None], (C, K, coef.shape[1])).reshape(C * K, -1, 1)
-        self.Kt += (x.transpose(0, 2, 1) @ x).reshape(C, K, R1, R1)
-        self.eps += (x.transpose(0, 2, 1) @ coef)[..., 0].reshape(C, K, R1)
+        pk, pc = self.pairs
+        x = np.concatenate(self._x, axis=2)[pc, pk]                      # (M, rows, R+1)
+        coef = np.concatenate(self._coef, axis=1)[pc]                     # (M, rows)
+        xt = x.transpose(0, 2, 1)
+        self.Kt += xt @ x
+        self.eps += (xt @ coef[:, :, None])[..., 0]
         self._x.clear()
         self._coef.clear()
 
-    def scores(self, spans: np.ndarray) -> Scores:
-        """Joint log-likelihoods for every task's candidates (as :meth:`Scorer.joint`).
+    def packed_scores(self) -> tuple[np.ndarray, np.ndarray]:
+        """Joint log-likelihoods (M,) and augmented factors (M, R+1, R+1) of every pair.
 
-        Parameters
-        ----------
-        spans : ndarray of int, shape (K, 2)
-            Task k scores ``durations[spans[k,0]:spans[k,1]]``.
+        Pairs are packed task after task (:attr:`pairs`); :meth:`scores` splits them.
         """
         self._flush()
         sc = self.scorer
@@ -147,10 +156,21 @@ class StreamStatistics:
             member = g.member                                                     # (K, Pg)
             const += (member @ per_dim)[:, None] + member.sum(axis=1)[:, None] * st.logdet_a
             gamma_term += member @ (st.gamma / sc.sigma2[g.dims]).T
-        pick = [(k, slice(int(a), int(b))) for k, (a, b) in enumerate(spans)]
-        ll, L = factor_scores(np.concatenate([self.Kt[c, k] for k, c in pick]),   # one batch
-                              np.concatenate([self.eps[c, k] for k, c in pick]),
-                              np.concatenate([gamma_term[k, c] for k, c in pick]),
-                              np.concatenate([const[k, c] for k, c in pick]))
-        cuts = np.cumsum([c.stop - c.start for _, c in pick])[:-1]
-        return Scores(np.split(ll, cuts), np.split(L, cuts))
+        pk, pc = self.pairs
+        np.copyto(self._work, self.Kt)        # factor_scores overwrites its input: a kept buffer
+        return factor_scores(self._work, self.eps, gamma_term[pk, pc], const[pk, pc])
+
+    def scores(self, spans: np.ndarray | None = None) -> Scores:
+        """Joint log-likelihoods for every task's candidates (as :meth:`Scorer.joint`).
+
+        Parameters
+        ----------
+        spans : ndarray of int, shape (K, 2), optional
+            Task k scores ``durations[spans[k,0]:spans[k,1]]``: the lattice's spans
+            (the statistics are kept for those pairs only; others are a ``ValueError``).
+        """
+        if spans is not None and not np.array_equal(spans, self.spans):
+            raise ValueError(f"spans: expected the lattice's {self.spans.tolist()}, "
+                             f"got {np.asarray(spans).tolist()}")
+        ll, L = self.packed_scores()
+        return Scores(np.split(ll, self.cuts), np.split(L, self.cuts))

@@ -21,12 +21,7 @@ import numpy as np
 from sandbox.core.familiarity import chosen, statistic, statistics
 from sandbox.core.inference import Prediction, predict
 from sandbox.core.likelihood import Scorer
-from sandbox.core.limits import (
-    MAX_CANDIDATES,
-    MAX_LATTICE_FLOATS,
-    MAX_TIME_S,
-    check_time,
-)
+from sandbox.core.limits import MAX_CANDIDATES, MAX_LATTICE_FLOATS, MAX_TIME_S, check_time
 from sandbox.core.phase import Lattice
 from sandbox.core.plan import Blending, Plan, check_steps
 from sandbox.core.statistics import StreamStatistics
@@ -290,7 +285,7 @@ class PredictorBase:
                        n_candidates=self.n_candidates, width=self.width,
                        refine_steps=self.refine_steps, stats=stats,
                        rest=bool(times[0] <= first))   # a later window is no rest (rest.py)
-        return self.apply(t, pred, n_observations=int(times.size), started=start)
+        return self._apply(t, pred, int(times.size), start)
 
     def _update_window(self, t: float | None):
         """``(t, times, values)`` of an update at ``t`` (default: the last observation
@@ -320,6 +315,11 @@ class PredictorBase:
         if not isinstance(prediction, Prediction):
             raise ValueError(f"prediction: expected a Prediction, got {type(prediction).__name__}")
         n_observations = check_integer(n_observations, "n_observations", 0)
+        return self._apply(t, prediction, n_observations, start)
+
+    def _apply(self, t: float, prediction: Prediction, n_observations: int,
+               start: float) -> Update | None:
+        """:meth:`apply` of checked arguments (an update's own prediction)."""
         held = self.ended
         ends = False
         familiarity = self._familiarity_of(t, prediction)
@@ -328,7 +328,7 @@ class PredictorBase:
                 return None                      # marginal likelihood: the plan just holds
             last = self.updates[-1]
             prediction = prediction.for_task(self.model, self.model.task_index(last.task),
-                                             last.task_posterior)
+                                             last.task_posterior, scorer=self.scorer)
         elif self.until_end and prediction.ended_probability(t) >= self.end_prob:
             ends = True                          # this update decides; later ones hold it
         k = prediction.task_index

@@ -18,12 +18,12 @@ REPO = Path(__file__).resolve().parents[2]
 
 def test_stages_follow_the_skip_options():
     names = lambda **kw: [n for n, _ in _stages(Namespace(repeats=1, seed=0, **kw))]  # noqa: E731
-    assert names(skip_env=True, skip_vector=False) == ["predictor update"]
-    assert names(skip_env=False, skip_vector=True) == ["predictor update", "environments"]
+    core = ["predictor update", "many tasks and demos"]
+    assert names(skip_env=True, skip_vector=False) == core
+    assert names(skip_env=False, skip_vector=True) == [*core, "environments"]
     assert names(skip_env=False, skip_vector=False) == [
-        "predictor update", "environments", "vector environments"]
-    assert names(skip_env=True, skip_vector=False, methods=True) == [
-        "predictor update", "methods"]
+        *core, "environments", "vector environments"]
+    assert names(skip_env=True, skip_vector=False, methods=True) == [*core, "methods"]
 
 
 def test_json_bench_draws_its_bar_on_stderr_only():
@@ -38,5 +38,10 @@ def test_json_bench_draws_its_bar_on_stderr_only():
     out = proc.communicate(timeout=900)[0].decode()
     os.close(master)
     assert proc.returncode == 0, err
-    assert "bench" in err and "1/1" in err and "predictor update" in err
-    assert json.loads(out)["update_ms"] > 0      # stdout is the JSON alone
+    assert "bench" in err and "2/2" in err and "predictor update" in err
+    result = json.loads(out)                     # stdout is the JSON alone
+    assert result["update_ms"] > 0
+    assert set(result["roofline"]["stages"]) == {"phase", "recognition", "conditioning",
+                                                 "blending"}
+    assert result["update_20_tasks_ms"] > 0 and set(result["update_demos_ms"]) == {
+        "10", "20", "40", "80", "160"}
