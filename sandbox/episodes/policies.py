@@ -143,11 +143,9 @@ def fit_family_model(family: str = "diverging", n_per_task: int = 20, seed: int 
         Modalities of the demonstrations: ``"hand"`` (default) or ``"hand,arm"``
         (the synthetic human arm; EMG is not simulated).
     calibrated : bool
-        Also calibrate its familiarity on a fresh draw of the family
-        (:func:`~sandbox.episodes.sessions.calibrated_synthetic`; a few seconds).
+        Also calibrate its familiarity (:func:`~sandbox.episodes.sessions.calibrated_synthetic`).
     shrinkage : {"none", "auto"}
-        :class:`~sandbox.core.IProMP`'s option (``"auto"``: the tasks' covariances
-        shrunk toward the pooled one, for families whose tasks share motion).
+        :class:`~sandbox.core.IProMP`'s option.
 
     Returns
     -------
