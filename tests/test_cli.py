@@ -38,3 +38,21 @@ def test_module_entry_point_runs():
     out = subprocess.run([sys.executable, "-m", "sandbox", "--version"], capture_output=True,
                          text=True, check=True)
     assert out.stdout.strip()
+
+
+def test_commands_run_with_one_blas_thread_unless_the_user_chose(monkeypatch):
+    from threadpoolctl import threadpool_info
+
+    from sandbox.cli import THREAD_VARIABLES, _blas_threads
+
+    def blas_threads():
+        return {i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"}
+
+    for name in THREAD_VARIABLES:
+        monkeypatch.delenv(name, raising=False)
+    with _blas_threads():
+        assert blas_threads() == {1}
+    monkeypatch.setenv("OPENBLAS_NUM_THREADS", "2")
+    before = blas_threads()
+    with _blas_threads():
+        assert blas_threads() == before
