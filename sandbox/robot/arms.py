@@ -194,7 +194,8 @@ ARMS: dict[str, ArmSpec] = {
         ("sandbox_finger_left_joint", "sandbox_finger_right_joint"), (0.04, 0.04), (0.0, 0.0),
         gripper_added=True),
     "kinova": ArmSpec(
-        "kinova", "Kinova Jaco 2 (j2s6s200, 2-finger hand)", "kinova_description/robots/kinova.urdf",
+        "kinova", "Kinova Jaco 2 (j2s6s200, 2-finger hand)",
+        "kinova_description/robots/kinova.urdf",
         tuple(f"j2s6s200_joint_{i}" for i in range(1, 7)), "j2s6s200_end_effector",
         _readonly([0.5, 2.28, 5.54, -1.26, 5.19, 0.05]), PEDESTAL,
         ("j2s6s200_joint_finger_1", "j2s6s200_joint_finger_2"), (0.0, 0.0), (1.2, 1.2),
