@@ -1,0 +1,106 @@
+"""From a policy's goal to an action, for any arm: the speed limit, retargeting, the gripper.
+
+A policy's model plans Baxter's seven left-arm joints (rad) or, fitted in task
+space, a position (m, Baxter's ``base`` frame = the world). The arm that acts
+is Baxter (``robot="baxter"``, the default) or another arm of
+:mod:`sandbox.robot.arms`:
+
+* Baxter with a joint-space model: the goal is the joint target, as ever;
+* any other case: the goal is **retargeted** (:mod:`sandbox.robot.retarget`):
+  taken to task space (Baxter's fingertip by forward kinematics, or the
+  task-space position as it is) and solved by the arm's inverse kinematics,
+  seeded with the previous target, within its joint limits. The blended
+  command of the predictor is retargeted at each control step, so the plans
+  are blended as before (in the model's space) and the arm follows the blend.
+  A Baxter joint-space model used with another arm says so
+  (:attr:`Steering.retargeted`).
+
+Then, for every arm, the target moves from the previous one by at most
+``max_velocity * dt`` per joint (the URDF's speed limits) and the gripper closes
+when the arm's fingertip (forward kinematics of the observed joints) is within
+``close_radius`` of the object. A goal the arm cannot reach (IK error above
+:data:`~sandbox.robot.retarget.IK_TOL`) sets :attr:`Steering.unreachable`: the
+arm goes to its closest configuration and the episode runners report the
+outcome ``"unreachable"`` when the episode ends without a handover.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sandbox.robot import TIP_LINK, joint_speed_limits
+from sandbox.robot.arms import arm_spec
+from sandbox.validation import check_array, check_positive
+
+FloatArray = NDArray[np.float64]
+
+
+class Steering:
+    """A goal to an action (dof + 1,): speed-limited target, retargeting and the gripper rule.
+
+    Attributes
+    ----------
+    robot : str
+        The arm acting (:data:`sandbox.robot.arms.ROBOTS`).
+    dof : int
+        Its number of joints (the action has ``dof + 1`` entries).
+    retargeted : bool
+        A Baxter joint-space model drives another arm (through task space).
+    unreachable : bool
+        The latest goal was out of the arm's reach.
+    """
+
+    _target: FloatArray | None
+
+    def _setup_steering(self, control_hz: float, close_radius: float, max_velocity,
+                        robot: str = "baxter", task_space: bool = False) -> None:
+        from sandbox.robot import BaxterKinematics
+
+        spec = arm_spec(robot)
+        self.robot, self.dof = robot, spec.dof
+        self.dt = 1.0 / check_positive(control_hz, "control_hz")
+        self.close_radius = check_positive(close_radius, "close_radius")
+        self.retarget = None
+        if robot != "baxter" or task_space:
+            from sandbox.robot.retarget import Retargeter
+
+            self.retarget = Retargeter(robot)
+        if max_velocity is None:
+            max_velocity = (joint_speed_limits() if self.retarget is None
+                            else self.retarget.max_velocity)
+        self.max_velocity = check_array(max_velocity, "max_velocity", 1, shape=(self.dof,))
+        check_positive(float(self.max_velocity.min()), "max_velocity")
+        self.kinematics = BaxterKinematics()
+        self.retargeted = robot != "baxter" and not task_space
+        self.unreachable = False
+
+    def _check_q(self, obs: Mapping[str, FloatArray]) -> FloatArray:
+        """The observed joints ``obs["q"]`` (dof,) rad."""
+        return check_array(obs["q"], "obs['q']", 1, shape=(self.dof,))
+
+    def _act(self, q: FloatArray, goal: FloatArray, obs: Mapping[str, FloatArray]) -> FloatArray:
+        """Action (dof + 1,): ``goal`` (the model's: 7 Baxter joints rad, or a position m)
+        approached at most ``max_velocity * dt`` from the previous target (from ``q`` at
+        first); the gripper closed near the object."""
+        previous = q if self._target is None else self._target
+        if self.retarget is not None:
+            goal = self._arm_goal(goal, previous)
+        step = self.max_velocity * self.dt
+        self._target = previous + np.clip(goal - previous, -step, step)
+        if self.retarget is None:
+            tip = self.kinematics.fk(q, link=TIP_LINK)
+        else:
+            tip = self.retarget.tip(q)
+        close = np.linalg.norm(tip - np.asarray(obs["object"], dtype=float)) < self.close_radius
+        return np.append(self._target, 1.0 if close else -1.0)
+
+    def _arm_goal(self, goal: FloatArray, seed: FloatArray) -> FloatArray:
+        """The arm's joints (dof,) rad for a model goal, by IK seeded at ``seed``."""
+        assert self.retarget is not None
+        point = self.retarget.task_points(np.asarray(goal, dtype=float)[None])
+        solved = self.retarget.solve(point, seed)
+        self.unreachable = not bool(solved.reached[0])
+        return solved.q[0]
