@@ -104,3 +104,38 @@ class Steering:
         solved = self.retarget.solve(point, seed)
         self.unreachable = not bool(solved.reached[0])
         return solved.q[0]
+
+
+def meeting_points(model, rng: np.random.Generator, draws: int = 20) -> FloatArray:
+    """The model's meeting points (n, 3) m, world: where each task's robot plan ends.
+
+    Per task, the end (phase 1) of the prior mean robot trajectory and of ``draws``
+    trajectories drawn from the task's weight distribution, taken to task space
+    (Baxter's fingertip for a joint-space model, the position for a task-space one).
+    """
+    from sandbox.core.promp import trajectory_distribution
+    from sandbox.robot.retarget import Retargeter
+
+    if not isinstance(rng, np.random.Generator):
+        raise ValueError(f"rng: expected a numpy.random.Generator, got {type(rng).__name__}")
+    ends = []
+    for task in model.task_models:
+        mean, cov = trajectory_distribution(task.weights, model.basis, np.array([1.0]))
+        robot = slice(model.n_human, model.n_human + model.n_robot)
+        mu, sigma = mean[0, robot], cov[0, robot, robot]
+        ends += [mu, *rng.multivariate_normal(mu, sigma, size=draws, method="eigh")]
+    return Retargeter("baxter").task_points(np.array(ends))
+
+
+def reach_report(model, robot: str) -> tuple[float, str | None]:
+    """Fraction of ``model``'s meeting points (:func:`meeting_points`, seed 0) that ``robot``
+    reaches (a ``UserWarning`` below :data:`~sandbox.robot.retarget.REACH_WARNING`), and a
+    note when a Baxter joint-space model is retargeted to another arm (None otherwise)."""
+    from sandbox.robot.retarget import check_reach
+
+    fraction = check_reach(robot, meeting_points(model, np.random.default_rng(0)))
+    note = None
+    if robot != "baxter" and getattr(model, "robot_space", "joint") == "joint":
+        note = (f"robot {robot}: the model plans Baxter's joints; its plans are retargeted "
+                f"(Baxter's fingertip path through the {robot}'s inverse kinematics)")
+    return fraction, note
