@@ -31,6 +31,7 @@ are hidden from then on (see :class:`~sandbox.viz.scene.Scene`).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -116,6 +117,9 @@ class PredictionOverlay:
             kinematics = BaxterKinematics()
         self.vis, self.rng, self.style, self.link = vis, rng, style, link
         self.kinematics = kinematics
+        #: ``q (dof,) -> fingertip (3,)`` m in the world for another arm than Baxter (None:
+        #: the executed joints are Baxter's, through :attr:`kinematics`).
+        self.executed_tip: Any = None
         self.tasks = tuple(tasks)
         if not self.tasks:
             raise ValueError("tasks: expected at least one task name, got none")
@@ -320,8 +324,9 @@ class PredictionOverlay:
             "unsure / unknown motion").
         t : float
             Current time (s).
-        executed_q : array_like, shape (7,), optional
+        executed_q : array_like, shape (7,) or (dof,), optional
             The robot's actual joints now (rad); default: the predictor's command at ``t``.
+            Another arm's joints need :attr:`executed_tip` (their fingertip in the world).
         human_to_world : array_like, shape (4, 4), optional
             Pose of the human observations' frame (default: Baxter's base = world).
         truth : str, optional
@@ -340,9 +345,12 @@ class PredictionOverlay:
         self.show_time(t)
         self.show_truth(truth, t, human[-1] if len(human) else None, since=truth_since)
         self.show_familiar(getattr(predictor, "familiar", None))
-        q = predictor.command(t)[0] if executed_q is None else check_array(
-            executed_q, "executed_q", 1, shape=(7,))
-        self._executed.append(self.kinematics.fk(q, link=self.link))
+        if executed_q is not None and self.executed_tip is not None:   # another arm than Baxter
+            self._executed.append(self.executed_tip(check_array(executed_q, "executed_q", 1)))
+        else:
+            q = predictor.command(t)[0] if executed_q is None else check_array(
+                executed_q, "executed_q", 1, shape=(7,))
+            self._executed.append(self.kinematics.fk(q, link=self.link))
         self.show_executed(np.array(self._executed))
         new = predictor.updates[self._n_updates:]
         for update in new:
