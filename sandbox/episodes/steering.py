@@ -18,7 +18,12 @@ is Baxter (``robot="baxter"``, the default) or another arm of
 Then, for every arm, the target moves from the previous one by at most
 ``max_velocity * dt`` per joint (the URDF's speed limits) and the gripper closes
 when the arm's fingertip (forward kinematics of the observed joints) is within
-``close_radius`` of the object. A goal the arm cannot reach (IK error above
+``close_radius`` of the object. Baxter's fingers close in one physics step (5 m/s);
+the others take :attr:`Steering.close_lead` seconds to half close (Panda and the
+UR5's simple gripper 0.1 s, the Kinova 0.6 s), so for them the gripper also closes
+when the fingertip-to-object gap, extrapolated from its last change over that
+time, would be within ``close_radius``: they close as they arrive, not after. A goal
+the arm cannot reach (IK error above
 :data:`~sandbox.robot.retarget.IK_TOL`) sets :attr:`Steering.unreachable`: the
 arm goes to its closest configuration and the episode runners report the
 outcome ``"unreachable"`` when the episode ends without a handover.
@@ -76,6 +81,8 @@ class Steering:
         self.kinematics = BaxterKinematics()
         self.retargeted = robot != "baxter" and not task_space
         self.unreachable = False
+        self.close_lead = 0.0 if robot == "baxter" else _half_closing_time(robot)
+        self._gap: FloatArray | None = None
 
     def _check_q(self, obs: Mapping[str, FloatArray]) -> FloatArray:
         """The observed joints ``obs["q"]`` (dof,) rad."""
@@ -85,6 +92,8 @@ class Steering:
         """Action (dof + 1,): ``goal`` (the model's: 7 Baxter joints rad, or a position m)
         approached at most ``max_velocity * dt`` from the previous target (from ``q`` at
         first); the gripper closed near the object."""
+        if self._target is None:
+            self._gap = None                          # a new episode
         previous = q if self._target is None else self._target
         if self.retarget is not None:
             goal = self._arm_goal(goal, previous)
@@ -94,7 +103,12 @@ class Steering:
             tip = self.kinematics.fk(q, link=TIP_LINK)
         else:
             tip = self.retarget.tip(q)
-        close = np.linalg.norm(tip - np.asarray(obs["object"], dtype=float)) < self.close_radius
+        gap = np.asarray(obs["object"], dtype=float) - tip
+        close = np.linalg.norm(gap) < self.close_radius
+        if self.close_lead > 0.0 and self._gap is not None:   # a slower gripper than Baxter's
+            ahead = gap + (gap - self._gap) / self.dt * self.close_lead
+            close = close or bool(np.linalg.norm(ahead) < self.close_radius)
+        self._gap = gap
         return np.append(self._target, 1.0 if close else -1.0)
 
     def _arm_goal(self, goal: FloatArray, seed: FloatArray) -> FloatArray:
@@ -104,6 +118,17 @@ class Steering:
         solved = self.retarget.solve(point, seed)
         self.unreachable = not bool(solved.reached[0])
         return solved.q[0]
+
+
+def _half_closing_time(robot: str) -> float:
+    """Time (s) the arm's fingers take from open to half closed, at their URDF speed limit."""
+    from sandbox.robot.assets import arm_urdf_path
+    from sandbox.robot.urdf import read_joints
+
+    spec = arm_spec(robot)
+    speed = {j.name: j.velocity for j in read_joints(arm_urdf_path(robot)).values()}
+    return max(abs(o - c) / 2.0 / speed[f] for f, o, c in
+               zip(spec.fingers, spec.finger_open, spec.finger_closed, strict=True))
 
 
 def meeting_points(model, rng: np.random.Generator, draws: int = 20) -> FloatArray:
