@@ -325,8 +325,8 @@ class RecordedRobotPolicy(Steering):
     ----------
     times : array_like, shape (T,)
         The trial's sample times (s); the episode's time 0 is ``times[0]``.
-    robot : array_like, shape (T, 7)
-        Recorded left-arm joint positions (rad).
+    robot : array_like, shape (T, 7) or (T, 3)
+        Recorded left-arm joint positions (rad), or with ``task_space`` positions (m).
     task : str
         The trial's task (reported as the recognised task).
     control_hz, close_radius, max_velocity
@@ -334,25 +334,29 @@ class RecordedRobotPolicy(Steering):
     arm : str
         The arm acting (``robot`` of :class:`IProMPPolicy`): another than Baxter follows
         the recorded fingertip path (retargeted).
+    task_space : bool
+        ``robot`` is a task-space position (m, world), followed through the arm's IK.
     """
 
     def __init__(self, times, robot, task: str, *, control_hz: float = 50.0,
-                 close_radius: float = 0.045, max_velocity=None, arm: str = "baxter") -> None:
+                 close_radius: float = 0.045, max_velocity=None, arm: str = "baxter",
+                 task_space: bool = False) -> None:
         from sandbox.validation import check_times
 
         t = check_times(times, "times")
         self._times = t - t[0]
-        self._robot = check_array(robot, "robot", 2, shape=(t.size, 7))
+        self._robot = check_array(robot, "robot", 2, shape=(t.size, 3 if task_space else 7))
         if not isinstance(task, str) or not task:
             raise ValueError(f"task: expected a task name, got {task!r}")
         self.task = task
-        self._setup_steering(control_hz, close_radius, max_velocity, arm)
+        self._setup_steering(control_hz, close_radius, max_velocity, arm, task_space)
         self.reset()
 
     @classmethod
     def from_demo(cls, demo, **options) -> RecordedRobotPolicy:
         """The policy replaying a :class:`~sandbox.data.Demonstration`'s robot."""
-        return cls(demo.times, demo.robot, demo.task, **options)
+        return cls(demo.times, demo.robot, demo.task,
+                   task_space=getattr(demo, "robot_space", "joint") == "task", **options)
 
     def reset(self) -> None:
         """Start the trial again."""
