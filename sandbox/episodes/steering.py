@@ -20,7 +20,7 @@ Then, for every arm, the target moves from the previous one by at most
 when the arm's fingertip (forward kinematics of the observed joints) is within
 ``close_radius`` of the object. Baxter's fingers close in one physics step (5 m/s);
 the others take :attr:`Steering.close_lead` seconds to half close (Panda and the
-UR5's simple gripper 0.1 s, the Kinova 0.6 s), so for them the gripper also closes
+UR5's simple gripper 0.1 s, the Kinova 0.4 s), so for them the gripper also closes
 when the fingertip-to-object gap, extrapolated from its last change over that
 time, would be within ``close_radius``: they close as they arrive, not after. A goal
 the arm cannot reach (IK error above

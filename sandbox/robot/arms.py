@@ -198,7 +198,7 @@ ARMS: dict[str, ArmSpec] = {
         "kinova_description/robots/kinova.urdf",
         tuple(f"j2s6s200_joint_{i}" for i in range(1, 7)), "j2s6s200_end_effector",
         _readonly([0.5, 2.28, 5.54, -1.26, 5.19, 0.05]), PEDESTAL,
-        ("j2s6s200_joint_finger_1", "j2s6s200_joint_finger_2"), (0.0, 0.0), (1.2, 1.2),
+        ("j2s6s200_joint_finger_1", "j2s6s200_joint_finger_2"), (0.0, 0.0), (0.8, 0.8),
         revolute_fingers=("j2s6s200_joint_finger_1", "j2s6s200_joint_finger_2")),
 }
 #: The registry's names, Baxter (the default) first.
