@@ -58,7 +58,7 @@ class BaxterHandoverEnv(gym.Env):
 
     Action space
     ------------
-    ``Box(dof + 1,)`` float64: the arm's joint position targets (rad, bounds =
+    ``Box(d + 1,)`` float64: the arm's d joint position targets (rad, bounds =
     joint limits; clipped to them; Baxter: seven, ``left_s0 ... left_w2``), then
     a gripper command in [-1, 1] (> 0 closes, <= 0 opens). The motors track
     the targets within the URDF's effort and speed limits. ``robot=`` chooses
@@ -93,8 +93,8 @@ class BaxterHandoverEnv(gym.Env):
     ``emg_valid``   (1,)   1 if ``emg`` holds a measurement: recorded trials
                            with EMG only, it is not simulated (v1)
     ``object``      (3,)   the object's grasp point (m)
-    ``q``           (dof,) arm joint positions (rad)
-    ``dq``          (dof,) arm joint velocities (rad/s)
+    ``q``           (d,)   arm joint positions (rad), d joints (Baxter 7)
+    ``dq``          (d,)   arm joint velocities (rad/s)
     ``gripper``     (1,)   finger opening, 0 closed .. 1 open
     ``time``        (1,)   time since the episode started (s)
     ==============  =====  =======================================================

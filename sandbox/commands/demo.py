@@ -187,8 +187,7 @@ def run(args) -> int:
                 model.tasks, rng=np.random.default_rng(args.seed),
                 title=f"demo: {args.from_task} -> {args.to_task}, dynamic (dow_t={args.dow:g} s)")
         dynamic = record_episode(env, IProMPPolicy(model, dow_t=args.dow, robot=args.robot),
-                                 seed=args.seed,
-                                 options=options, viewer=viewer, overlay=overlay,
+                                 seed=args.seed, options=options, viewer=viewer, overlay=overlay,
                                  policy_name=f"dynamic (dow_t={args.dow:g} s)")
         truth = env.unwrapped.motion.meta["intent"]
         duration = env.unwrapped.motion.duration

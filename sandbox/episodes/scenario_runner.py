@@ -140,8 +140,9 @@ def run_scenario_file(scenario: Scenario, *, html: str | Path | None = None,
     model = build_model(scenario)
     policy = make_policy(scenario, model)
     options = reset_options(scenario, model)
+    extra: dict[str, Any] = {} if scenario.robot == "baxter" else {"robot": scenario.robot}
     env: Any = gym.make(scenario.env_id, max_episode_steps=max(1, round(scenario.time_limit * 50)),
-                        **({} if scenario.robot == "baxter" else {"robot": scenario.robot}))
+                        **extra)
     env = env if wrap_env is None else wrap_env(env)
     viewer = overlay = None
     try:

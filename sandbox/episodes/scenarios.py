@@ -93,7 +93,7 @@ class EpisodeResult:
         :class:`sandbox.episodes.replays.Replay`); ``{}`` otherwise.
     outcome : str
         ``"handover"``; ``"unreachable"``: no handover and the arm could not reach the
-        policy's last goal (:attr:`sandbox.episodes.steering.Steering.unreachable`);
+        policy's last goal (``unreachable`` of :class:`sandbox.episodes.steering.Steering`);
         ``"missed"``: no handover otherwise.
     reach : float or None
         Another arm than Baxter, or a task-space model: the fraction of the model's
@@ -171,30 +171,32 @@ def run_scenario(scenario: str = "diverging", policy: str | Callable = "dynamic"
     spec : DataSpec, optional
         ``recorded`` only: the sets' layout (:func:`~sandbox.episodes.replays.plan_replays`).
     robot : str
-        The arm (:data:`sandbox.robot.arms.ROBOTS`, default ``"baxter"``): the environment's
-        and the policies' (another arm follows the plans retargeted).
-    """
+        The arm (:data:`sandbox.robot.arms.ROBOTS`); another than Baxter is retargeted."""
     sessions = (session, train_session)
     observe = _check_run(scenario, policy, n_episodes, data, observe, test, sessions)
-    arm_spec(robot)
     make_policy = _policy_factory(policy, dow_t, ratio, observe, robot)
     episodes = _episodes(scenario, int(n_episodes), int(seed), data, model, options or {},
                          observe, test, sessions, spec)
     own_env = env is None
     env = _make_env(scenario, robot) if own_env else env
-    reports: dict[int, tuple[float | None, str | None]] = {}
     try:
-        out = []
-        for e in episodes:
-            if id(e.model) not in reports:
-                reports[id(e.model)] = _reach(e.model, robot)
-            reach, note = reports[id(e.model)]
-            out.append(replace(run_episode(env, make_policy(e.model, e.demo), e.seed, e.options),
-                               replay=e.provenance, reach=reach, note=note or ""))
-        return out
+        return _run_all(env, episodes, make_policy, robot)
     finally:
-        if own_env:
-            env.close()
+        _ = env.close() if own_env else None
+
+
+def _run_all(env, episodes: list[Replay], make_policy: Callable,
+             robot: str) -> list[EpisodeResult]:
+    """Every episode in ``env``, each with its reach report (one per model)."""
+    reports: dict[int, tuple[float | None, str | None]] = {}
+    out = []
+    for e in episodes:
+        if id(e.model) not in reports:
+            reports[id(e.model)] = _reach(e.model, robot)
+        reach, note = reports[id(e.model)]
+        out.append(replace(run_episode(env, make_policy(e.model, e.demo), e.seed, e.options),
+                           replay=e.provenance, reach=reach, note=note or ""))
+    return out
 
 
 def run_episode(env: Any, policy: Policy, seed: int,
@@ -260,7 +262,8 @@ def _make_env(scenario: str, robot: str = "baxter") -> Any:
 
     import sandbox.envs  # noqa: F401  (registers the environments)
 
-    return gym.make(SCENARIOS[scenario][0], **({} if robot == "baxter" else {"robot": robot}))
+    extra: dict[str, Any] = {} if robot == "baxter" else {"robot": robot}
+    return gym.make(SCENARIOS[scenario][0], **extra)
 
 
 def _check_run(scenario, policy, n_episodes, data, observe, test=None,
@@ -323,6 +326,7 @@ def _check_observe(observe) -> tuple[str, ...] | None:
 def _policy_factory(policy, dow_t: float, ratio: float, observe,
                     robot: str = "baxter") -> Callable:
     """``(model, held-out demo or None) -> policy``."""
+    arm_spec(robot)                               # an unknown arm: one line, before anything
     if callable(policy):
         return lambda model, demo: policy(model)
     from sandbox.episodes.policies import IProMPPolicy, RecordedRobotPolicy, StaticPolicy

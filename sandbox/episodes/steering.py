@@ -13,18 +13,18 @@ is Baxter (``robot="baxter"``, the default) or another arm of
   command of the predictor is retargeted at each control step, so the plans
   are blended as before (in the model's space) and the arm follows the blend.
   A Baxter joint-space model used with another arm says so
-  (:attr:`Steering.retargeted`).
+  (``Steering.retargeted``).
 
 Then, for every arm, the target moves from the previous one by at most
 ``max_velocity * dt`` per joint (the URDF's speed limits) and the gripper closes
 when the arm's fingertip (forward kinematics of the observed joints) is within
 ``close_radius`` of the object. Baxter's fingers close in one physics step (5 m/s);
-the others take :attr:`Steering.close_lead` seconds to half close (Panda and the
+the others take ``Steering.close_lead`` seconds to half close (Panda and the
 UR5's simple gripper 0.1 s, the Kinova 0.4 s), so for them the gripper also closes
 when the fingertip-to-object gap, extrapolated from its last change over that
 time, would be within ``close_radius``: they close as they arrive, not after. A goal
 the arm cannot reach (IK error above
-:data:`~sandbox.robot.retarget.IK_TOL`) sets :attr:`Steering.unreachable`: the
+:data:`~sandbox.robot.retarget.IK_TOL`) sets ``Steering.unreachable``: the
 arm goes to its closest configuration and the episode runners report the
 outcome ``"unreachable"`` when the episode ends without a handover.
 """
@@ -104,7 +104,7 @@ class Steering:
         else:
             tip = self.retarget.tip(q)
         gap = np.asarray(obs["object"], dtype=float) - tip
-        close = np.linalg.norm(gap) < self.close_radius
+        close = bool(np.linalg.norm(gap) < self.close_radius)
         if self.close_lead > 0.0 and self._gap is not None:   # a slower gripper than Baxter's
             ahead = gap + (gap - self._gap) / self.dt * self.close_lead
             close = close or bool(np.linalg.norm(ahead) < self.close_radius)
@@ -122,7 +122,7 @@ class Steering:
 
 def _half_closing_time(robot: str) -> float:
     """Time (s) the arm's fingers take from open to half closed, at their URDF speed limit."""
-    from sandbox.robot.assets import arm_urdf_path
+    from sandbox.robot.arm_files import arm_urdf_path
     from sandbox.robot.urdf import read_joints
 
     spec = arm_spec(robot)

@@ -20,8 +20,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from sandbox.robot.arm_files import arm_urdf_path
 from sandbox.robot.arms import arm_spec
-from sandbox.robot.assets import arm_urdf_path
 from sandbox.robot.facts import ARM_JOINTS, TIP_LINK
 from sandbox.robot.pybullet_quiet import BulletClient, pybullet
 from sandbox.validation import check_array

@@ -31,8 +31,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from sandbox.robot import ik as _ik
+from sandbox.robot.arm_files import arm_urdf_path
 from sandbox.robot.arms import ArmSpec, arm_spec
-from sandbox.robot.assets import arm_urdf_path, source_urdf_path
+from sandbox.robot.assets import source_urdf_path
 from sandbox.robot.facts import ARM_JOINTS, Q_HOME
 from sandbox.robot.urdf import UrdfJoint, chain_to, read_joints
 from sandbox.validation import check_array
@@ -134,7 +135,7 @@ class ArmKinematics:
         A name of :data:`sandbox.robot.arms.ROBOTS` (default ``"baxter"``).
     urdf : str or pathlib.Path, optional
         The robot's URDF; default the one of the installed ``example-robot-data``
-        (with the sandbox's gripper changes, :func:`sandbox.robot.assets.arm_text`).
+        (with the sandbox's gripper changes, :func:`sandbox.robot.arm_files.arm_text`).
 
     Attributes
     ----------

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from sandbox.robot import ARM_JOINTS, Q_HOME, TIP_LINK, BaxterKinematics, joint_speed_limits
+from sandbox.robot.arm_files import arm_text, arm_urdf_path
 from sandbox.robot.arms import ARMS, ROBOTS, arm_spec
-from sandbox.robot.assets import arm_text, arm_urdf_path
 from sandbox.robot.kinematics import ArmKinematics
 from sandbox.robot.urdf import read_joints
 
