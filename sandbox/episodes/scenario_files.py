@@ -289,15 +289,15 @@ def _human(check: _Checker, data: Any, family: str, folder: Path,
 
 
 def _spec(check: _Checker, path: Path):
-    """A recorded human's spec file, checked: Baxter's 7 joints in joint space."""
+    """A recorded human's spec file, checked: Baxter's 7 joints, or a position (task space)."""
     from sandbox.data.spec import DataSpec
 
     try:
         spec = DataSpec.load(path)
-        if spec.robot_space == "task":
-            raise ValueError("the robot part is in task space (a position, m); following it "
-                             "on Baxter's arm needs inverse kinematics (issue 23, not built)")
-        if len(spec.robot) != 7:
+        if spec.robot_space == "task" and len(spec.robot) != 3:
+            raise ValueError(f"expected a task-space robot part of 3 columns (x, y, z), got "
+                             f"{list(spec.robot)}")
+        if spec.robot_space == "joint" and len(spec.robot) != 7:
             raise ValueError(f"expected Baxter's 7 arm joints as robot, got {list(spec.robot)}")
     except ValueError as error:
         raise ValueError(f"scenario {check.path}: human.spec: {error}") from None
