@@ -96,3 +96,17 @@ def test_policies_refuse_an_unknown_arm_and_observations_of_another_arm():
         policy(obs)
     with pytest.raises(ValueError, match="rng"):
         meeting_points(model, 0)
+
+
+def test_scenario_files_name_the_arm(tmp_path):
+    from sandbox.episodes.scenario_files import load_scenario
+
+    path = tmp_path / "s.yaml"
+    path.write_text("human: {task: left}\npolicy: {type: dynamic, dow_t: 0.2}\nrobot: panda\n")
+    assert load_scenario(path).robot == "panda"
+    assert load_scenario(path, robot="kinova").robot == "kinova"       # play --robot wins
+    path.write_text("human: {task: left}\npolicy: {type: dynamic, dow_t: 0.2}\nrobot: iiwa\n")
+    with pytest.raises(ValueError, match=r"robot: expected one of \['baxter', 'panda'"):
+        load_scenario(path)
+    path.write_text("human: {task: left}\npolicy: {type: dynamic, dow_t: 0.2}\n")
+    assert load_scenario(path).robot == "baxter"
