@@ -16,6 +16,11 @@ registering). Without the import,
 started from a forkserver (:mod:`sandbox.envs.vector`);
 ``vectorization_mode="sync"`` or ``"async"`` gives Gymnasium's own.
 
+Any arm (issue 23): ``gym.make("sandbox/Handover-v2", robot="panda")`` (or
+``"sandbox/HandoverDiverging-v2"``; :data:`ROBOT_IDS`) with ``robot`` one of
+``baxter`` (default), ``panda``, ``ur5``, ``kinova``; the Baxter ids below take
+``robot=`` too and stay registered as aliases for one release.
+
 ``sandbox/BaxterHandover-v1`` hands over objects (synthetic box, glasses case
 and tape, or a recorded trial with ``options={"source": DIR}``);
 ``sandbox/BaxterHandoverDiverging-v1`` plays the diverging tasks (left, right,
@@ -67,4 +72,21 @@ for _env_id, _family, _body in _VARIANTS:
         )
     (ENV_IDS if _body else LEGACY_IDS).append(_env_id)
 
-__all__ = ["ENV_IDS", "LEGACY_IDS", "MAX_EPISODE_STEPS", "BaxterHandoverEnv", "RewardWeights"]
+#: Ids that do not name Baxter: (id, synthetic family); ``robot=`` chooses the arm
+#: (:data:`sandbox.robot.arms.ROBOTS`, default ``"baxter"``). The ``sandbox/BaxterHandover*``
+#: ids are the same environment (they take ``robot=`` too), kept as aliases for one release.
+ROBOT_IDS: list[str] = []
+for _env_id, _family in (("sandbox/Handover-v2", "objects"),
+                         ("sandbox/HandoverDiverging-v2", "diverging")):
+    if _env_id not in gym.registry:
+        gym.register(
+            id=_env_id,
+            entry_point="sandbox.envs.handover:BaxterHandoverEnv",
+            vector_entry_point=VECTOR_ENTRY_POINT,
+            kwargs={"family": _family, "observe_body": True, "robot": "baxter"},
+            max_episode_steps=MAX_EPISODE_STEPS,
+        )
+    ROBOT_IDS.append(_env_id)
+
+__all__ = ["ENV_IDS", "LEGACY_IDS", "MAX_EPISODE_STEPS", "ROBOT_IDS", "BaxterHandoverEnv",
+           "RewardWeights"]

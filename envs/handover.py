@@ -22,10 +22,10 @@ from sandbox.envs.human import HumanHand, HumanMotion
 from sandbox.envs.observations import Observer, observation_space
 from sandbox.envs.options import EpisodeOptions, parse_options
 from sandbox.envs.pybullet import Simulation
-from sandbox.envs.robot import BaxterArm
+from sandbox.envs.robot import RobotArm
 from sandbox.envs.sources import FAMILIES, episode_motion
 from sandbox.envs.task import HandoverTask, RewardWeights, object_for
-from sandbox.robot import Q_HOME
+from sandbox.robot.arms import arm_spec
 from sandbox.validation import check_array, check_positive
 
 FloatArray = NDArray[np.float64]
@@ -34,21 +34,19 @@ SETTLE_STEPS = 100
 
 
 class ClosedEnvironmentError(gym.error.ClosedEnvironmentError, RuntimeError):
-    """``reset``, ``step`` or ``render`` of an environment after its :meth:`close`.
-
-    Both Gymnasium's :class:`gymnasium.error.ClosedEnvironmentError` and a
-    :class:`RuntimeError` (a call out of order).
-    """
+    """``reset``, ``step`` or ``render`` after :meth:`close`: both Gymnasium's
+    :class:`gymnasium.error.ClosedEnvironmentError` and a :class:`RuntimeError`."""
 
 
 class BaxterHandoverEnv(gym.Env):
-    """A human hands an object to Baxter; Baxter's left arm must meet the hand and take it.
+    """A human hands an object to the robot (Baxter's left arm by default), which must meet
+    the hand and take it.
 
     Description
     -----------
-    A simulated Rethink Baxter (PyBullet, model from ``example-robot-data``)
-    stands at the origin of its ``base`` frame facing +x; a human 1.4 m in
-    front of it reaches toward it with an object in the left hand. The hand is
+    A simulated Rethink Baxter (PyBullet, ``example-robot-data``; or a Panda, UR5 or
+    Kinova, ``robot=``) stands at the origin of its ``base`` frame facing +x; a human 1.4 m
+    in front of it reaches toward it with an object in the left hand. The hand is
     kinematic: it replays a synthetic reach (seeded, family ``"objects"``: box,
     glasses case, tape; or ``"diverging"``: left, right, up, down, straight,
     sharing their start), a recorded trial or a scripted motion, or it follows a
@@ -60,11 +58,11 @@ class BaxterHandoverEnv(gym.Env):
 
     Action space
     ------------
-    ``Box(8,)`` float64: seven left-arm joint position targets (rad, bounds =
-    joint limits; clipped to them) in the order ``left_s0 ... left_w2``, then
+    ``Box(d + 1,)`` float64: the arm's d joint position targets (rad, bounds =
+    joint limits; clipped to them; Baxter: seven, ``left_s0 ... left_w2``), then
     a gripper command in [-1, 1] (> 0 closes, <= 0 opens). The motors track
-    the targets within the URDF's effort and speed limits (1.5 rad/s
-    shoulder/elbow, 4 rad/s wrist).
+    the targets within the URDF's effort and speed limits. ``robot=`` chooses
+    the arm (:mod:`sandbox.robot.arms`: baxter, panda, ur5, kinova; dof 7, 7, 6, 6).
 
     Observation space
     -----------------
@@ -95,8 +93,8 @@ class BaxterHandoverEnv(gym.Env):
     ``emg_valid``   (1,)   1 if ``emg`` holds a measurement: recorded trials
                            with EMG only, it is not simulated (v1)
     ``object``      (3,)   the object's grasp point (m)
-    ``q``           (7,)   left-arm joint positions (rad)
-    ``dq``          (7,)   left-arm joint velocities (rad/s)
+    ``q``           (d,)   arm joint positions (rad), d joints (Baxter 7)
+    ``dq``          (d,)   arm joint velocities (rad/s)
     ``gripper``     (1,)   finger opening, 0 closed .. 1 open
     ``time``        (1,)   time since the episode started (s)
     ==============  =====  =======================================================
@@ -135,6 +133,7 @@ class BaxterHandoverEnv(gym.Env):
     (or ``gym.make("sandbox.envs:sandbox/BaxterHandover-v1")``) with
 
     * ``family`` ("objects" or "diverging"): synthetic tasks (set by the id);
+    * ``robot`` ("baxter"; "panda", "ur5", "kinova"): the arm, at its world pose;
     * ``observe_body`` (True; False for the v0 ids): observe the arm and EMG
       (``arm``, ``arm_valid``, ``emg``, ``emg_valid``);
     * ``render_mode`` (None, "human" or "rgb_array"): "human" shows the
@@ -195,7 +194,7 @@ class BaxterHandoverEnv(gym.Env):
     ----------
     sim : Simulation
         The PyBullet world; ``sim.client`` and ``sim.bodies`` let a viewer mirror it.
-    robot : BaxterArm
+    robot : RobotArm
     human : HumanHand
     task : HandoverTask
     motion : HumanMotion or TeleopMotion or None
@@ -210,7 +209,8 @@ class BaxterHandoverEnv(gym.Env):
                  control_hz: float = 50.0, substeps: int = 5, grasp_radius: float = 0.05,
                  reward_weights: RewardWeights | None = None,
                  default_object: str = "box", viewer_options: Mapping | None = None,
-                 observe_body: bool = True) -> None:
+                 observe_body: bool = True, robot: str = "baxter") -> None:
+        arm_spec(robot)                                   # unknown name: one-line ValueError
         if not isinstance(observe_body, bool):
             raise ValueError(f"observe_body: expected True or False, got {observe_body!r}")
         self.observe_body = observe_body
@@ -232,7 +232,7 @@ class BaxterHandoverEnv(gym.Env):
         weights = check_reward_weights(reward_weights)
         check_positive(grasp_radius, "grasp_radius")
         self.sim = Simulation(physics_hz=control_hz * self.substeps)
-        self.robot = BaxterArm(self.sim)
+        self.robot = RobotArm(self.sim, robot)
         self.human = HumanHand(self.sim)
         self.task = HandoverTask(self.sim, self.robot, self.human, grasp_radius=grasp_radius,
                                  weights=weights)
@@ -245,12 +245,11 @@ class BaxterHandoverEnv(gym.Env):
 
     # ------------------------------------------------------------------ spaces
     def _action_space(self) -> spaces.Box:
-        low = np.append(self.robot.lower, -1.0)
-        high = np.append(self.robot.upper, 1.0)
-        return spaces.Box(low, high, dtype=np.float64)
+        return spaces.Box(np.append(self.robot.lower, -1.0), np.append(self.robot.upper, 1.0),
+                          dtype=np.float64)
 
     def _settle_and_save(self) -> None:
-        self.robot.reset(Q_HOME)
+        self.robot.reset()
         for _ in range(SETTLE_STEPS):
             self.sim.step_physics()
         self.sim.save()
@@ -270,11 +269,11 @@ class BaxterHandoverEnv(gym.Env):
         hold_offset = episode.hold_offset(motion.task)
         self.task.release()
         self.sim.restore()
-        self.robot.reset(Q_HOME)
+        self.robot.reset()
         self.task.reset(object_name, motion.position(0.0), hold_offset)
         self.motion, self.episode = motion, episode
         self._observer.reset()
-        self._steps, self._t, self._prev_target = 0, 0.0, Q_HOME.copy()
+        self._steps, self._t, self._prev_target = 0, 0.0, np.array(self.robot.spec.q_home)
         self._handover_time: float | None = None
         info = {"task": motion.task, "object": object_name, "source": motion.source,
                 "speed": episode.speed, "duration": motion.duration,
@@ -288,9 +287,10 @@ class BaxterHandoverEnv(gym.Env):
         self._check_open("step")
         if self.motion is None:
             raise RuntimeError("step: call reset() before step()")
-        action = check_array(action, "action", 1, shape=(8,))
-        target = np.clip(action[:7], self.robot.lower, self.robot.upper)
-        self.robot.act(target, close=bool(action[7] > 0.0))
+        dof = self.robot.dof
+        action = check_array(action, "action", 1, shape=(dof + 1,))
+        target = np.clip(action[:dof], self.robot.lower, self.robot.upper)
+        self.robot.act(target, close=bool(action[dof] > 0.0))
         physics_dt = self.dt / self.substeps
         for k in range(1, self.substeps + 1):
             self.task.move_hand(self.motion.position(self._t + k * physics_dt))

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from sandbox.robot.bullet import BulletBaxter, _quiet, load_baxter
+from sandbox.robot.bullet import BulletBaxter, _quiet, load_baxter, load_robot
 from sandbox.robot.pybullet_quiet import BulletClient, pybullet
 from sandbox.validation import check_positive
 
@@ -60,6 +60,12 @@ class Simulation:
         baxter = load_baxter(self.client)
         self.bodies[name] = baxter.body
         return baxter
+
+    def load_robot(self, name: str, robot: str = "baxter") -> BulletBaxter:
+        """Load an arm of :mod:`sandbox.robot.arms` (fixed base at its world pose) as ``name``."""
+        arm = load_robot(self.client, robot)
+        self.bodies[name] = arm.body
+        return arm
 
     def load_urdf(self, name: str, path: str | Path, position: ArrayLike,
                   orientation: Sequence[float] = IDENTITY, *, fixed: bool = False) -> int:

@@ -1,8 +1,9 @@
-"""Baxter in the environment: the left arm under position control and its gripper.
+"""The robot in the environment: an arm under position control and its gripper.
 
-Reaches PyBullet only through :class:`~sandbox.envs.pybullet.Simulation`. The
-right arm and the head are held at the recorded posture; the left arm starts
-at the recorded home configuration with the gripper open.
+Any arm of :mod:`sandbox.robot.arms` (:class:`RobotArm`; :class:`BaxterArm` is
+Baxter's). Reaches PyBullet only through :class:`~sandbox.envs.pybullet.Simulation`.
+Baxter's right arm and head are held at the recorded posture; the arm starts at
+its home configuration with the gripper open.
 """
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from sandbox.envs.pybullet import Simulation
-from sandbox.robot import Q_HOME, TIP_LINK
+from sandbox.robot.arms import arm_spec
 
 FloatArray = NDArray[np.float64]
 
@@ -23,76 +24,95 @@ RIGHT_JOINTS = ("right_s0", "right_s1", "right_e0", "right_e1", "right_w0", "rig
 CLOSED_BELOW = 0.5
 
 
-class BaxterArm:
-    """Baxter's left arm and gripper, position-controlled.
+class RobotArm:
+    """An arm of :mod:`sandbox.robot.arms` and its gripper, position-controlled.
 
     Parameters
     ----------
     sim : Simulation
-        Where to load Baxter (as body ``"baxter"``).
+        Where to load the arm (as body ``robot``, e.g. ``"baxter"``), at its world pose.
+    robot : str
+        A name of :data:`sandbox.robot.arms.ROBOTS` (default ``"baxter"``).
 
     Attributes
     ----------
-    lower, upper : ndarray, shape (7,)
-        Left-arm joint limits (rad).
-    max_velocity : ndarray, shape (7,)
-        Joint speed limits (rad/s) from the URDF (1.5 for shoulder and elbow,
+    spec : ArmSpec
+        The arm's description (joints, tip link, home, base pose, fingers).
+    lower, upper : ndarray, shape (dof,)
+        Arm joint limits (rad).
+    max_velocity : ndarray, shape (dof,)
+        Joint speed limits (rad/s) from the URDF (Baxter: 1.5 for shoulder and elbow,
         4.0 for the wrist); the motors never exceed them.
-    max_force : ndarray, shape (7,)
+    max_force : ndarray, shape (dof,)
         Joint effort limits (N m) from the URDF.
     """
 
-    name = "baxter"
-
-    def __init__(self, sim: Simulation) -> None:
+    def __init__(self, sim: Simulation, robot: str = "baxter") -> None:
+        self.spec = arm_spec(robot)
+        self.name = robot
         self.sim = sim
-        self.baxter = sim.load_baxter(self.name)
+        self.baxter = sim.load_robot(self.name, robot)
         self.lower, self.upper = self.baxter.lower.copy(), self.baxter.upper.copy()
         self.max_force, self.max_velocity = sim.joint_limits(self.name, self.baxter.arm)
         self._finger_force, self._finger_speed = sim.joint_limits(self.name,
                                                                   self.baxter.fingers)
-        self._finger_travel = self.baxter.limits["l_gripper_l_finger_joint"][1]
-        self.tip_link = self.baxter.links[TIP_LINK]
+        self._finger_travel = self.baxter.limits[self.spec.fingers[0]][1]
+        if robot == "baxter":          # mirrored fingers, travel from the URDF
+            self._open = np.array([self._finger_travel, -self._finger_travel])
+        else:
+            self._open = np.array(self.spec.finger_open)
+        self._closed = np.array(self.spec.finger_closed, dtype=float)
+        self.tip_link = self.baxter.links[self.spec.tip_link]
         self._held = self._held_joints()
 
+    @property
+    def dof(self) -> int:
+        """Number of arm joints."""
+        return self.spec.dof
+
     def _held_joints(self) -> tuple[list[int], FloatArray]:
-        """Joints outside the left arm and gripper, with the posture they are held at."""
+        """Joints outside the arm and gripper, with the posture they are held at."""
         joints = self.baxter.joints
-        held = {n: q for n, q in zip(RIGHT_JOINTS, Q_RIGHT, strict=True)}
+        held = dict(self.spec.held)
         for name in self.baxter.limits:
             if name not in held and joints[name] not in (*self.baxter.arm, *self.baxter.fingers):
                 held[name] = 0.0
         return [joints[n] for n in held], np.array(list(held.values()))
 
-    def reset(self, q: ArrayLike = Q_HOME) -> None:
-        """Teleport the arm to ``q`` (7,) rad at rest, gripper open; motors hold it there."""
-        q = np.clip(np.asarray(q, dtype=float), self.lower, self.upper)
+    def reset(self, q: ArrayLike | None = None) -> None:
+        """Teleport the arm to ``q`` (dof,) rad (default home) at rest, gripper open; motors
+        hold it there."""
+        q = np.clip(np.asarray(self.spec.q_home if q is None else q, dtype=float), self.lower,
+                    self.upper)
         joints, posture = self._held
-        self.sim.reset_joints(self.name, joints, posture)
-        self.sim.control_joints(self.name, joints, posture, np.full(len(joints), 100.0),
-                                np.full(len(joints), 1.0))
+        if joints:
+            self.sim.reset_joints(self.name, joints, posture)
+            self.sim.control_joints(self.name, joints, posture, np.full(len(joints), 100.0),
+                                    np.full(len(joints), 1.0))
         self.sim.reset_joints(self.name, self.baxter.arm, q)
-        self.sim.reset_joints(self.name, self.baxter.fingers,
-                              [self._finger_travel, -self._finger_travel])
+        self.sim.reset_joints(self.name, self.baxter.fingers, self._open)
         self.act(q, close=False)
 
     def act(self, q_target: ArrayLike, close: bool) -> None:
-        """Command joint targets ``q_target`` (7,) rad (clipped to limits) and the gripper."""
+        """Command joint targets ``q_target`` (dof,) rad (clipped to limits) and the gripper."""
         q_target = np.clip(np.asarray(q_target, dtype=float), self.lower, self.upper)
         self.sim.control_joints(self.name, self.baxter.arm, q_target, self.max_force,
                                 self.max_velocity)
-        travel = 0.0 if close else self._finger_travel
-        self.sim.control_joints(self.name, self.baxter.fingers, [travel, -travel],
+        fingers = self._closed if close else self._open
+        self.sim.control_joints(self.name, self.baxter.fingers, fingers,
                                 self._finger_force, self._finger_speed)
 
     def joint_state(self) -> tuple[FloatArray, FloatArray]:
-        """Arm joint positions (7,) rad and velocities (7,) rad/s."""
+        """Arm joint positions (dof,) rad and velocities (dof,) rad/s."""
         return self.sim.joint_states(self.name, self.baxter.arm)
 
     def gripper_opening(self) -> float:
         """Finger opening in [0, 1]: 0 closed, 1 fully open (mean of both fingers)."""
         q, _ = self.sim.joint_states(self.name, self.baxter.fingers)
-        opening = 0.5 * (q[0] - q[1]) / self._finger_travel
+        if self.name == "baxter":
+            opening = 0.5 * (q[0] - q[1]) / self._finger_travel
+        else:
+            opening = float(np.mean((q - self._closed) / (self._open - self._closed)))
         return float(np.clip(opening, 0.0, 1.0))
 
     def gripper_closed(self) -> bool:
@@ -100,5 +120,18 @@ class BaxterArm:
         return self.gripper_opening() < CLOSED_BELOW
 
     def tip_position(self) -> FloatArray:
-        """World position (3,) m of the gripper's fingertip point (:data:`TIP_LINK`)."""
+        """World position (3,) m of the gripper's fingertip point (the arm's tip link)."""
         return self.sim.link_position(self.name, self.tip_link)
+
+
+class BaxterArm(RobotArm):
+    """Baxter's left arm and gripper, position-controlled: :class:`RobotArm` of ``"baxter"``.
+
+    Parameters
+    ----------
+    sim : Simulation
+        Where to load Baxter (as body ``"baxter"``).
+    """
+
+    def __init__(self, sim: Simulation) -> None:
+        super().__init__(sim, "baxter")

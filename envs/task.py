@@ -6,7 +6,7 @@ an offset from the tracked hand point: where the demonstrated gripper tip met
 the hand, learned per task from the training demonstrations (the ``grasp_offset``
 reset option, which the episode runners fill from the model's meeting geometry,
 :mod:`sandbox.data.geometry`), else :data:`DEFAULT_HOLD_OFFSET`. When the gripper is
-closed (:func:`~sandbox.envs.robot.BaxterArm.gripper_closed`) with its
+closed (:func:`~sandbox.envs.robot.RobotArm.gripper_closed`) with its
 fingertip point within ``grasp_radius`` of the grasp point, the object is
 fixed to the gripper where it is (a PyBullet constraint) and the hand lets go: that is the handover,
 and the episode's success. The robot passes through the hand and the object
@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 from sandbox import urdf
 from sandbox.envs.human import HumanHand
 from sandbox.envs.pybullet import Simulation
-from sandbox.envs.robot import BaxterArm
+from sandbox.envs.robot import RobotArm
 from sandbox.robot import FLOOR_Z, GRASP_OFFSET
 from sandbox.validation import check_positive
 
@@ -91,14 +91,14 @@ class HandoverTask:
     Parameters
     ----------
     sim : Simulation
-    robot : BaxterArm
+    robot : RobotArm
     human : HumanHand
     grasp_radius : float
         Largest fingertip-to-grasp-point distance (m) at which closing the gripper grasps.
     weights : RewardWeights
     """
 
-    def __init__(self, sim: Simulation, robot: BaxterArm, human: HumanHand, *,
+    def __init__(self, sim: Simulation, robot: RobotArm, human: HumanHand, *,
                  grasp_radius: float = 0.05, weights: RewardWeights = RewardWeights()) -> None:
         self.sim, self.robot, self.human = sim, robot, human
         self.grasp_radius = check_positive(grasp_radius, "grasp_radius")

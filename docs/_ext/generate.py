@@ -186,10 +186,11 @@ def _env_page(env_id: str) -> str:
 def write_environments() -> None:
     import sandbox.envs
 
-    ids = [*sandbox.envs.ENV_IDS, *sandbox.envs.LEGACY_IDS]
+    ids = [*sandbox.envs.ENV_IDS, *sandbox.envs.LEGACY_IDS, *sandbox.envs.ROBOT_IDS]
     lines = ["Environments", "============", "",
              "One page per registered id (``import sandbox.envs`` registers them). The",
-             "``-v0`` ids keep v0's observation (no ``arm``, ``emg``) for one release.",
+             "``-v0`` ids keep v0's observation (no ``arm``, ``emg``) for one release. The",
+             "``-v2`` ids take any arm (``robot=``, :doc:`/tutorials/robots`); shown with Baxter.",
              "How to use them: :doc:`/tutorials/environments`.", "",
              ".. toctree::", "   :maxdepth: 1", ""]
     for env_id in ids:

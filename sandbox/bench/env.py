@@ -12,6 +12,10 @@
   observing the arm and EMG (target >= 0.9).
 * ``policy_steps_per_s``: steps per second with the dynamic policy
   (:class:`sandbox.episodes.policies.IProMPPolicy`, ``dow_t = 0.1`` s) choosing the actions.
+* ``env_steps_per_s_by_robot``: random stepping of ``sandbox/HandoverDiverging-v2`` with
+  each arm (``robot=``: baxter, panda, ur5, kinova), blocks alternating between the arms,
+  medians; ``policy_steps_per_s_by_robot``: the dynamic policy in the loop for each arm
+  (another arm than Baxter retargets every command through its IK).
 
 :func:`run_vector_benchmarks` (the bench command runs it too):
 
@@ -36,14 +40,16 @@ import numpy as np
 ENV_ID = "sandbox/BaxterHandoverDiverging-v1"
 #: The legacy id with the hand-only observation, timed beside ``ENV_ID``.
 LEGACY_ENV_ID = "sandbox/BaxterHandoverDiverging-v0"
+#: The id that takes any arm (``robot=``), timed per arm.
+ROBOT_ENV_ID = "sandbox/HandoverDiverging-v2"
 
 
-def _make_env(env_id: str = ENV_ID):
+def _make_env(env_id: str = ENV_ID, **kwargs):
     import gymnasium as gym
 
     import sandbox.envs  # noqa: F401  (registers the environments)
 
-    return gym.make(env_id)
+    return gym.make(env_id, **kwargs)
 
 
 def _env_block(env, n_steps: int, rng: np.random.Generator) -> float:
@@ -104,12 +110,13 @@ def env_vs_raw(n_steps: int = 200, blocks: int = 5, seed: int = 0) -> dict[str, 
             "env_v1_v0_ratio": env_rate / legacy_rate}
 
 
-def policy_steps_per_s(n_episodes: int = 3, dow_t: float = 0.1, seed: int = 0) -> float:
+def policy_steps_per_s(n_episodes: int = 3, dow_t: float = 0.1, seed: int = 0,
+                       robot: str = "baxter") -> float:
     """Environment steps per second with the dynamic policy in the loop (whole episodes)."""
     from sandbox.episodes.policies import IProMPPolicy, fit_family_model
 
-    env = _make_env()
-    policy = IProMPPolicy(fit_family_model("diverging"), dow_t=dow_t)
+    env = _make_env() if robot == "baxter" else _make_env(ROBOT_ENV_ID, robot=robot)
+    policy = IProMPPolicy(fit_family_model("diverging"), dow_t=dow_t, robot=robot)
     steps, seconds = 0, 0.0
     try:
         for i in range(n_episodes):
@@ -126,11 +133,38 @@ def policy_steps_per_s(n_episodes: int = 3, dow_t: float = 0.1, seed: int = 0) -
     return steps / seconds
 
 
-def run_env_benchmarks() -> dict[str, float]:
+def by_robot(n_steps: int = 200, blocks: int = 3, seed: int = 0) -> dict[str, float]:
+    """Median random-action steps per second of ``sandbox/HandoverDiverging-v2`` per arm."""
+    from sandbox.robot.arms import ROBOTS
+
+    envs = {robot: _make_env(ROBOT_ENV_ID, robot=robot) for robot in ROBOTS}
+    rng = np.random.default_rng(seed)
+    times: dict[str, list[float]] = {robot: [] for robot in ROBOTS}
+    try:
+        for env in envs.values():
+            env.reset(seed=seed)
+            _env_block(env, 20, rng)  # warm up
+        for _ in range(blocks):
+            for robot, env in envs.items():
+                times[robot].append(_env_block(env, n_steps, rng))
+    finally:
+        for env in envs.values():
+            env.close()
+    return {robot: n_steps / float(np.median(t)) for robot, t in times.items()}
+
+
+def run_env_benchmarks() -> dict:
     """All environment figures (see the module docstring), rounded for printing."""
+    from sandbox.robot.arms import ROBOTS
+
     result = env_vs_raw()
     result["policy_steps_per_s"] = policy_steps_per_s()
-    return {key: round(value, 3 if key.endswith("ratio") else 1) for key, value in result.items()}
+    out: dict = {key: round(value, 3 if key.endswith("ratio") else 1)
+                 for key, value in result.items()}
+    out["env_steps_per_s_by_robot"] = {r: round(v, 1) for r, v in by_robot().items()}
+    out["policy_steps_per_s_by_robot"] = {
+        r: round(policy_steps_per_s(n_episodes=2, robot=r), 1) for r in ROBOTS}
+    return out
 
 
 # ---------------------------------------------------------------- vector environments

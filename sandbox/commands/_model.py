@@ -65,12 +65,14 @@ BAXTER_JOINTS = 7
 
 
 def baxter(model) -> None:
-    """``ValueError`` unless the model drives Baxter's seven left-arm joints (in joint space)."""
+    """``ValueError`` unless an arm can follow the model: Baxter's seven left-arm joints
+    (retargeted to another arm) or a task-space position (3 dims, m; through the arm's
+    inverse kinematics, :mod:`sandbox.episodes.steering`)."""
     if getattr(model, "robot_space", "joint") == "task":
-        raise ValueError("--model: its robot part is in task space (a position, m); the "
-                         "environments drive Baxter's 7 joints and following a task-space "
-                         "plan needs inverse kinematics onto the arm (issue 23, not built "
-                         "yet): fit a joint-space model to drive the arm")
+        if model.n_robot != 3:
+            raise ValueError(f"--model: its robot part is in task space with {model.n_robot} "
+                             f"dims; an arm follows a position x, y, z (3 dims, m)")
+        return
     if model.n_robot != BAXTER_JOINTS:
         raise ValueError(f"--model: the model drives {model.n_robot} robot dims, the "
                          f"environments' Baxter arm has {BAXTER_JOINTS} joints")

@@ -38,6 +38,11 @@ def add_arguments(parser) -> None:
                         help="dynamic window dow_t (s), in (0, 60]")
     parser.add_argument("--ratio", type=_types.FRACTION, default=0.3,
                         help="observed fraction of the static baseline")
+    from sandbox.robot.arms import ROBOTS
+
+    parser.add_argument("--robot", default="baxter", choices=ROBOTS,
+                        help="the arm: baxter (default), panda, ur5 or kinova (the model's plans "
+                             "retargeted)")
     parser.add_argument("--demos", type=_types.DEMOS, default=20,
                         help="training demos per task (at least 2)")
     _model.add_argument(parser, "the robot uses it instead of fitting one (it must know "
@@ -174,7 +179,7 @@ def run(args) -> int:
     else:
         print(f"model {args.model}: {len(model.tasks)} tasks {list(model.tasks)}, observing "
               f"{','.join(model.modality_names)}")
-    env = gym.make("sandbox/BaxterHandoverDiverging-v1")
+    env = gym.make("sandbox/BaxterHandoverDiverging-v1", robot=args.robot)
     options = {"task": args.from_task, "switch_to": args.to_task, "switch_phase": args.switch}
     viewer = overlay = None
     try:
@@ -186,12 +191,13 @@ def run(args) -> int:
             overlay = viewer.add_overlay(
                 model.tasks, rng=np.random.default_rng(args.seed),
                 title=f"demo: {args.from_task} -> {args.to_task}, dynamic (dow_t={args.dow:g} s)")
-        dynamic = record_episode(env, IProMPPolicy(model, dow_t=args.dow), seed=args.seed,
-                                 options=options, viewer=viewer, overlay=overlay,
+        dynamic = record_episode(env, IProMPPolicy(model, dow_t=args.dow, robot=args.robot),
+                                 seed=args.seed, options=options, viewer=viewer, overlay=overlay,
                                  policy_name=f"dynamic (dow_t={args.dow:g} s)")
         truth = env.unwrapped.motion.meta["intent"]
         duration = env.unwrapped.motion.duration
-        static = record_episode(env, StaticPolicy(model, ratio=args.ratio), seed=args.seed,
+        static = record_episode(env, StaticPolicy(model, ratio=args.ratio, robot=args.robot),
+                                seed=args.seed,
                                 options=options, policy_name=f"static (ratio={args.ratio:g})")
     finally:
         env.close()

@@ -42,6 +42,7 @@ def add_arguments(parser) -> None:
     """Add the ``episodes`` command's options to ``parser``."""
     from sandbox.commands import _types
     from sandbox.episodes.scenarios import POLICIES, SCENARIOS
+    from sandbox.robot.arms import ROBOTS
 
     parser.add_argument("--scenario", default="diverging", choices=sorted(SCENARIOS),
                         help="what the human does (default diverging)")
@@ -82,6 +83,10 @@ def add_arguments(parser) -> None:
                         help="dynamic window dow_t (s) (default 0.2)")
     parser.add_argument("--ratio", type=_types.FRACTION, default=0.3,
                         help="static observed ratio (default 0.3)")
+    parser.add_argument("--robot", default="baxter", choices=ROBOTS,
+                        help="the arm: baxter (default), panda, ur5 or kinova; another than "
+                             "Baxter follows the model's plans retargeted through its inverse "
+                             "kinematics")
     parser.add_argument("--json", type=_types.output_file, default=None, metavar="FILE",
                         help="write the summaries and every episode's outcome as JSON")
     parser.add_argument("--force", action="store_true", help="overwrite an existing --json file")
@@ -110,6 +115,7 @@ def run(args) -> int:
         print(_mode_line(config))
     print(table(out))
     print(notes(args, out))
+    print(robot_note(args, out))
     if any("per_session" in entry for entry in out.values()):
         print("\nby session:\n" + session_table(out))
     if args.json:
@@ -140,13 +146,19 @@ def _run_policy(name: str, args) -> dict:
     results = run_scenario(args.scenario, name, n_episodes=args.episodes, seed=args.seed,
                            dow_t=args.dow, ratio=args.ratio, data=args.data, test=args.test,
                            observe=args.observe, session=args.session,
-                           train_session=args.train_session, spec=_spec(args))
+                           train_session=args.train_session, spec=_spec(args),
+                           robot=args.robot)
     episodes = [{"seed": r.seed, "task": r.task, "final_task": r.final_task,
                  "success": r.success, "handover_time": r.handover_time,
                  "min_distance": r.min_distance, "final_distance": r.final_distance,
-                 "options": _jsonable(r.options), **({"replay": r.replay} if r.replay else {})}
+                 "outcome": r.outcome, "options": _jsonable(r.options),
+                 **({"replay": r.replay} if r.replay else {})}
                 for r in results]
-    entry = {"summary": _summary(results), "episodes": episodes}
+    entry = {"summary": _summary(results), "episodes": episodes, "robot": args.robot}
+    reach = [r.reach for r in results if r.reach is not None]
+    if reach:
+        entry["reach"] = float(min(reach))
+        entry["note"] = results[0].note
     if args.scenario == "recorded":
         entry["config"] = _config(args, results)
     if entry.get("config", {}).get("mode") == "leave-one-session-out":
@@ -241,6 +253,21 @@ def notes(args, out: dict) -> str:
                      "synthetic) robot, so its row is the reference the others are measured "
                      "against.")
     return "\n".join(lines)
+
+
+def robot_note(args, out: dict) -> str:
+    """Which arm acted; for a retargeted one, the reach of the models' meeting points."""
+    entry = next(iter(out.values()))
+    line = f"robot: {args.robot}"
+    if "reach" in entry:
+        line += (f"; reaches {entry['reach']:.2f} of the model's meeting points"
+                 + (f". {entry['note']}" if entry.get("note") else ""))
+    unreachable = {n: sum(e["outcome"] == "unreachable" for e in v["episodes"])
+                   for n, v in out.items()}
+    if any(unreachable.values()):
+        line += "; episodes ending 'unreachable': " + ", ".join(
+            f"{n} {k}" for n, k in unreachable.items())
+    return line
 
 
 def table(out: dict) -> str:

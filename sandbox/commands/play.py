@@ -38,6 +38,11 @@ HELP = ("drive the human hand from the keyboard while the robot anticipates live
 
 def add_arguments(parser) -> None:
     """Add the ``play`` command's options to ``parser``."""
+    from sandbox.robot.arms import ROBOTS
+
+    parser.add_argument("--robot", default=None, choices=ROBOTS,
+                        help="the arm: baxter (default), panda, ur5 or kinova (the model's plans "
+                             "retargeted); with --scenario it replaces the file's robot:")
     parser.add_argument("--scenario", metavar="FILE", default=None,
                         help="run a scenario file (.json/.yaml) or a shipped example "
                              "(intent_switch, waypoints) instead of the keyboard teleop; keys: "
@@ -148,6 +153,9 @@ def run(args) -> int:
         return _scenario(args)
     if args.spec is not None:
         raise ValueError("--spec: expected with --scenario FILE whose human is recorded")
+    if recorder is not None and (args.robot or "baxter") != "baxter":
+        raise ValueError(f"--robot: expected baxter with --record-demos (the demos record "
+                         f"Baxter's joints), got {args.robot}")
     from sandbox.validation import check_positive
     from sandbox.viz.server import check_host
 
@@ -186,7 +194,8 @@ def _teleop(args, recorder=None) -> int:
               f"saved when it ends (n, q, handover, time limit)", flush=True)
     env = gym.make(env_id, render_mode="human",
                    max_episode_steps=max(1, round(args.time_limit * 50)),
-                   viewer_options={"open_browser": args.open, "host": args.host})
+                   viewer_options={"open_browser": args.open, "host": args.host},
+                   robot=args.robot or "baxter")
     wrap, save = args.record
     env = wrap(env)
     try:   # Ctrl-C: the environment closes, the terminal is restored, cli.main says it
@@ -222,6 +231,7 @@ def _teleop_policy(args):
         known = f"{args.demos} synthetic demos each"
     try:
         policy = IProMPPolicy(model, dow_t=args.dow, observe=observe,
+                              robot=args.robot or "baxter",
                               **_settings.predictor_options(settings))
     except ValueError as error:
         raise ValueError(f"--model/--observe: {error}" if args.model else str(error)) from None
@@ -239,7 +249,8 @@ def _scenario(args) -> int:
     scenario = load_scenario(args.scenario, observe=_settings.observe(args.observe, settings),
                              model=args.model,
                              options=_settings.predictor_options(settings),
-                             model_options=_settings.model_options(settings), spec=args.spec)
+                             model_options=_settings.model_options(settings), spec=args.spec,
+                             robot=args.robot)
     html = Path(args.out or f"{scenario.path.stem}.html")
     summary_path = Path(args.summary or f"{scenario.path.stem}.summary.json")
     if summary_path.suffix.lower() != ".json":

@@ -171,7 +171,8 @@ def meeting_point(beliefs, kinematics, link: str = TIP_LINK) -> np.ndarray:
     :class:`~sandbox.robot.BaxterKinematics` (``fk(q, link=...)``).
     """
     _, means, _ = beliefs.plan()
-    return kinematics.fk(means[-1], link=link)
+    end = np.asarray(means[-1], dtype=float)
+    return end if end.shape[-1] == 3 else kinematics.fk(end, link=link)   # task space: as is
 
 
 def _meetings(policy) -> str:
@@ -264,6 +265,11 @@ class _Loop:
                 beliefs_of(self.policy).tasks, rng=np.random.default_rng(self.seed),
                 title="teleop: keys in the terminal (h: help)")
             self.out("keys:\n" + HELP_TEXT)
+            arm = getattr(self.env.unwrapped.robot, "name", "baxter")
+            if arm != "baxter":                      # another arm: its own fingertip
+                from sandbox.robot.retarget import Retargeter
+
+                self.overlay.executed_tip = Retargeter(arm).tip
         self.overlay.restart(beliefs_of(self.policy), truth=self.env.unwrapped.human_intent(0.0))
 
     def wait(self, step: Step) -> bool:
@@ -295,7 +301,9 @@ class _Loop:
             self.overlay.show(beliefs, t, executed_q=self.obs["q"], truth=env.human_intent(t))
         if beliefs.n_updates > self.n_updates:
             self.n_updates = beliefs.n_updates
-            gripper = self.kinematics.fk(self.obs["q"], link=TIP_LINK)
+            gripper = (self.kinematics.fk(self.obs["q"], link=TIP_LINK)
+                       if self.obs["q"].shape == (7,) and env.robot.name == "baxter"
+                       else env.robot.tip_position())
             meeting = meeting_point(beliefs, self.kinematics)
             self.out(status_line(t, env.motion.position(t), self.obs["hand"], beliefs,
                                  gripper=gripper, meeting=meeting))

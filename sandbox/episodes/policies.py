@@ -1,8 +1,10 @@
 """Policies for the handover environments: the Interaction ProMP predictor as a controller.
 
 A policy maps each observation of :mod:`sandbox.envs` (a dict with ``hand``,
-``arm``, ``emg``, ``object``, ``q``, ``time``...) to an action (8,): seven
-joint targets (rad) and a gripper command. :class:`IProMPPolicy` feeds the
+``arm``, ``emg``, ``object``, ``q``, ``time``...) to an action (dof + 1,): the
+arm's joint targets (rad; Baxter's seven) and a gripper command. ``robot=``
+names the arm; another than Baxter follows the plan retargeted
+(:mod:`sandbox.episodes.steering`). :class:`IProMPPolicy` feeds the
 observed modalities (every one its model has and the environments carry:
 ``hand``, ``arm``, ``emg``, see :func:`modality_values`) to a
 :class:`~sandbox.core.DynamicPredictor` and steers the arm along the blended
@@ -43,8 +45,8 @@ from numpy.typing import NDArray
 
 from sandbox.core import DynamicPredictor, IProMP, StaticPredictor
 from sandbox.episodes.policy import Beliefs, check_joint_model
-from sandbox.robot import TIP_LINK, joint_speed_limits
-from sandbox.validation import check_array, check_positive
+from sandbox.episodes.steering import Steering
+from sandbox.validation import check_array
 
 FloatArray = NDArray[np.float64]
 
@@ -161,33 +163,7 @@ def fit_family_model(family: str = "diverging", n_per_task: int = 20, seed: int 
     return fit(family, n_per_task, seed, n_basis, tuple(names), **more)
 
 
-class _Steering:
-    """From a goal pose to an action: the speed-limited target and the gripper rule."""
-
-    _target: FloatArray | None
-
-    def _setup_steering(self, control_hz: float, close_radius: float, max_velocity) -> None:
-        from sandbox.robot import BaxterKinematics
-
-        self.dt = 1.0 / check_positive(control_hz, "control_hz")
-        self.close_radius = check_positive(close_radius, "close_radius")
-        limits = joint_speed_limits() if max_velocity is None else max_velocity
-        self.max_velocity = check_array(limits, "max_velocity", 1, shape=(7,))
-        check_positive(float(self.max_velocity.min()), "max_velocity")
-        self.kinematics = BaxterKinematics()
-
-    def _act(self, q: FloatArray, goal: FloatArray, obs: Mapping[str, FloatArray]) -> FloatArray:
-        """Action (8,): ``goal`` (7,) rad approached at most ``max_velocity * dt`` from the
-        previous target (from ``q`` at first); the gripper closed near the object."""
-        previous = q if self._target is None else self._target
-        step = self.max_velocity * self.dt
-        self._target = previous + np.clip(goal - previous, -step, step)
-        tip = self.kinematics.fk(q, link=TIP_LINK)
-        close = np.linalg.norm(tip - np.asarray(obs["object"], dtype=float)) < self.close_radius
-        return np.append(self._target, 1.0 if close else -1.0)
-
-
-class IProMPPolicy(_Steering):
+class IProMPPolicy(Steering):
     """Dynamic Interaction ProMP controller: re-predict every ``dow_t`` seconds, follow the plan.
 
     Parameters
@@ -206,9 +182,13 @@ class IProMPPolicy(_Steering):
         The environment's control rate (Hz); sets the step and the subsampling.
     close_radius : float
         Fingertip-to-object distance (m) under which the gripper closes.
-    max_velocity : array_like, shape (7,), optional
-        Joint speed limits (rad/s); default Baxter's URDF ``<limit velocity>``
-        (:func:`sandbox.robot.joint_speed_limits`).
+    max_velocity : array_like, shape (dof,), optional
+        Joint speed limits (rad/s) of the arm; default its URDF's ``<limit velocity>``
+        (Baxter's: :func:`sandbox.robot.joint_speed_limits`).
+    robot : str
+        The arm acting (:data:`sandbox.robot.arms.ROBOTS`, default ``"baxter"``); any
+        other arm, or a model fitted in task space, is retargeted
+        (:mod:`sandbox.episodes.steering`).
     **options
         More options of the predictor (``blend_rate``, ``likelihood``...);
         ``until_end`` defaults to False here (:data:`CLOSED_LOOP`).
@@ -240,18 +220,19 @@ class IProMPPolicy(_Steering):
 
     def __init__(self, model: IProMP, *, dow_t: float = 0.2, control_hz: float = 50.0,
                  close_radius: float = 0.045, max_velocity=None, observe=None,
-                 **options) -> None:
-        self._setup(model, observe, control_hz, close_radius, max_velocity)
+                 robot: str = "baxter", **options) -> None:
+        self._setup(model, observe, control_hz, close_radius, max_velocity, robot)
         self.predictor: DynamicPredictor | StaticPredictor = DynamicPredictor(
             model, dow_t=dow_t, subsample=self.subsample, observe=self.observe,
             **{**CLOSED_LOOP, **options})
         self.reset()
 
     def _setup(self, model, observe, control_hz: float, close_radius: float,
-               max_velocity) -> None:
+               max_velocity, robot: str = "baxter") -> None:
         check_joint_model(model)
         self.observe, self._required = _observed(model, observe)
-        self._setup_steering(control_hz, close_radius, max_velocity)
+        self._setup_steering(control_hz, close_radius, max_velocity, robot,
+                             getattr(model, "robot_space", "joint") == "task")
         self.subsample = max(1, int(round(float(control_hz) / PREDICTOR_HZ)))
 
     def reset(self) -> None:
@@ -267,7 +248,7 @@ class IProMPPolicy(_Steering):
         if t < self._last_time:
             self.reset()
         self._last_time = t
-        q = check_array(obs["q"], "obs['q']", 1, shape=(7,))
+        q = self._check_q(obs)
         self.predictor.observe(*tracker_row(obs, self.observe, required=self._required))
         self.history.append((t, self.task))
         mean, _ = self.predictor.command(t + self.dt)
@@ -305,8 +286,8 @@ class StaticPolicy(IProMPPolicy):
 
     def __init__(self, model: IProMP, *, ratio: float = 0.3, control_hz: float = 50.0,
                  close_radius: float = 0.045, max_velocity=None, observe=None,
-                 **options) -> None:
-        self._setup(model, observe, control_hz, close_radius, max_velocity)
+                 robot: str = "baxter", **options) -> None:
+        self._setup(model, observe, control_hz, close_radius, max_velocity, robot)
         self.predictor = StaticPredictor(model, ratio=ratio, subsample=self.subsample,
                                          observe=self.observe, **{**CLOSED_LOOP, **options})
         self.reset()
@@ -337,7 +318,7 @@ def _observed(model: IProMP, observe) -> tuple[tuple[str, ...] | None, bool]:
     return names, True
 
 
-class RecordedRobotPolicy(_Steering):
+class RecordedRobotPolicy(Steering):
     """The recorded robot's own motion as a controller: the reference for recorded replays.
 
     Commands, at each step, the robot's recorded joint positions at the next
@@ -351,31 +332,38 @@ class RecordedRobotPolicy(_Steering):
     ----------
     times : array_like, shape (T,)
         The trial's sample times (s); the episode's time 0 is ``times[0]``.
-    robot : array_like, shape (T, 7)
-        Recorded left-arm joint positions (rad).
+    robot : array_like, shape (T, 7) or (T, 3)
+        Recorded left-arm joint positions (rad), or with ``task_space`` positions (m).
     task : str
         The trial's task (reported as the recognised task).
     control_hz, close_radius, max_velocity
         As for :class:`IProMPPolicy`.
+    arm : str
+        The arm acting (``robot`` of :class:`IProMPPolicy`): another than Baxter follows
+        the recorded fingertip path (retargeted).
+    task_space : bool
+        ``robot`` is a task-space position (m, world), followed through the arm's IK.
     """
 
     def __init__(self, times, robot, task: str, *, control_hz: float = 50.0,
-                 close_radius: float = 0.045, max_velocity=None) -> None:
+                 close_radius: float = 0.045, max_velocity=None, arm: str = "baxter",
+                 task_space: bool = False) -> None:
         from sandbox.validation import check_times
 
         t = check_times(times, "times")
         self._times = t - t[0]
-        self._robot = check_array(robot, "robot", 2, shape=(t.size, 7))
+        self._robot = check_array(robot, "robot", 2, shape=(t.size, 3 if task_space else 7))
         if not isinstance(task, str) or not task:
             raise ValueError(f"task: expected a task name, got {task!r}")
         self.task = task
-        self._setup_steering(control_hz, close_radius, max_velocity)
+        self._setup_steering(control_hz, close_radius, max_velocity, arm, task_space)
         self.reset()
 
     @classmethod
     def from_demo(cls, demo, **options) -> RecordedRobotPolicy:
         """The policy replaying a :class:`~sandbox.data.Demonstration`'s robot."""
-        return cls(demo.times, demo.robot, demo.task, **options)
+        return cls(demo.times, demo.robot, demo.task,
+                   task_space=getattr(demo, "robot_space", "joint") == "task", **options)
 
     def reset(self) -> None:
         """Start the trial again."""
@@ -394,6 +382,6 @@ class RecordedRobotPolicy(_Steering):
     def __call__(self, obs: Mapping[str, FloatArray]) -> FloatArray:
         """The action (8,): the recorded pose at ``t + dt`` (speed-limited), gripper command."""
         t = float(np.asarray(obs["time"]).reshape(-1)[0])
-        q = check_array(obs["q"], "obs['q']", 1, shape=(7,))
+        q = self._check_q(obs)
         goal = np.array([np.interp(t + self.dt, self._times, joint) for joint in self._robot.T])
         return self._act(q, goal, obs)

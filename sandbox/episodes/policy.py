@@ -160,14 +160,14 @@ def beliefs_of(policy: Any) -> Beliefs:
 
 
 def check_joint_model(model) -> None:
-    """Refuse (``ValueError``, one line) a model that does not plan Baxter's 7 arm joints:
-    a task-space robot part would need inverse kinematics onto the arm (the any-arm
-    issue 23), which is not built."""
+    """Refuse (``ValueError``, one line) a model whose robot part no arm can follow: the
+    policies drive an arm from Baxter's 7 joints (retargeted to other arms) or from a
+    task-space position (3 dims, m), through the arm's inverse kinematics."""
     if getattr(model, "robot_space", "joint") == "task":
-        raise ValueError("the model's robot part is in task space (a position, m): the "
-                         "environments drive Baxter's 7 arm joints and following a task-space "
-                         "plan needs inverse kinematics onto the arm (issue 23, not built "
-                         "yet); fit a joint-space model for episodes and play")
+        if getattr(model, "n_robot", 3) != 3:
+            raise ValueError(f"the model's robot part is in task space with {model.n_robot} "
+                             f"dims; a policy follows a position x, y, z (3 dims, m)")
+        return
     if getattr(model, "n_robot", 7) != 7:          # an unfitted model: its own error later
         raise ValueError(f"the model drives {model.n_robot} robot dims, the environments' "
                          f"Baxter arm has 7 joints")

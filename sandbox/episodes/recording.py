@@ -227,6 +227,11 @@ class _Recorder:
         if self.viewer is not None:
             self.viewer.restart_recording()
             self.viewer.update(0.0, force=True)
+        arm = getattr(getattr(self.env.unwrapped, "robot", None), "name", "baxter")
+        if self.overlay is not None and arm != "baxter":   # its fingertip, not Baxter's FK
+            from sandbox.robot.retarget import Retargeter
+
+            self.overlay.executed_tip = Retargeter(arm).tip
 
     def step(self, step: Step) -> None:
         record, beliefs, t = self.record, beliefs_of(self.policy), step.time

@@ -148,8 +148,9 @@ def plan_replays(data: str | Path, n: int, seed: int, *, test: str | Path | None
     spec : DataSpec, optional
         The sets' layout (:mod:`sandbox.data.spec`); the replayed motion (its ``hand``
         and the body modalities it has) is then loaded with it and given to the
-        environment as its ``motion``. Its robot part must be Baxter's 7 joints:
-        a task-space one would need inverse kinematics onto the arm (issue 23).
+        environment as its ``motion``. Its robot part is Baxter's 7 joints or a
+        task-space position (m), which the arms follow through their inverse
+        kinematics (:mod:`sandbox.episodes.steering`).
 
     Returns
     -------
@@ -162,10 +163,6 @@ def plan_replays(data: str | Path, n: int, seed: int, *, test: str | Path | None
         have none of (named); a ``test`` that is not one set.
     """
     mode = replay_mode(data, test)
-    if spec is not None and spec.robot_space == "task":
-        raise ValueError("spec: the robot part is in task space (a position, m); replaying "
-                         "it on Baxter's arm needs inverse kinematics (issue 23, not built "
-                         "yet): episodes need a joint-space robot part")
     observe = tuple(observe or (spec.observe if spec is not None else ("hand",)))
     options = dict(options or {})
     if mode == LEAVE_ONE_OUT:

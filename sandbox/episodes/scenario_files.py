@@ -8,6 +8,7 @@ A scenario file is one mapping (YAML needs PyYAML; paths are relative to the fil
     object: box                     # optional: box, glasses_case, tape, measuring_tape, screwdriver
     speed: 1.0                      # human speed factor (0.25 - 4)
     time_limit: 6.0                 # episode length limit (s)
+    robot: baxter                   # the arm: baxter | panda | ur5 | kinova (retargeted)
     observe: [hand]                 # modalities the policy observes: hand, arm, emg (or
                                     # "hand,arm"); the model is fitted on these (synthetic:
                                     # hand, arm; recorded: hand, arm, emg)
@@ -59,7 +60,7 @@ SUFFIXES = MAPPING_SUFFIXES
 FAMILIES = {"diverging": "sandbox/BaxterHandoverDiverging-v1",
             "objects": "sandbox/BaxterHandover-v1"}
 TOP_KEYS = ("name", "family", "seed", "object", "speed", "time_limit", "observe", "human",
-            "policy", "model")
+            "policy", "model", "robot")
 #: Modalities the environments' observations carry.
 ENV_MODALITIES = ("hand", "arm", "emg")
 #: Modalities the synthetic motions and models carry (EMG is not simulated).
@@ -89,6 +90,7 @@ class Scenario:
     speed: float = 1.0
     time_limit: float = 6.0
     observe: tuple[str, ...] = ("hand",)
+    robot: str = "baxter"
 
     @property
     def env_id(self) -> str:
@@ -164,7 +166,8 @@ def _exists(path: Path, kind: str) -> bool:
 
 def load_scenario(path: str | Path, *, observe: list[str] | str | None = None,
                   model: str | Path | None = None, options: Mapping | None = None,
-                  model_options: Mapping | None = None, spec: str | Path | None = None) -> Scenario:
+                  model_options: Mapping | None = None, spec: str | Path | None = None,
+                  robot: str | None = None) -> Scenario:
     """Read and validate a scenario file (or a shipped example by name).
 
     ``observe`` (e.g. ``"hand,arm"``), if given, replaces the file's ``observe:``;
@@ -173,6 +176,7 @@ def load_scenario(path: str | Path, *, observe: list[str] | str | None = None,
     in what the file's ``policy.options`` and ``model.options`` do not set
     (``play --config``). ``spec`` (a spec file, relative to the working folder) is the
     recorded human's ``human.spec`` (``play --spec``); refused for another human.
+    ``robot`` (``play --robot``) replaces the file's ``robot:``.
     """
     path = resolve(path)
     check = _Checker(path)
@@ -188,6 +192,9 @@ def load_scenario(path: str | Path, *, observe: list[str] | str | None = None,
         if key not in data:
             check.fail(key, "this key (required)", "nothing")
     family = check.choice(data.get("family", "diverging"), "family", FAMILIES)
+    from sandbox.robot.arms import ARMS
+
+    arm = check.choice(robot or data.get("robot", "baxter"), "robot", ARMS)
     obj = data.get("object")
     if obj is not None:
         import sandbox.urdf as urdf
@@ -210,7 +217,7 @@ def load_scenario(path: str | Path, *, observe: list[str] | str | None = None,
         policy=_policy(check, data["policy"]), model=model_spec,
         object=obj, speed=check.bounded(data.get("speed", 1.0), "speed", "speed"),
         time_limit=check.bounded(data.get("time_limit", 6.0), "time_limit", "time_limit"),
-        observe=names)
+        observe=names, robot=arm)
 
 
 def _fill_in(check: _Checker, data: dict, model, options, model_options) -> dict:
@@ -282,15 +289,15 @@ def _human(check: _Checker, data: Any, family: str, folder: Path,
 
 
 def _spec(check: _Checker, path: Path):
-    """A recorded human's spec file, checked: Baxter's 7 joints in joint space."""
+    """A recorded human's spec file, checked: Baxter's 7 joints, or a position (task space)."""
     from sandbox.data.spec import DataSpec
 
     try:
         spec = DataSpec.load(path)
-        if spec.robot_space == "task":
-            raise ValueError("the robot part is in task space (a position, m); following it "
-                             "on Baxter's arm needs inverse kinematics (issue 23, not built)")
-        if len(spec.robot) != 7:
+        if spec.robot_space == "task" and len(spec.robot) != 3:
+            raise ValueError(f"expected a task-space robot part of 3 columns (x, y, z), got "
+                             f"{list(spec.robot)}")
+        if spec.robot_space == "joint" and len(spec.robot) != 7:
             raise ValueError(f"expected Baxter's 7 arm joints as robot, got {list(spec.robot)}")
     except ValueError as error:
         raise ValueError(f"scenario {check.path}: human.spec: {error}") from None

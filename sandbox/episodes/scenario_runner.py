@@ -79,8 +79,8 @@ def make_policy(scenario: Scenario, model):
     try:
         options = {"observe": list(scenario.observe), **spec["options"]}
         if spec["type"] == "dynamic":
-            return IProMPPolicy(model, dow_t=spec["dow_t"], **options)
-        return StaticPolicy(model, ratio=spec["ratio"], **options)
+            return IProMPPolicy(model, dow_t=spec["dow_t"], robot=scenario.robot, **options)
+        return StaticPolicy(model, ratio=spec["ratio"], robot=scenario.robot, **options)
     except (TypeError, ValueError) as error:
         raise ValueError(f"scenario {scenario.path}: policy.options: {error}") from None
 
@@ -141,8 +141,9 @@ def run_scenario_file(scenario: Scenario, *, html: str | Path | None = None,
     model = build_model(scenario)
     policy = make_policy(scenario, model)
     options = reset_options(scenario, model)
-    env: Any = gym.make(scenario.env_id,
-                        max_episode_steps=max(1, round(scenario.time_limit * 50)))
+    extra: dict[str, Any] = {} if scenario.robot == "baxter" else {"robot": scenario.robot}
+    env: Any = gym.make(scenario.env_id, max_episode_steps=max(1, round(scenario.time_limit * 50)),
+                        **extra)
     env = env if wrap_env is None else wrap_env(env)
     viewer = overlay = None
     try:
@@ -158,7 +159,7 @@ def run_scenario_file(scenario: Scenario, *, html: str | Path | None = None,
         env.close()
     summary = {"scenario": scenario.name, "file": str(scenario.path), "seed": scenario.seed,
                "human": scenario.human_kind, "policy_spec": scenario.policy,
-               "observe": list(scenario.observe),
+               "observe": list(scenario.observe), "robot": scenario.robot,
                "model_tasks": list(model.tasks), **record.summary()}
     if intent is not None:
         summary["intent_switch"] = {"from": intent.tasks[0], "to": intent.tasks[1],

@@ -48,6 +48,7 @@ import numpy as np
 from sandbox.episodes.policy import Policy, beliefs_of, recognitions
 from sandbox.episodes.replays import Replay, grasp_options, plan_replays
 from sandbox.episodes.rollout import Step, rollout
+from sandbox.robot.arms import arm_spec
 from sandbox.validation import check_choice
 
 #: Scenario name -> (environment id, synthetic family).
@@ -90,6 +91,15 @@ class EpisodeResult:
         ``recorded`` scenario: where the replayed trial comes from and what its
         model was fitted on (``mode``, ``session``, ``train``, ``n_train``:
         :class:`sandbox.episodes.replays.Replay`); ``{}`` otherwise.
+    outcome : str
+        ``"handover"``; ``"unreachable"``: no handover and the arm could not reach the
+        policy's last goal (``unreachable`` of :class:`sandbox.episodes.steering.Steering`);
+        ``"missed"``: no handover otherwise.
+    reach : float or None
+        Another arm than Baxter, or a task-space model: the fraction of the model's
+        meeting points the arm reaches (:func:`sandbox.episodes.steering.reach_report`).
+    note : str
+        ``"... retargeted ..."`` when a Baxter joint-space model drives another arm.
     """
 
     seed: int
@@ -103,6 +113,9 @@ class EpisodeResult:
     steps: int
     options: dict = field(default_factory=dict)
     replay: dict = field(default_factory=dict)
+    outcome: str = ""
+    reach: float | None = None
+    note: str = ""
 
     @property
     def final_task(self) -> str:
@@ -115,7 +128,8 @@ def run_scenario(scenario: str = "diverging", policy: str | Callable = "dynamic"
                  data: str | Path | None = None, test: str | Path | None = None, env=None,
                  model=None, options: Mapping[str, Any] | None = None,
                  observe: Sequence[str] | str | None = None, session: int | None = None,
-                 train_session: int | None = None, spec=None) -> list[EpisodeResult]:
+                 train_session: int | None = None, spec=None,
+                 robot: str = "baxter") -> list[EpisodeResult]:
     """Run ``n_episodes`` seeded episodes of ``scenario`` with ``policy``; a list of
     :class:`EpisodeResult`, one per episode.
 
@@ -156,20 +170,33 @@ def run_scenario(scenario: str = "diverging", policy: str | Callable = "dynamic"
         (:mod:`sandbox.episodes.sessions`).
     spec : DataSpec, optional
         ``recorded`` only: the sets' layout (:func:`~sandbox.episodes.replays.plan_replays`).
-    """
+    robot : str
+        The arm (:data:`sandbox.robot.arms.ROBOTS`); another than Baxter is retargeted."""
     sessions = (session, train_session)
     observe = _check_run(scenario, policy, n_episodes, data, observe, test, sessions)
-    make_policy = _policy_factory(policy, dow_t, ratio, observe)
+    make_policy = _policy_factory(policy, dow_t, ratio, observe, robot)
     episodes = _episodes(scenario, int(n_episodes), int(seed), data, model, options or {},
                          observe, test, sessions, spec)
     own_env = env is None
-    env = _make_env(scenario) if own_env else env
+    env = _make_env(scenario, robot) if own_env else env
     try:
-        return [replace(run_episode(env, make_policy(e.model, e.demo), e.seed, e.options),
-                        replay=e.provenance) for e in episodes]
+        return _run_all(env, episodes, make_policy, robot)
     finally:
-        if own_env:
-            env.close()
+        _ = env.close() if own_env else None
+
+
+def _run_all(env, episodes: list[Replay], make_policy: Callable,
+             robot: str) -> list[EpisodeResult]:
+    """Every episode in ``env``, each with its reach report (one per model)."""
+    reports: dict[int, tuple[float | None, str | None]] = {}
+    out = []
+    for e in episodes:
+        if id(e.model) not in reports:
+            reports[id(e.model)] = _reach(e.model, robot)
+        reach, note = reports[id(e.model)]
+        out.append(replace(run_episode(env, make_policy(e.model, e.demo), e.seed, e.options),
+                           replay=e.provenance, reach=reach, note=note or ""))
+    return out
 
 
 def run_episode(env: Any, policy: Policy, seed: int,
@@ -195,11 +222,14 @@ def run_episode(env: Any, policy: Policy, seed: int,
     info = last.reset_info
     step_info: dict[str, Any] = last.info if last.n else {
         "is_success": False, "handover_time": None, "distance": np.nan}
+    success = bool(step_info["is_success"])
+    outcome = ("handover" if success else
+               "unreachable" if getattr(policy, "unreachable", False) else "missed")
     return EpisodeResult(
         seed=seed, task=info["task"], object=info["object"],
-        success=bool(step_info["is_success"]), handover_time=step_info["handover_time"],
+        success=success, handover_time=step_info["handover_time"],
         final_distance=float(step_info["distance"]), min_distance=float(np.min(distances)),
-        recognised=tuple(recognised), steps=last.n, options=dict(options))
+        recognised=tuple(recognised), steps=last.n, options=dict(options), outcome=outcome)
 
 
 def summarize(results: list[EpisodeResult]) -> dict[str, float]:
@@ -218,12 +248,22 @@ def summarize(results: list[EpisodeResult]) -> dict[str, float]:
 
 
 # ------------------------------------------------------------------ internals
-def _make_env(scenario: str) -> Any:
+def _reach(model, robot: str) -> tuple[float | None, str | None]:
+    """:func:`~sandbox.episodes.steering.reach_report` when the plans are retargeted."""
+    if robot == "baxter" and getattr(model, "robot_space", "joint") == "joint":
+        return None, None
+    from sandbox.episodes.steering import reach_report
+
+    return reach_report(model, robot)
+
+
+def _make_env(scenario: str, robot: str = "baxter") -> Any:
     import gymnasium as gym
 
     import sandbox.envs  # noqa: F401  (registers the environments)
 
-    return gym.make(SCENARIOS[scenario][0])
+    extra: dict[str, Any] = {} if robot == "baxter" else {"robot": robot}
+    return gym.make(SCENARIOS[scenario][0], **extra)
 
 
 def _check_run(scenario, policy, n_episodes, data, observe, test=None,
@@ -283,21 +323,25 @@ def _check_observe(observe) -> tuple[str, ...] | None:
     return tuple(names)
 
 
-def _policy_factory(policy, dow_t: float, ratio: float, observe) -> Callable:
+def _policy_factory(policy, dow_t: float, ratio: float, observe,
+                    robot: str = "baxter") -> Callable:
     """``(model, held-out demo or None) -> policy``."""
+    arm_spec(robot)                               # an unknown arm: one line, before anything
     if callable(policy):
         return lambda model, demo: policy(model)
     from sandbox.episodes.policies import IProMPPolicy, RecordedRobotPolicy, StaticPolicy
 
     if policy == "dynamic":
-        return lambda model, demo: IProMPPolicy(model, dow_t=dow_t, observe=observe)
+        return lambda model, demo: IProMPPolicy(model, dow_t=dow_t, observe=observe,
+                                                robot=robot)
     if policy == "recorded_robot":
-        return lambda model, demo: RecordedRobotPolicy.from_demo(demo)
+        return lambda model, demo: RecordedRobotPolicy.from_demo(demo, arm=robot)
     if policy != "static":
         from sandbox.episodes.method_policy import MethodPolicy
 
-        return lambda model, demo: MethodPolicy(model, policy, dow_t=dow_t, observe=observe)
-    return lambda model, demo: StaticPolicy(model, ratio=ratio, observe=observe)
+        return lambda model, demo: MethodPolicy(model, policy, dow_t=dow_t, observe=observe,
+                                                robot=robot)
+    return lambda model, demo: StaticPolicy(model, ratio=ratio, observe=observe, robot=robot)
 
 
 def _episodes(scenario, n, seed, data, model, options, observe, test=None,

@@ -20,7 +20,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from sandbox.robot.assets import urdf_path
+from sandbox.robot.arm_files import arm_urdf_path
+from sandbox.robot.arms import arm_spec
 from sandbox.robot.facts import ARM_JOINTS, TIP_LINK
 from sandbox.robot.pybullet_quiet import BulletClient, pybullet
 from sandbox.validation import check_array
@@ -104,13 +105,39 @@ def load_baxter(client: BulletClient, *, quiet: bool = True) -> BulletBaxter:
     BulletBaxter
         The body id and name -> index maps; the arm is at zero.
     """
+    return load_robot(client, "baxter", quiet=quiet)
+
+
+def load_robot(client: BulletClient, robot: str = "baxter", *,
+               quiet: bool = True) -> BulletBaxter:
+    """Load any arm of :mod:`sandbox.robot.arms` with a fixed base at its world pose.
+
+    Parameters
+    ----------
+    client : pybullet_utils.bullet_client.BulletClient
+        A connected client.
+    robot : str
+        A name of :data:`sandbox.robot.arms.ROBOTS` (Baxter stands at the origin).
+    quiet : bool
+        Hide PyBullet's warnings while loading.
+
+    Returns
+    -------
+    BulletBaxter
+        The body id and name -> index maps of that arm (``arm``: its driven joints,
+        ``fingers``: its two finger joints); the arm is at zero.
+    """
+    spec = arm_spec(robot)
     if not isinstance(client, BulletClient):
         raise ValueError(
             f"client: expected a pybullet_utils BulletClient, got {type(client).__name__}"
         )
     flags = pybullet.URDF_ENABLE_CACHED_GRAPHICS_SHAPES
+    position = spec.base[:3, 3].tolist()
+    orientation = _quaternion(spec.base[:3, :3])
     with _quiet() if quiet else contextlib.nullcontext():
-        body = client.loadURDF(str(urdf_path()), useFixedBase=True, flags=flags)
+        body = client.loadURDF(str(arm_urdf_path(robot)), position, orientation,
+                               useFixedBase=True, flags=flags)
     joints, links, limits = {}, {client.getBodyInfo(body)[0].decode(): -1}, {}
     for index in range(client.getNumJoints(body)):
         info = client.getJointInfo(body, index)
@@ -119,18 +146,25 @@ def load_baxter(client: BulletClient, *, quiet: bool = True) -> BulletBaxter:
         links[info[12].decode()] = index
         if info[2] != pybullet.JOINT_FIXED:
             limits[name] = (float(info[8]), float(info[9]))
-    arm = tuple(joints[n] for n in ARM_JOINTS)
+    arm = tuple(joints[n] for n in spec.joints)
     return BulletBaxter(
         client=client,
         body=body,
         joints=joints,
         links=links,
         arm=arm,
-        fingers=(joints[FINGER_JOINTS[0]], joints[FINGER_JOINTS[1]]),
+        fingers=(joints[spec.fingers[0]], joints[spec.fingers[1]]),
         limits=limits,
-        lower=np.array([limits[n][0] for n in ARM_JOINTS]),
-        upper=np.array([limits[n][1] for n in ARM_JOINTS]),
+        lower=np.array([limits[n][0] for n in spec.joints]),
+        upper=np.array([limits[n][1] for n in spec.joints]),
     )
+
+
+def _quaternion(rotation: FloatArray) -> list[float]:
+    """Quaternion (x, y, z, w) of a rotation matrix (3, 3)."""
+    from scipy.spatial.transform import Rotation
+
+    return [float(v) for v in Rotation.from_matrix(rotation).as_quat()]
 
 
 def reset_arm(baxter: BulletBaxter, q: ArrayLike) -> None:

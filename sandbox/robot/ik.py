@@ -282,7 +282,8 @@ def _restarted(forward, targets, orientations, q_best, rest, limits, settings) -
     """Descend from ``q_best`` (n, 7), then from the restart configurations for the targets
     not yet solved, keeping each target's best solution."""
     lower, upper = limits
-    restart = lower + (0.1 + 0.8 * _HALTON) * (upper - lower)  # inner 80 % of the ranges
+    # inner 80 % of the ranges, the first dof columns
+    restart = lower + (0.1 + 0.8 * _HALTON[:, : len(lower)]) * (upper - lower)
     n, tol, angle_tol = len(targets), settings["tol"], settings["angle_tol"]
     err_best, ang_best = np.full(n, np.inf), np.full(n, np.inf)
     steps = np.zeros(n, np.int64)

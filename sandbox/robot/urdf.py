@@ -87,7 +87,7 @@ def _joint(element: ET.Element) -> UrdfJoint:
         parent=element.find("parent").get("link", ""),
         child=element.find("child").get("link", ""),
         origin=_origin(element.find("origin")),
-        axis=axis / np.linalg.norm(axis),
+        axis=axis / np.linalg.norm(axis) if np.linalg.norm(axis) > 0 else axis,
         lower=lower,
         upper=upper,
         velocity=velocity,

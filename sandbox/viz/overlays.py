@@ -31,6 +31,7 @@ are hidden from then on (see :class:`~sandbox.viz.scene.Scene`).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -116,6 +117,9 @@ class PredictionOverlay:
             kinematics = BaxterKinematics()
         self.vis, self.rng, self.style, self.link = vis, rng, style, link
         self.kinematics = kinematics
+        #: ``q (dof,) -> fingertip (3,)`` m in the world for another arm than Baxter (None:
+        #: the executed joints are Baxter's, through :attr:`kinematics`).
+        self.executed_tip: Any = None
         self.tasks = tuple(tasks)
         if not self.tasks:
             raise ValueError("tasks: expected at least one task name, got none")
@@ -191,17 +195,25 @@ class PredictionOverlay:
 
     # -- prediction --------------------------------------------------------------------------
 
+    def _tip(self, x: FloatArray) -> FloatArray:
+        """World gripper points (..., 3) m: Baxter joints (..., 7) rad through :attr:`kinematics`,
+        or a task-space plan's positions (..., 3) m as they are."""
+        x = np.asarray(x, dtype=float)
+        return x if x.shape[-1] == 3 else self.kinematics.fk(x, link=self.link)
+
     def gripper_paths(self, means: ArrayLike, covs: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Mean gripper path (n, 3) and sampled paths (s, n, 3) m of a joint-space plan.
 
         ``means`` (n, 7) rad and ``covs`` (n, 7, 7) rad² are thinned to at most
         ``style.max_steps`` evenly spaced steps (the last one always kept).
         """
-        means = check_array(means, "means", 2, shape=(None, 7), min_len=1)
-        covs = check_array(covs, "covs", 3, shape=(len(means), 7, 7))
+        means = np.asarray(means, dtype=float)
+        dims = 3 if means.ndim == 2 and means.shape[1] == 3 else 7   # a task-space plan (m)
+        means = check_array(means, "means", 2, shape=(None, dims), min_len=1)
+        covs = check_array(covs, "covs", 3, shape=(len(means), dims, dims))
         keep = np.unique(np.linspace(0, len(means) - 1, self.style.max_steps).round().astype(int))
         means, covs = means[keep], covs[keep]
-        fk = lambda q: self.kinematics.fk(q, link=self.link)  # noqa: E731
+        fk = self._tip
         samples = sample_paths(fk, means, covs, self.style.n_samples, self.rng)
         return fk(means), samples
 
@@ -320,8 +332,9 @@ class PredictionOverlay:
             "unsure / unknown motion").
         t : float
             Current time (s).
-        executed_q : array_like, shape (7,), optional
+        executed_q : array_like, shape (7,) or (dof,), optional
             The robot's actual joints now (rad); default: the predictor's command at ``t``.
+            Another arm's joints need :attr:`executed_tip` (their fingertip in the world).
         human_to_world : array_like, shape (4, 4), optional
             Pose of the human observations' frame (default: Baxter's base = world).
         truth : str, optional
@@ -340,15 +353,18 @@ class PredictionOverlay:
         self.show_time(t)
         self.show_truth(truth, t, human[-1] if len(human) else None, since=truth_since)
         self.show_familiar(getattr(predictor, "familiar", None))
-        q = predictor.command(t)[0] if executed_q is None else check_array(
-            executed_q, "executed_q", 1, shape=(7,))
-        self._executed.append(self.kinematics.fk(q, link=self.link))
+        if executed_q is not None and self.executed_tip is not None:   # another arm than Baxter
+            self._executed.append(self.executed_tip(check_array(executed_q, "executed_q", 1)))
+        else:
+            q = predictor.command(t)[0] if executed_q is None else check_array(
+                executed_q, "executed_q", 1, shape=(7,))
+            self._executed.append(self._tip(q))
         self.show_executed(np.array(self._executed))
         new = predictor.updates[self._n_updates:]
         for update in new:
             seen = times <= update.time
             hand = human[np.flatnonzero(seen)[-1]] if seen.any() else None
-            command = self.kinematics.fk(predictor.command(update.time)[0], link=self.link)
+            command = self._tip(predictor.command(update.time)[0])
             self.mark_update(hand, command, update.task)
         if new or self._fresh or self.board.version < 0:
             self._fresh = False

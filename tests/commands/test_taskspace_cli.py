@@ -4,8 +4,8 @@ The set (:mod:`tests.commands.taskspace_data`) has the receiving hand's x, y, z
 (m) as robot part: ``fit`` stores that the part is in task space, ``evaluate``
 (leave-one-out and ``--model``) and ``compare`` measure e_p on the predicted
 positions themselves (no forward kinematics) and report e_q as not applicable
-(null in JSON, "n/a" in tables); ``episodes`` and ``play`` refuse it in one line
-(no inverse kinematics yet, issue 23). A joint-space part that is not Baxter's
+(null in JSON, "n/a" in tables); ``episodes`` replays it on every arm through
+the arm's inverse kinematics (issue 23). A joint-space part that is not Baxter's
 7 joints is refused by ``data summary`` and ``fit``.
 """
 
@@ -129,21 +129,24 @@ def test_compare_reports_e_q_as_not_applicable(taskspace, tmp_path, capsys):
     assert "| n/a |" in (out / "compare.md").read_text()
 
 
-def test_episodes_and_play_refuse_a_task_space_part_in_one_line(taskspace, model, tmp_path,
-                                                                 capsys):
+@pytest.mark.parametrize("robot", ["baxter", "ur5"])
+def test_episodes_follow_a_task_space_part_with_any_arm(taskspace, model, tmp_path, robot):
+    """Issue 23: the plan's positions through the arm's inverse kinematics (refused before)."""
     data, spec = taskspace
+    out = tmp_path / "e.json"
     assert main(["episodes", "--scenario", "recorded", "--data", str(data), "--spec", str(spec),
-                 "--episodes", "1", "--policies", "dynamic"]) == 2
-    err = capsys.readouterr().err.strip()
-    assert len(err.splitlines()) == 1 and "task space" in err and "issue 23" in err
+                 "--episodes", "2", "--policies", "dynamic,recorded_robot", "--robot", robot,
+                 "--json", str(out)]) == 0
+    result = json.loads(out.read_text())
+    assert result["dynamic"]["robot"] == robot and result["dynamic"]["reach"] == 1.0
+    assert result["recorded_robot"]["summary"]["success_rate"] == 1.0
+    assert all(e["outcome"] in ("handover", "missed") for e in result["dynamic"]["episodes"])
     from sandbox.commands import _model
     from sandbox.core import IProMP
     from sandbox.episodes.policy import check_joint_model
 
-    with pytest.raises(ValueError, match="task space.*issue 23"):
-        _model.baxter(IProMP.load(model))
-    with pytest.raises(ValueError, match="task space.*inverse kinematics"):
-        check_joint_model(IProMP.load(model))
+    _model.baxter(IProMP.load(model))              # accepted: no error
+    check_joint_model(IProMP.load(model))
 
 
 def test_a_joint_space_part_that_is_not_baxters_arm_is_refused_early(taskspace, tmp_path,

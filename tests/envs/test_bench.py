@@ -26,10 +26,21 @@ def test_run_env_benchmarks_merges_and_rounds(monkeypatch):
     monkeypatch.setattr(bench, "env_vs_raw", lambda: {"env_steps_per_s": 500.123,
                                                       "raw_pybullet_steps_per_s": 800.0,
                                                       "env_raw_ratio": 0.6251})
-    monkeypatch.setattr(bench, "policy_steps_per_s", lambda: 300.06)
-    assert bench.run_env_benchmarks() == {"env_steps_per_s": 500.1,
-                                          "raw_pybullet_steps_per_s": 800.0,
-                                          "env_raw_ratio": 0.625, "policy_steps_per_s": 300.1}
+    rates = {"baxter": 300.06, "ur5": 200.04}
+    monkeypatch.setattr(bench, "policy_steps_per_s",
+                        lambda robot="baxter", **kw: rates.get(robot, 1))
+    monkeypatch.setattr(bench, "by_robot", lambda: {"baxter": 500.123, "ur5": 700.07})
+    assert bench.run_env_benchmarks() == {
+        "env_steps_per_s": 500.1, "raw_pybullet_steps_per_s": 800.0, "env_raw_ratio": 0.625,
+        "policy_steps_per_s": 300.1,
+        "env_steps_per_s_by_robot": {"baxter": 500.1, "ur5": 700.1},
+        "policy_steps_per_s_by_robot": {"baxter": 300.1, "panda": 1, "ur5": 200.0, "kinova": 1}}
+
+
+def test_every_arm_is_timed():
+    rates = bench.by_robot(n_steps=10, blocks=1)
+    assert list(rates) == ["baxter", "panda", "ur5", "kinova"] and min(rates.values()) > 0
+    assert bench.policy_steps_per_s(n_episodes=1, robot="kinova") > 0
 
 
 def test_soak_reports_memory_and_descriptors_over_steps_and_resets():

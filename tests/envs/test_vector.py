@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 from gymnasium.vector import AsyncVectorEnv, AutoresetMode, SyncVectorEnv
 
-from sandbox.envs import ENV_IDS, LEGACY_IDS
+from sandbox.envs import ENV_IDS, LEGACY_IDS, ROBOT_IDS
 from sandbox.envs.vector import make_vector_env
 
-ALL_IDS = ENV_IDS + LEGACY_IDS
+ALL_IDS = ENV_IDS + LEGACY_IDS + ROBOT_IDS
 #: Short episodes, so a few steps cross an autoreset.
 EPISODE_STEPS = 3
 N_STEPS = 5

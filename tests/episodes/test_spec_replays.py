@@ -51,10 +51,14 @@ def test_without_the_spec_no_usable_trial_is_one_line(tmp_path):
     assert message.startswith(f"no usable trial in data {tmp_path}: 6 skipped (missing column")
 
 
-def test_a_task_space_spec_is_refused_before_loading(tmp_path):
-    spec = DataSpec.from_dict({"robot": {"columns": ["rx", "ry", "rz"], "space": "task"}})
-    with pytest.raises(ValueError, match=r"task space.*inverse kinematics \(issue 23"):
-        plan_replays(tmp_path, 1, 0, spec=spec)
+def test_a_task_space_spec_is_replayed(tmp_path):
+    """Issue 23: the arms follow a task-space robot part through their IK (refused before)."""
+    from tests.commands.taskspace_data import write_set
+
+    spec = DataSpec.load(write_set(tmp_path))
+    replays = plan_replays(tmp_path / "data", 2, 0, spec=spec)
+    assert len(replays) == 2 and all(r.model.robot_space == "task" for r in replays)
+    assert all(r.demo.robot.shape[1] == 3 for r in replays)
 
 
 def test_a_scenario_with_a_recorded_human_takes_the_spec(tmp_path):
