@@ -143,8 +143,13 @@ def _settled(record, task: str) -> float | None:
 def _model_of(args):
     """The saved model of ``--model`` (checked against the episode), or one fitted here."""
     if args.model is None:
+        from sandbox.data.synthetic.families import DIRECTIONS
         from sandbox.episodes.policies import fit_family_model
 
+        unknown = [t for t in (args.from_task, args.to_task) if t not in DIRECTIONS]
+        if unknown:  # checked before the fit and calibration (seconds), not after
+            raise ValueError(f"--from-task/--to-task: expected tasks of the diverging family "
+                             f"{list(DIRECTIONS)}, got {unknown}")
         model = fit_family_model("diverging", n_per_task=args.demos, seed=args.seed,
                                  calibrated=True, shrinkage=SHRINKAGE)
     else:
