@@ -194,7 +194,8 @@ def _format(s: dict) -> str:
         lines += format_floors(s["noise_floor"])
     if s["robot_space"] == "task":
         lines.append("  robot part in task space (m): e_p is measured on it directly, e_q "
-                     "does not apply; episodes and play need a joint-space model")
+                     "does not apply; episodes and play follow it through the arm's inverse "
+                     "kinematics")
     geometry = s["meeting_geometry"]
     if "note" in geometry:
         lines.append(f"  meeting geometry: {geometry['note']}")
