@@ -6,7 +6,7 @@ predictor options, the names of :class:`~sandbox.eval.loocv.EvalConfig`::
     observe: [hand]          # modalities (or "hand,arm")
     n_basis: 21              # model (IProMP) options
     regularizer: 0.001
-    noise_floor: 0.02        # m
+    noise_floor: 0.02        # m, or auto: learned per position modality from the demos
     jitter_floor: 15         # opt-in: position floors max(2 mm, 15 x the data's raw jitter)
     shrinkage: auto          # auto | none: task covariances shrunk toward the pooled one
     settle_tol: 0.05         # rad, or null: the whole recording is the motion
@@ -109,6 +109,8 @@ def _check(path: Path, key: str, value: Any) -> Any:
     if key == "until_end":
         if not isinstance(value, bool):
             raise fail("true or false")
+        return value
+    if key == "noise_floor" and value == "auto":
         return value
     if value is None and key in OPTIONAL:
         return None
