@@ -110,7 +110,9 @@ def _check(path: Path, key: str, value: Any) -> Any:
         if not isinstance(value, bool):
             raise fail("true or false")
         return value
-    if key == "noise_floor" and value == "auto":
+    if key == "noise_floor" and isinstance(value, str) and not _numeric(value):
+        if value != "auto":
+            raise fail("a number (m) or auto")
         return value
     if value is None and key in OPTIONAL:
         return None
@@ -131,6 +133,14 @@ def _bounded(path: Path, label: str, key: str, value: Any) -> Any:
         return check(key, value, label, or_null=key in OPTIONAL)
     except ValueError as error:
         raise ValueError(f"settings {path}: {error}") from None
+
+
+def _numeric(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
 
 
 def _show(value: Any) -> str:

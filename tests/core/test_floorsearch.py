@@ -111,3 +111,15 @@ def test_a_wrong_noise_floor_is_refused():
     with pytest.raises(ValueError, match=r"noise_floor: expected a number \(m\) or 'auto', "
                                          r"got 'automatic'"):
         IProMP(noise_floor="automatic")
+
+
+def test_a_settings_file_takes_auto_and_names_it_when_wrong(tmp_path):
+    from sandbox.commands._settings import load
+
+    path = tmp_path / "s.yaml"
+    path.write_text("noise_floor: auto\n")
+    assert load(path) == {"noise_floor": "auto"}
+    path.write_text("noise_floor: automatic\n")
+    with pytest.raises(ValueError, match=r"noise_floor: expected a number \(m\) or auto, "
+                                         r"got 'automatic'"):
+        load(path)
