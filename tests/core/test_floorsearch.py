@@ -10,7 +10,8 @@ import scipy.stats
 
 from sandbox.core import IProMP
 from sandbox.core.basis import GaussianBasis
-from sandbox.core.floorsearch import GRID_M, HeldOut, candidates
+from sandbox.core.floorscore import HeldOut
+from sandbox.core.floorsearch import GRID_M, candidates
 from sandbox.core.promp import WeightDistribution
 from sandbox.data.demonstration import Demonstration
 
