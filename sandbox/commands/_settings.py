@@ -6,7 +6,7 @@ predictor options, the names of :class:`~sandbox.eval.loocv.EvalConfig`::
     observe: [hand]          # modalities (or "hand,arm")
     n_basis: 21              # model (IProMP) options
     regularizer: 0.001
-    noise_floor: 0.02        # m
+    noise_floor: 0.02        # m, or auto: learned per position modality from the demos
     jitter_floor: 15         # opt-in: position floors max(2 mm, 15 x the data's raw jitter)
     shrinkage: auto          # auto | none: task covariances shrunk toward the pooled one
     settle_tol: 0.05         # rad, or null: the whole recording is the motion
@@ -110,6 +110,10 @@ def _check(path: Path, key: str, value: Any) -> Any:
         if not isinstance(value, bool):
             raise fail("true or false")
         return value
+    if key == "noise_floor" and isinstance(value, str) and not _numeric(value):
+        if value != "auto":
+            raise fail("a number (m) or auto")
+        return value
     if value is None and key in OPTIONAL:
         return None
     assert key in NUMBERS and key in BOUNDS, key
@@ -129,6 +133,14 @@ def _bounded(path: Path, label: str, key: str, value: Any) -> Any:
         return check(key, value, label, or_null=key in OPTIONAL)
     except ValueError as error:
         raise ValueError(f"settings {path}: {error}") from None
+
+
+def _numeric(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
 
 
 def _show(value: Any) -> str:

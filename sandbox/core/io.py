@@ -125,6 +125,8 @@ def save_model(model: IProMP, path: str | os.PathLike) -> None:
     }
     if getattr(model, "jitter_floor", None) is not None:
         meta["hyperparameters"]["jitter_floor"] = model.jitter_floor
+    if getattr(model, "noise_floor", None) == "auto":     # the floors it learned (m)
+        meta["floors_used"] = np.asarray(model.floors_used, dtype=float).tolist()
     if getattr(model, "shrinkage", "none") != "none":
         meta["hyperparameters"]["shrinkage"] = model.shrinkage
     arrays = {"noise": model.noise, "scale": model.scale}
@@ -365,5 +367,7 @@ def model_from_file(cls, f: ModelFile):
     model.priors = np.array([t["prior"] for t in meta["tasks"]], dtype=np.float64)
     model.calibration = f.calibration
     model.session = dict(meta["session"])
+    if meta.get("floors_used") is not None:
+        model.floors_used = np.asarray(meta["floors_used"], dtype=np.float64)
     model._fitted = True
     return model

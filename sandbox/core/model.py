@@ -83,8 +83,13 @@ from sandbox.core.fitting import (
     task_models,
     task_priors,
 )
+from sandbox.core.floorsearch import (  # noqa: F401 - MIN_JITTER_FLOOR re-exported
+    MIN_JITTER_FLOOR,
+    check_noise_floor,
+    model_floors,
+)
 from sandbox.core.io import model_from_file, read_model, save_model
-from sandbox.core.jitter import demo_jitter, jitter_floors
+from sandbox.core.jitter import demo_jitter
 from sandbox.core.limits import MAX_DURATION_S, MAX_RELATIVE, check_alpha_std
 from sandbox.core.modality import Modality
 from sandbox.core.shrinkage import check_shrinkage
@@ -96,9 +101,6 @@ if TYPE_CHECKING:
 
 #: Default noise floor of signal modalities, in their normalised units (see IProMP).
 SIGNAL_FLOOR = 1.0
-#: The lowest floor (m) ``jitter_floor`` may give a position modality: 2 mm, twice a
-#: motion-capture system's jitter, as no model follows a live track closer than that.
-MIN_JITTER_FLOOR = 0.002
 
 
 class IProMP:
@@ -131,7 +133,9 @@ class IProMP:
         chosen by leave-one-out on the recorded handovers: a live, causally filtered
         track departs from what the model can explain by ~2 cm (tracker jumps and
         occlusions, motion the demos do not span); trusting observations more made
-        every prediction worse, including the oracle's.
+        every prediction worse, including the oracle's. ``"auto"``: each position
+        modality's floor is chosen from a grid (2 to 40 mm) by a held-out score on the
+        training demos (:mod:`sandbox.core.floorsearch`; scores: :attr:`floor_scores`).
     jitter_floor : float or None
         k: a position modality's floor becomes ``max(MIN_JITTER_FLOOR, k x its
         jitter)`` (:mod:`sandbox.core.jitter`) instead of ``noise_floor``; None (the
@@ -191,7 +195,7 @@ class IProMP:
         normalized_basis: bool = True,
         regularizer: float = 1e-3,
         noise_scale: float = 1.0,
-        noise_floor: float = 0.02,
+        noise_floor: float | str = 0.02,
         signal_floor: float = SIGNAL_FLOOR,
         noise_floors: Mapping[str, float] | None = None,
         jitter_floor: float | None = None,
@@ -207,7 +211,8 @@ class IProMP:
         self.basis = GaussianBasis(n_basis, basis_width, basis_margin, normalized_basis)
         self.regularizer = float(BOUNDS["regularizer"].check(regularizer, "regularizer"))
         self.noise_scale = check_positive(noise_scale, "noise_scale", high=MAX_RELATIVE)
-        self.noise_floor = check_floor(noise_floor, "noise_floor", "noise_floor")
+        self.noise_floor = check_noise_floor(noise_floor, check_floor)
+        self.floor_scores: dict[str, dict[float, float]] = {}   #: of noise_floor="auto"
         self.signal_floor = check_floor(signal_floor, "signal_floor", "signal_floor")
         self.noise_floors = {k: check_floor(v, f"noise_floors[{k!r}]", "noise_floors")
                              for k, v in check_mapping(noise_floors, "noise_floors").items()}
@@ -284,7 +289,7 @@ class IProMP:
         modalities = modalities_of(names_from, P)
         check_floor_names(self.noise_floors, modalities)
         scale = signal_scale(modalities, np.sum([f.moments for f in fits], axis=0))
-        self.floors_used = self.floors(modalities, fits)
+        self.floors_used = self.floors(modalities, fits, scale)
         sigma2 = observation_noise(fits, scale, self.floors_used, self.noise_scale)
         divide = np.r_[scale, np.ones(Q)].repeat(self.basis.n_basis)
         arrays = {k: np.array(v) / divide for k, v in weights.items()}
@@ -293,17 +298,11 @@ class IProMP:
         self._set_fit(arrays, durations, sigma2, P, Q, names_from, modalities, scale)
         return self
 
-    def floors(self, modalities: Sequence[Modality], fits: Sequence[DemoFit] = ()) -> FloatArray:
-        """Noise floor of every human dim (normalised units), shape (P,); with
-        ``jitter_floor``, a position modality's from the jitter of ``fits``."""
-        out = np.array([self.noise_floor if m.kind == "position" else self.signal_floor
-                        for m in modalities for _ in range(m.size)])
-        if self.jitter_floor is not None and fits:
-            jitters = np.array([np.full(out.size, np.nan) if f.jitter is None else f.jitter
-                                for f in fits])
-            out = jitter_floors(jitters, modalities, self.jitter_floor, MIN_JITTER_FLOOR, out)
-        given = [self.noise_floors.get(m.name) for m in modalities for _ in range(m.size)]
-        return np.array([f if g is None else g for f, g in zip(out, given)])
+    def floors(self, modalities: Sequence[Modality], fits: Sequence[DemoFit] = (),
+               scale: FloatArray | None = None) -> FloatArray:
+        """Noise floor of every human dim (normalised units), shape (P,):
+        :func:`~sandbox.core.floorsearch.model_floors`."""
+        return model_floors(self, modalities, fits, scale)
 
     def _set_fit(self, weights, durations, sigma2, P, Q, first, modalities, scale) -> None:
         tasks, self.shrinkage_used = task_models(

@@ -68,7 +68,8 @@ def check_metadata(meta, path: Path) -> dict:
             "robot_space": _space(meta.get("robot_space", "joint")),
             "tasks": _tasks(meta["tasks"], _min_alpha_std(meta["hyperparameters"])),
             "familiarity": meta.get("familiarity"),
-            "session": _session(meta.get("session", {}))}
+            "session": _session(meta.get("session", {})),
+            "floors_used": _floors_used(meta.get("floors_used"), P)}
 
 
 
@@ -94,6 +95,19 @@ def _check_speed(where: str, nominal: float, a_mean: float, a_std: float, n_demo
                          f"[{min_alpha_std:g}, {high:.4g}] (min_alpha_std to what {n_demos} "
                          f"demonstrations can give, limits.MAX_ALPHA_STD {MAX_ALPHA_STD:g}), "
                          f"got {a_std:g}")
+
+
+def _floors_used(value, P: int) -> list | None:
+    """``floors_used``: the P floors a ``noise_floor="auto"`` fit learned (absent before)."""
+    if value is None:
+        return None
+    ok = isinstance(value, list) and len(value) == P and all(
+        isinstance(v, (int, float)) and not isinstance(v, bool) and 0 < v < np.inf
+        for v in value)
+    if not ok:
+        raise ValueError(f"metadata floors_used: expected {P} positive numbers, "
+                         f"got {str(value)[:60]}")
+    return value
 
 
 def _space(value) -> str:

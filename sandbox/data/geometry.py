@@ -70,8 +70,9 @@ MAX_OFFSET_M = 0.3
 DEFAULT_OFFSET = GRASP_OFFSET
 #: Both partners have arrived once the robot stays within ``SETTLE_TOL`` (rad) of its final
 #: pose and the hand has come within ``ARRIVE_TOL`` (m) of its farthest reach: the models'
-#: own defaults (:class:`sandbox.core.IProMP`, :func:`sandbox.core.fitting.motion_end`).
-SETTLE_TOL, ARRIVE_TOL = 0.05, 0.02
+#: own defaults (:class:`sandbox.core.IProMP`, :func:`sandbox.core.fitting.motion_end`); a
+#: task-space part (m) within ``SETTLE_TOL_M`` (5 cm would stop a receiving hand mid-approach).
+SETTLE_TOL, ARRIVE_TOL, SETTLE_TOL_M = 0.05, 0.02, 0.005
 #: Rounds of the fixed-point search for the meeting moments (:func:`task_offsets`).
 MAX_ROUNDS = 20
 
@@ -303,8 +304,9 @@ def learn_geometry(demos: Sequence, *, max_offset: float = MAX_OFFSET_M) -> Meet
     by_task: dict[str, list] = {}
     for d in usable:
         by_task.setdefault(str(d.task), []).append(d)
-    offsets = {task: task_offsets([(_hand(d), _tip(d, kin),
-                                    motion_end(d.times, d.robot, SETTLE_TOL, _hand(d), ARRIVE_TOL))
+    tol = {"joint": SETTLE_TOL, "task": SETTLE_TOL_M}
+    offsets = {task: task_offsets([(_hand(d), _tip(d, kin), motion_end(
+        d.times, d.robot, tol[getattr(d, "robot_space", "joint")], _hand(d), ARRIVE_TOL))
                                    for d in group])
                for task, group in by_task.items()}
     far = [f"{getattr(d, 'source', '') or d.task} ({np.linalg.norm(off):.2f} m)"

@@ -17,6 +17,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from sandbox.core.floorsearch import START_FLOOR
 from sandbox.core.jitter import demo_jitter
 from sandbox.core.model import MIN_JITTER_FLOOR
 
@@ -46,7 +47,7 @@ def modality_jitter(demos: Sequence) -> dict[str, float | None]:
     return {n: (float(np.median(out[n])) if n in out else None) for n in names}
 
 
-def floor_summary(demos: Sequence, *, noise_floor: float = 0.02,
+def floor_summary(demos: Sequence, *, noise_floor: float | str = 0.02,
                   jitter_floor: float | None = None,
                   noise_floors: dict | None = None) -> dict[str, dict]:
     """Per position modality: its ``jitter_m``, the ``floor_m`` a model with these options
@@ -57,6 +58,8 @@ def floor_summary(demos: Sequence, *, noise_floor: float = 0.02,
         from_jitter = None if jitter is None else max(MIN_JITTER_FLOOR, k * jitter)
         if noise_floors and name in noise_floors:
             floor, source = float(noise_floors[name]), "noise_floors"
+        elif noise_floor == "auto":        # the fit fills floor_m in (sandbox.core.floorsearch)
+            floor, source = START_FLOOR, "auto: held-out score on the training demos"
         elif jitter_floor is not None and from_jitter is not None:
             floor, source = from_jitter, f"max({MIN_JITTER_FLOOR:g} m, {k:g} x jitter)"
         else:

@@ -77,7 +77,7 @@ class EvalConfig:
     n_basis: int = 21
     regularizer: float = 1e-3
     noise_scale: float = 1.0
-    noise_floor: float = 0.02
+    noise_floor: float | str = 0.02
     signal_floor: float = SIGNAL_FLOOR
     noise_floors: tuple[tuple[str, float], ...] = ()
     jitter_floor: float | None = None
