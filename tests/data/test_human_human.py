@@ -1,8 +1,9 @@
 """Human-human recordings in episodes (issue 28 item 5): the receiving hand met the object a
 few cm from the giving hand, the object rides where the demos' learned meeting geometry
 says, so a faithful imitation of the receiving hand succeeds; at the giver's hand itself
-(offset forced to zero) it fails. (With two demos per task left, the dynamic policy only
-runs here; on ten per task it succeeds in 29 of 30 episodes: docs, own-recordings.)"""
+(offset forced to zero) it fails. (The dynamic policy needs more demos than this small set
+leaves; on ten per task it succeeds in 29 of 30 episodes: docs, own-recordings. A
+task-space model driving it is tested in tests/commands/test_taskspace_cli.py.)"""
 
 from __future__ import annotations
 
@@ -58,11 +59,10 @@ def test_an_imitation_succeeds_at_the_learned_meeting_and_fails_at_the_givers_ha
     data, spec, _ = human_set
     out = tmp_path / "e.json"
     assert main(["episodes", "--scenario", "recorded", "--data", str(data), "--spec", str(spec),
-                 "--episodes", "2", "--policies", "recorded_robot,dynamic",
+                 "--episodes", "2", "--policies", "recorded_robot",
                  "--json", str(out)]) == 0
     result = json.loads(out.read_text())
     assert result["recorded_robot"]["summary"]["success_rate"] == 1.0
-    assert all(e["outcome"] in ("handover", "missed") for e in result["dynamic"]["episodes"])
     at_hand = run_scenario("recorded", "recorded_robot", n_episodes=2, data=data,
                            spec=resolve(spec), options={"grasp_offset": [0.0, 0.0, 0.0]})
     assert [r.success for r in at_hand] == [False] * 2
