@@ -34,6 +34,13 @@ def _describe(x: np.ndarray) -> str:
     return f"shape {x.shape}"
 
 
+def short_text(text: str, limit: int = 400) -> str:
+    """``text`` quoted for a one-line error message; cut to 200 characters (with its
+    length) only past ``limit``, so that any real path is shown whole and a megabyte of
+    garbage is not."""
+    return repr(text) if len(text) <= limit else f"{text[:200]!r}... ({len(text)} characters)"
+
+
 def _show(value) -> str:
     """A short repr of ``value`` for error messages."""
     text = repr(value)

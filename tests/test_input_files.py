@@ -341,3 +341,19 @@ def test_a_name_the_system_refuses_is_one_value_error(tmp_path, reader, name):
     with pytest.raises(ValueError) as info:
         READERS[reader](tmp_path / name)
     assert "\n" not in str(info.value) and "Errno" not in str(info.value)
+
+
+def test_a_long_real_path_is_named_whole_and_garbage_is_cut(tmp_path):
+    """A path in a deep folder (pytest-xdist's temporary folders are 80+ characters) is
+    named whole in the one-line refusal; a megabyte name is cut, with its length."""
+    from sandbox.data.datasets import load_dataset
+    from sandbox.episodes.scenario_files import resolve
+
+    deep = tmp_path.joinpath(*["a_rather_long_folder_name"] * 6) / "missing.yaml"
+    for refuse in (resolve, load_dataset):
+        with pytest.raises(ValueError) as error:
+            refuse(str(deep))
+        assert str(deep) in str(error.value) and "\n" not in str(error.value)
+    with pytest.raises(ValueError, match=r"\.\.\. \(1000000 characters\)") as error:
+        resolve("x" * 1_000_000)
+    assert len(str(error.value)) < 600

@@ -24,7 +24,7 @@ import numpy as np
 from sandbox.data.demonstration import Demonstration, stack_tasks
 from sandbox.data.limits import MAX_GRID_SAMPLES, MAX_RATE_HZ
 from sandbox.data.spec import DataSpec, resolve
-from sandbox.validation import check_array, check_choice, check_integer, check_positive
+from sandbox.validation import check_array, check_choice, check_integer, check_positive, short_text
 
 SYNTHETIC_PREFIX = "synthetic:"
 #: Prefix of a synthetic out-of-distribution set (:mod:`sandbox.data.synthetic.ood`).
@@ -170,7 +170,7 @@ def _load(data: str | Path, layout: DataSpec, spec_given: bool, observe, seed: i
         elif spec_given:
             raise ValueError("spec and columns: expected one of them, got both")
         return _recorded(Path(data), tasks, n_per_task, preprocess, given)
-    raise ValueError(f"data: expected {_spec_options()}, got {_short(str(data))}")
+    raise ValueError(f"data: expected {_spec_options()}, got {short_text(str(data))}")
 
 
 def _is_folder(data: str | Path) -> bool:
@@ -180,10 +180,6 @@ def _is_folder(data: str | Path) -> bool:
     except (OSError, ValueError):
         return False
 
-
-def _short(text: str) -> str:
-    """``text`` quoted, cut to 80 characters (with its length when cut)."""
-    return repr(text) if len(text) <= 80 else f"{text[:60]!r}... ({len(text)} characters)"
 
 
 def _recorded(root, tasks, n_per_task, preprocess, options) -> list[Demonstration]:
@@ -203,7 +199,7 @@ def _minari(dataset_id, layout, observe, tasks, n_per_task, preprocess, options)
     if len(dataset_id) > MAX_NAME_CHARS:
         raise ValueError(f"data: expected minari:ID with an ID of at most {MAX_NAME_CHARS} "
                          f"characters (sandbox.limits.MAX_NAME_CHARS), got "
-                         f"{_short(dataset_id)}")
+                         f"{short_text(dataset_id)}")
     if options:
         raise ValueError(f"{sorted(options)}: only used for recorded folders, not minari:ID")
     return load_for_fit(dataset_id, [m.name for m in layout.observed(observe)], tasks=tasks,
@@ -219,7 +215,7 @@ def _synthetic(name, seed, tasks, n_per_task, preprocess, options, *,
     options = dict(options)
     observe = check_observe(options.pop("observe"))
     if not ood and name not in synthetic_names():
-        raise ValueError(f"data: expected {_spec_options()}, got 'synthetic:{_short(name)}'")
+        raise ValueError(f"data: expected {_spec_options()}, got 'synthetic:{short_text(name)}'")
     for key in ("columns", "max_duration"):
         if key in options:
             raise ValueError(f"{key}: only used for recorded folders, not synthetic:NAME")

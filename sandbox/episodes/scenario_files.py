@@ -54,7 +54,7 @@ from typing import Any
 
 from sandbox.episodes.scenario_models import check_model_file, default_observe, human_tasks
 from sandbox.episodes.scenario_options import checked_options, keywords, policy_options
-from sandbox.validation import MAPPING_SUFFIXES, read_mapping
+from sandbox.validation import MAPPING_SUFFIXES, read_mapping, short_text
 
 SUFFIXES = MAPPING_SUFFIXES
 FAMILIES = {"diverging": "sandbox/BaxterHandoverDiverging-v1",
@@ -148,11 +148,8 @@ def resolve(path: str | Path) -> Path:
             return example
     names = sorted(p.stem for p in EXAMPLES.glob("*") if p.suffix in SUFFIXES)
     raise ValueError(f"scenario: expected an existing .json/.yaml file or an example name "
-                     f"({', '.join(names)}), got {_short(str(path))}")
+                     f"({', '.join(names)}), got {short_text(str(path))}")
 
-
-def _short(text: str) -> str:
-    return repr(text) if len(text) <= 80 else f"{text[:60]!r}... ({len(text)} characters)"
 
 
 def _exists(path: Path, kind: str) -> bool:
