@@ -20,8 +20,10 @@ correlated). A slow or hesitant person is absorbed by the speed factor in
 :math:`m`, so three statistics of timing join it (:mod:`sandbox.core.evidence`,
 with their equations): the elapsed time against the best task's speed prior
 while the motion has not ended, the observed speed against the predicted one
-over the last 0.3 s, and the spread of the speed posterior;
-:func:`statistics` gives all four, :math:`s = (m, s_T, s_v, s_\\phi)`.
+over the last 0.3 s, and the spread of the speed posterior; and one of the
+goal: how far the conditioned end of the hand's motion lies from the task's
+prior ends (a hand heading elsewhere);
+:func:`statistics` gives all five, :math:`s = (m, s_T, s_v, s_\\phi, s_G)`.
 
 They are *calibrated* (:func:`calibrate`): each training motion,
 streamed as a predictor sees it, is scored by a model fitted without it
@@ -29,15 +31,17 @@ streamed as a predictor sees it, is scored by a model fitted without it
 elapsed time are stored (:class:`Calibration`). Each statistic of an update
 then ranks as a p-value-like :math:`p_j` in (0, 1]: the share of held-out
 training updates that chose the same task at about the same elapsed time and
-scored worse; the familiarity is Fisher's combination of the four,
-:math:`f = P(\\chi^2_8 \\ge -2 \\sum_j \\log p_j)` (:meth:`Calibration.familiarity`).
+scored worse (:math:`s_T` and :math:`s_G`, p-value bounds by construction, rank as
+:math:`e^{-s}`); the familiarity is Fisher's combination of the five,
+:math:`f = P(\\chi^2_{10} \\ge -2 \\sum_j \\log p_j)` (:meth:`Calibration.familiarity`).
 The threshold below which :attr:`~sandbox.core.updating.PredictorBase.familiar`
 is False is the split-conformal quantile of each calibration motion's *lowest*
 familiarity over its updates (:func:`~sandbox.core.calibration.conformal_threshold`),
 so a new motion like the training ones is called unfamiliar at some update
 with probability at most ``alpha`` (and above ``alpha - 1/(n+1)``).
 ``score="mahalanobis"`` calibrates :math:`m` alone (what models before the
-timing evidence carry; they still load and rank that way).
+timing evidence carry; they still load and rank that way, and models calibrated
+before the goal rank their four statistics).
 
 The statistic grows with the white noise of the stream (1 cm of tracker noise
 adds (1 cm / 2 cm floor)^2 = 0.25), so the calibration streams must be
@@ -73,7 +77,7 @@ __all__ = ["COMPONENTS", "EDGES", "LEVELS", "SCORES", "Calibration", "calibrate"
            "chosen", "leave_one_out", "loo_records", "statistic", "statistics", "stream_record",
            "update_times"]
 
-#: What a calibration ranks: the four statistics (default) or the Mahalanobis term alone.
+#: What a calibration ranks: the five statistics (default) or the Mahalanobis term alone.
 SCORES = ("timing", "mahalanobis")
 
 
@@ -99,7 +103,7 @@ def statistic(prediction: Prediction) -> float:
 
 def statistics(model: IProMP, prediction: Prediction, t: float, times: FloatArray,
                values: FloatArray) -> FloatArray:
-    """All four statistics of an update, shape (4,): :data:`COMPONENTS` (module docstring).
+    """All five statistics of an update, shape (5,): :data:`COMPONENTS` (module docstring).
 
     Parameters
     ----------
@@ -146,7 +150,7 @@ def stream_record(model: IProMP, times, human, *, dow_t: float = 0.2, subsample:
                   score: str = "timing") -> tuple[FloatArray, FloatArray, np.ndarray]:
     """Update times (u,), statistics and chosen task (u,) of a stream, as a predictor sees it.
 
-    The statistics are :func:`statistics` (u, 4) with ``score="timing"``
+    The statistics are :func:`statistics` (u, 5) with ``score="timing"``
     (default), :func:`statistic` (u,) with ``score="mahalanobis"``.
 
     Parameters
@@ -226,7 +230,7 @@ def calibrate(model: IProMP, demos, streams=None, *, alpha: float = 0.05, dow_t:
     dow_t, subsample : float, int
         The predictor's window (s) and subsampling the familiarity is calibrated for.
     score : {"timing", "mahalanobis"}
-        The four statistics (default) or the Mahalanobis term alone (:data:`SCORES`).
+        The five statistics (default) or the Mahalanobis term alone (:data:`SCORES`).
     refit : bool
         True: ``demos`` are the training demos, each streamed by a model fitted
         without it. False: ``demos`` are motions the model was not fitted on (a fresh

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from sandbox.core import DynamicPredictor, IProMP
+from sandbox.core.evidence import TIMING
 from sandbox.core.familiarity import LEVELS, Calibration, statistic, stream_record
 
 from . import synth
@@ -119,11 +120,11 @@ def test_familiarity_is_in_0_1_and_falls_with_the_statistic(model):
     cal = model.calibration
     values = np.geomspace(1e-4, 1e4, 200)
     for t in (0.0, 1.0, 5.0):
-        fam = np.array([cal.familiarity(t, [v, 0.0, 0.0, 0.0], 0) for v in values])
+        fam = np.array([cal.familiarity(t, [v, 0.0, 0.0, 0.0, 0.0], 0) for v in values])
         assert np.all((fam > 0) & (fam <= 1))
         assert np.all(np.diff(fam) <= 0)
         assert fam[0] == 1.0 and fam[-1] < 1e-3
-    assert np.isnan(cal.familiarity(1.0, [float("nan"), 0.0, 0.0, 0.0], 1))
+    assert np.isnan(cal.familiarity(1.0, [float("nan"), 0.0, 0.0, 0.0, 0.0], 1))
 
 
 def test_familiarity_of_a_bin_matches_its_quantiles():
@@ -276,6 +277,25 @@ def test_files_before_the_timing_evidence_rank_the_mahalanobis_term(model, tmp_p
     np.testing.assert_allclose(fam, [u.familiarity for u in stream(old, demo).updates])
 
 
+def test_files_before_the_goal_rank_their_four_statistics(model, tmp_path):
+    """A file calibrated on the four timing statistics (before the goal) loads, and the
+    predictors rank those four of the five, as the calibration's own ranking does."""
+    path = tmp_path / "m.npz"
+    model.save(path)
+    with np.load(path) as data:
+        arrays = {k: data[k] for k in data.files}
+    meta = json.loads(str(arrays["metadata"]))
+    meta["familiarity"]["components"] = list(TIMING)
+    arrays["familiarity_extra"] = arrays["familiarity_extra"][:3]
+    np.savez(tmp_path / "old.npz", **{**arrays, "metadata": np.array(json.dumps(meta))})
+    old = IProMP.load(tmp_path / "old.npz")
+    assert old.calibration.components == TIMING and old.calibration.extra.shape[0] == 3
+    demo = unseen(0, seed=10)
+    times, stats, tasks = stream_record(old, demo.times, demo.human, **OPTIONS)
+    fam = [old.calibration.familiarity(t, v[:4], k) for t, v, k in zip(times, stats, tasks)]
+    np.testing.assert_allclose(fam, [u.familiarity for u in stream(old, demo).updates])
+
+
 def test_a_mahalanobis_calibration_round_trips(tmp_path):
     train = synth.demos(np.random.default_rng(0), n_per_task=4, n_tasks=2)
     bare = IProMP(n_basis=9).fit(train)
@@ -304,7 +324,7 @@ def test_tampered_calibration_is_refused(model, tmp_path):
     with pytest.raises(ValueError, match="threshold"):
         IProMP.load(tmp_path / "meta.npz")
     meta["familiarity"]["threshold"] = 0.1
-    meta["familiarity"]["components"] = ["mahalanobis", "made_up", "x", "y"]
+    meta["familiarity"]["components"] = ["mahalanobis", "made_up", "x", "y", "z"]
     np.savez(tmp_path / "names.npz", **{**arrays, "metadata": np.array(json.dumps(meta))})
     with pytest.raises(ValueError, match="components"):
         IProMP.load(tmp_path / "names.npz")
