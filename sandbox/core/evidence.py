@@ -59,7 +59,12 @@ update time :math:`t` (s), from what the update already computed:
   :math:`\\delta = G U K^{-1} e` and
 
   .. math::  D = \\delta^T \\Sigma_g^{-1} \\delta, \\qquad
-             s_G = -\\log P(\\chi^2_d \\ge D).
+             s_G = (1 - e(t)) \\, (-\\log P(\\chi^2_d \\ge D)),
+
+  weighted like :math:`s_T` by the probability that the motion has not ended:
+  where a motion *is heading* is evidence while it goes; after its end the
+  conditioned end is where the hand stopped, and what people do then (hold,
+  drift back, wait) is not the reach the tasks model.
 
   Under the model :math:`e` has covariance :math:`(K - I) K`, so :math:`\\delta` is
   Gaussian with covariance :math:`G U (I - K^{-1}) U^T G^T \\preceq \\Sigma_g`: :math:`D`
@@ -171,15 +176,19 @@ def goal_frame(model: IProMP, k: int) -> tuple[FloatArray, FloatArray]:
     return frame
 
 
-def goal(model: IProMP, prediction: Prediction, k: int, values: FloatArray) -> float:
-    """:math:`s_G = -\\log P(\\chi^2_d \\ge D) \\ge 0` of task ``k`` (module docstring).
+def goal(model: IProMP, prediction: Prediction, t: float, k: int, values: FloatArray) -> float:
+    """:math:`s_G = (1 - e(t))(-\\log P(\\chi^2_d \\ge D)) \\ge 0` of task ``k`` at ``t`` (s)
+    (module docstring).
 
     ``values`` (s, P) are the update's observations (NaN where unobserved): the
     :math:`d` dims observed in some row are tested. 0 without factors (marginal
-    likelihood) or observed dims.
+    likelihood) or observed dims, or once the motion has surely ended.
     """
     seen = np.isfinite(values).any(axis=0) if values.size else np.zeros(model.n_human, bool)
     if prediction.factors is None or not seen.any():
+        return 0.0
+    going = 1.0 - (prediction.ended_probability(t, k) if prediction.grid is not None else 0.0)
+    if going <= 0.0:
         return 0.0
     loads, cov = goal_frame(model, k)
     r, R = loads.shape[1], prediction.factors.shape[1] - 1
@@ -187,7 +196,7 @@ def goal(model: IProMP, prediction: Prediction, k: int, values: FloatArray) -> f
     x = lapack.dtrtrs(factor[:r, :r], factor[R, :r], lower=1, trans=1)[0] if r else np.zeros(0)
     delta = loads[seen] @ x                                            # posterior end shift
     w = np.linalg.solve(np.linalg.cholesky(cov[np.ix_(seen, seen)]), delta)
-    return float(max(-chi2.logsf(float(w @ w), int(seen.sum())), 0.0))
+    return float(max(going * -chi2.logsf(float(w @ w), int(seen.sum())), 0.0))
 
 
 def components(model: IProMP, prediction: Prediction, t: float, times: FloatArray,
@@ -196,4 +205,4 @@ def components(model: IProMP, prediction: Prediction, t: float, times: FloatArra
     :func:`not_arrived`, :func:`speed_change`, :func:`phase_spread`, :func:`goal` of task ``k``."""
     return np.array([mahalanobis, not_arrived(model, prediction, t, k),
                      speed_change(model, prediction, k, times, values),
-                     phase_spread(model, prediction, k), goal(model, prediction, k, values)])
+                     phase_spread(model, prediction, k), goal(model, prediction, t, k, values)])
