@@ -59,20 +59,19 @@ update time :math:`t` (s), from what the update already computed:
   :math:`\\delta = G U K^{-1} e` and
 
   .. math::  D = \\delta^T \\Sigma_g^{-1} \\delta, \\qquad
-             s_G = (1 - e(t)) \\, (-\\log P(\\chi^2_d \\ge D)),
-
-  weighted like :math:`s_T` by the probability that the motion has not ended:
-  where a motion *is heading* is evidence while it goes; after its end the
-  conditioned end is where the hand stopped, and what people do then (hold,
-  drift back, wait) is not the reach the tasks model.
+             s_G = -\\log P(\\chi^2_d \\ge D).
 
   Under the model :math:`e` has covariance :math:`(K - I) K`, so :math:`\\delta` is
   Gaussian with covariance :math:`G U (I - K^{-1}) U^T G^T \\preceq \\Sigma_g`: :math:`D`
   is stochastically below :math:`\\chi^2_d` and :math:`e^{-s_G}` is a valid
-  (conservative) p-value, like :math:`e^{-s_T}`. (At the MAP speed and task, as all the
-  statistics.) A hand heading for an end outside the task moves :math:`\\delta`
-  before the residual of each observation is large, and :math:`D` tests that one direction (:math:`d` degrees of freedom)
-  where the Mahalanobis term averages over all :math:`n` values.
+  (conservative) p-value, like :math:`e^{-s_T}` (at the MAP speed and task, as all
+  the statistics). A hand
+  heading for an end outside the task moves :math:`\\delta` before the residual of
+  each observation is large, and :math:`D` tests that one direction (:math:`d`
+  degrees of freedom) where the Mahalanobis term averages over all :math:`n`
+  values. It sees an end only along the demos' modes of variation
+  (:math:`GU`): an end off in a direction no demo varied in moves
+  :math:`\\delta` little, and is left to the Mahalanobis term.
 
 ``not_arrived`` and ``goal`` are p-value bounds by construction and rank as
 :math:`e^{-s}`; the others are ranked against held-out training updates of the
@@ -93,7 +92,6 @@ from scipy.special import log_ndtr
 from scipy.stats import chi2
 
 from sandbox.core.likelihood import compress_human
-
 from sandbox.validation import FloatArray
 
 if TYPE_CHECKING:
@@ -156,7 +154,8 @@ _GOAL_FRAMES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def goal_frame(model: IProMP, k: int) -> tuple[FloatArray, FloatArray]:
-    """Task ``k``'s human end: :math:`G U` (P, r) in the likelihood's frame, :math:`\\Sigma_g` (P, P).
+    """Task ``k``'s human end: :math:`G U` (P, r) in the likelihood's frame and
+    :math:`\\Sigma_g` (P, P).
 
     The loadings are those of :func:`~sandbox.core.likelihood.compress_human`'s
     turned factor (the frame of the update's factor; its first r columns); the
@@ -176,19 +175,15 @@ def goal_frame(model: IProMP, k: int) -> tuple[FloatArray, FloatArray]:
     return frame
 
 
-def goal(model: IProMP, prediction: Prediction, t: float, k: int, values: FloatArray) -> float:
-    """:math:`s_G = (1 - e(t))(-\\log P(\\chi^2_d \\ge D)) \\ge 0` of task ``k`` at ``t`` (s)
-    (module docstring).
+def goal(model: IProMP, prediction: Prediction, k: int, values: FloatArray) -> float:
+    """:math:`s_G = -\\log P(\\chi^2_d \\ge D) \\ge 0` of task ``k`` (module docstring).
 
     ``values`` (s, P) are the update's observations (NaN where unobserved): the
     :math:`d` dims observed in some row are tested. 0 without factors (marginal
-    likelihood) or observed dims, or once the motion has surely ended.
+    likelihood) or observed dims.
     """
     seen = np.isfinite(values).any(axis=0) if values.size else np.zeros(model.n_human, bool)
     if prediction.factors is None or not seen.any():
-        return 0.0
-    going = 1.0 - (prediction.ended_probability(t, k) if prediction.grid is not None else 0.0)
-    if going <= 0.0:
         return 0.0
     loads, cov = goal_frame(model, k)
     r, R = loads.shape[1], prediction.factors.shape[1] - 1
@@ -196,7 +191,7 @@ def goal(model: IProMP, prediction: Prediction, t: float, k: int, values: FloatA
     x = lapack.dtrtrs(factor[:r, :r], factor[R, :r], lower=1, trans=1)[0] if r else np.zeros(0)
     delta = loads[seen] @ x                                            # posterior end shift
     w = np.linalg.solve(np.linalg.cholesky(cov[np.ix_(seen, seen)]), delta)
-    return float(max(going * -chi2.logsf(float(w @ w), int(seen.sum())), 0.0))
+    return float(max(-chi2.logsf(float(w @ w), int(seen.sum())), 0.0))
 
 
 def components(model: IProMP, prediction: Prediction, t: float, times: FloatArray,
@@ -205,4 +200,4 @@ def components(model: IProMP, prediction: Prediction, t: float, times: FloatArra
     :func:`not_arrived`, :func:`speed_change`, :func:`phase_spread`, :func:`goal` of task ``k``."""
     return np.array([mahalanobis, not_arrived(model, prediction, t, k),
                      speed_change(model, prediction, k, times, values),
-                     phase_spread(model, prediction, k), goal(model, prediction, t, k, values)])
+                     phase_spread(model, prediction, k), goal(model, prediction, k, values)])

@@ -110,15 +110,19 @@ def test_several_statistics_calibrate_and_a_new_record_fires_at_about_alpha(name
 
 def test_a_calibration_before_the_goal_ranks_its_own_four_of_all_statistics():
     """Older calibrations (four statistics) take theirs from a full vector, the goal
-    ignored; the goal ranks as exp(-s) in a full calibration."""
+    ignored. A full one takes the lower of the four's combination and the goal's
+    exp(-s), as 1 - (1 - min)^2."""
     rng = np.random.default_rng(6)
-    old = Calibration.from_records(records(rng, 30, 4), 2, edges=[0.0])
-    new = Calibration.from_records(records(rng, 30, 5), 2, edges=[0.0])
+    five = records(rng, 30, 5)
+    old = Calibration.from_records([(t, v[:, :4], k) for t, v, k in five], 2, edges=[0.0])
+    new = Calibration.from_records(five, 2, edges=[0.0])
     v = np.array([1.0, 0.5, 2.0, 1.5, 0.0])
-    assert old.familiarity(0.5, v, 1) == old.familiarity(0.5, v[:4], 1)
-    assert old.familiarity(0.5, v + [0, 0, 0, 0, 30.0], 1) == old.familiarity(0.5, v[:4], 1)
+    f4 = old.familiarity(0.5, v[:4], 1)
+    assert old.familiarity(0.5, v, 1) == f4
+    assert old.familiarity(0.5, v + [0, 0, 0, 0, 30.0], 1) == f4
+    assert new.familiarity(0.5, v, 1) == pytest.approx(f4 * (2.0 - f4), rel=1e-12)
     far = new.familiarity(0.5, v + [0, 0, 0, 0, 30.0], 1)
-    assert far < new.familiarity(0.5, v, 1) and far < 1e-9        # e^-30 among five ranks
+    assert far == pytest.approx(2.0 * np.exp(-30.0), rel=1e-9)
     with pytest.raises(ValueError, match="expected 1 or 4 or 5 statistics"):
         Calibration.from_records(records(rng, 5, 3), 2, edges=[0.0])
 

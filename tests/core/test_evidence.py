@@ -92,7 +92,7 @@ def test_components_are_in_order_and_inputs_are_not_mutated(model):
     before = (t.copy(), y.copy())
     out = components(model, pred, 1.2, t, y, 1, 0.7)
     assert out.shape == (len(COMPONENTS),) == (5,) and out[0] == 0.7 and np.all(out >= 0)
-    assert out[COMPONENTS.index("goal")] == goal(model, pred, 1.2, 1, y)
+    assert out[COMPONENTS.index("goal")] == goal(model, pred, 1, y)
     np.testing.assert_array_equal(t, before[0])
     np.testing.assert_array_equal(y, before[1])
 
@@ -109,18 +109,13 @@ def test_a_hand_heading_for_another_end_has_a_large_goal_before_it_arrives(model
     """The task's ends vary by 5 % of 0.5 m; an end 0.15 m beyond (6 of those stds)
     scores p < e^-5 at 85 % of the motion, the task's own mean motion p > 0.9."""
     demo = synth.replay(0, model.task_models[0].nominal_duration)
-    pred, t, y = prediction_of(model, demo, 0.85 * demo.times[-1])
-    assert goal(model, pred, t[-1], 0, y) < 0.1
+    pred, _, y = prediction_of(model, demo, 0.85 * demo.times[-1])
+    assert goal(model, pred, 0, y) < 0.1
     odd = veered(demo, [0.0, 0.15, 0.0])
-    pred, t, y = prediction_of(model, odd, 0.85 * odd.times[-1])
-    assert goal(model, pred, t[-1], 0, y) > 5.0
-    ended = with_grid(pred, 0, [0.5, 0.6], [0.5, 0.5], model)            # surely over by t
-    assert goal(model, ended, t[-1], 0, y) == 0.0
-    half = with_grid(pred, 0, [0.5, 9.0], [0.5, 0.5], model)
-    assert goal(model, half, t[-1], 0, y) == pytest.approx(0.5 * goal(
-        model, with_grid(pred, 0, [9.0], [1.0], model), t[-1], 0, y))
-    early, t, y = prediction_of(model, odd, 0.3 * odd.times[-1])       # not heading off yet
-    assert goal(model, early, t[-1], 0, y) < 0.1
+    pred, _, y = prediction_of(model, odd, 0.85 * odd.times[-1])
+    assert goal(model, pred, 0, y) > 5.0
+    early, _, y = prediction_of(model, odd, 0.3 * odd.times[-1])       # not heading off yet
+    assert goal(model, early, 0, y) < 0.1
 
 
 def test_the_goal_is_a_valid_p_value_bound_for_motions_of_the_model(model):
@@ -138,15 +133,15 @@ def test_the_goal_is_a_valid_p_value_bound_for_motions_of_the_model(model):
         y = psi @ draw[:P * N].reshape(P, N).T + np.sqrt(model.noise) * rng.standard_normal(
             (t.size, P))
         pred = predict(model, scorer, t, y, n_candidates=20)
-        small += np.exp(-goal(model, pred, t[-1], 0, y)) < 0.1
+        small += np.exp(-goal(model, pred, 0, y)) < 0.1
     assert small <= 20
 
 
 def test_the_goal_tests_the_observed_dims_and_needs_factors(model):
     demo = veered(synth.replay(0, 2.0), [0.0, 0.15, 0.0])
-    pred, t, y = prediction_of(model, demo, 1.7)
-    assert goal(model, pred, t[-1], 0, np.full_like(y, np.nan)) == 0.0    # nothing observed
-    assert goal(model, replace(pred, factors=None), t[-1], 0, y) == 0.0   # marginal likelihood
+    pred, _, y = prediction_of(model, demo, 1.7)
+    assert goal(model, pred, 0, np.full_like(y, np.nan)) == 0.0       # nothing observed
+    assert goal(model, replace(pred, factors=None), 0, y) == 0.0      # marginal likelihood
     loads, cov = goal_frame(model, 0)
     assert loads.shape[0] == cov.shape[0] == model.n_human
     np.testing.assert_allclose(cov, cov.T)
