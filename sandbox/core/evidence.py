@@ -88,8 +88,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.linalg import lapack
-from scipy.special import log_ndtr
-from scipy.stats import chi2
+from scipy.special import chdtrc, gammaln, log_ndtr
 
 from sandbox.core.likelihood import compress_human
 from sandbox.validation import FloatArray
@@ -190,8 +189,19 @@ def goal(model: IProMP, prediction: Prediction, k: int, values: FloatArray) -> f
     factor = prediction.factors[k]
     x = lapack.dtrtrs(factor[:r, :r], factor[R, :r], lower=1, trans=1)[0] if r else np.zeros(0)
     delta = loads[seen] @ x                                            # posterior end shift
-    w = np.linalg.solve(np.linalg.cholesky(cov[np.ix_(seen, seen)]), delta)
-    return float(max(-chi2.logsf(float(w @ w), int(seen.sum())), 0.0))
+    w = lapack.dtrtrs(np.linalg.cholesky(cov[np.ix_(seen, seen)]), delta, lower=1)[0]
+    return chi2_log_survival(float(w @ w), int(seen.sum()))
+
+
+def chi2_log_survival(x: float, d: int) -> float:
+    """:math:`-\\log P(\\chi^2_d \\ge x) \\ge 0`; past the doubles' range, the leading
+    term of the upper incomplete gamma function,
+    :math:`x/2 - (d/2 - 1)\\log(x/2) + \\log\\Gamma(d/2)`."""
+    p = float(chdtrc(d, x))
+    if p > 1e-300:
+        return float(max(0.0, -np.log(p)))
+    a, h = 0.5 * d, 0.5 * x
+    return float(h - (a - 1.0) * np.log(h) + gammaln(a))
 
 
 def components(model: IProMP, prediction: Prediction, t: float, times: FloatArray,

@@ -11,6 +11,7 @@ from scipy import stats
 from sandbox.core import IProMP
 from sandbox.core.evidence import (
     COMPONENTS,
+    chi2_log_survival,
     components,
     goal,
     goal_frame,
@@ -146,3 +147,12 @@ def test_the_goal_tests_the_observed_dims_and_needs_factors(model):
     assert loads.shape[0] == cov.shape[0] == model.n_human
     np.testing.assert_allclose(cov, cov.T)
     assert goal_frame(model, 0)[1] is cov                              # cached per weights
+
+
+def test_chi2_log_survival_is_scipys_and_finite_far_out():
+    for x, d in [(0.0, 3), (1.0, 3), (30.0, 3), (3.0, 1), (200.0, 9)]:
+        assert chi2_log_survival(x, d) == pytest.approx(-stats.chi2.logsf(x, d), rel=1e-9)
+    # past the doubles' range (scipy's logsf is inf there): the asymptote, continuous
+    assert chi2_log_survival(1390.0, 3) == pytest.approx(-stats.chi2.logsf(1390.0, 3), rel=1e-5)
+    far = [chi2_log_survival(x, 3) for x in (1500.0, 5000.0, 1e6)]
+    assert np.all(np.isfinite(far)) and np.all(np.diff(far) > 0)
