@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from sandbox.core import DynamicPredictor, IProMP
-from sandbox.core.evidence import TIMING
+from sandbox.core.evidence import COMPONENTS, TIMING
 from sandbox.core.familiarity import LEVELS, Calibration, statistic, stream_record
 
 from . import synth
@@ -296,6 +296,21 @@ def test_files_before_the_goal_rank_their_four_statistics(model, tmp_path):
     np.testing.assert_allclose(fam, [u.familiarity for u in stream(old, demo).updates])
 
 
+def test_a_goal_calibration_ranks_five_statistics_and_round_trips(tmp_path):
+    train = synth.demos(np.random.default_rng(0), n_per_task=4, n_tasks=2)
+    bare = IProMP(n_basis=9).fit(train)
+    cal = bare.calibrate(train, score="goal", **OPTIONS)
+    assert cal.components == COMPONENTS and cal.extra.shape[0] == len(COMPONENTS) - 1
+    bare.save(tmp_path / "m.npz")
+    loaded = IProMP.load(tmp_path / "m.npz")
+    assert loaded.calibration.components == COMPONENTS
+    demo = unseen(1, seed=11)
+    times, stats, tasks = stream_record(loaded, demo.times, demo.human, **OPTIONS)
+    assert stats.shape == (times.size, len(COMPONENTS))
+    fam = [loaded.calibration.familiarity(*update) for update in zip(times, stats, tasks)]
+    np.testing.assert_allclose(fam, [u.familiarity for u in stream(loaded, demo).updates])
+
+
 def test_a_mahalanobis_calibration_round_trips(tmp_path):
     train = synth.demos(np.random.default_rng(0), n_per_task=4, n_tasks=2)
     bare = IProMP(n_basis=9).fit(train)
@@ -324,7 +339,7 @@ def test_tampered_calibration_is_refused(model, tmp_path):
     with pytest.raises(ValueError, match="threshold"):
         IProMP.load(tmp_path / "meta.npz")
     meta["familiarity"]["threshold"] = 0.1
-    meta["familiarity"]["components"] = ["mahalanobis", "made_up", "x", "y", "z"]
+    meta["familiarity"]["components"] = ["mahalanobis", "made_up", "x", "y"]
     np.savez(tmp_path / "names.npz", **{**arrays, "metadata": np.array(json.dumps(meta))})
     with pytest.raises(ValueError, match="components"):
         IProMP.load(tmp_path / "names.npz")
@@ -352,6 +367,7 @@ def test_a_calibration_on_fresh_motions_streams_them_by_the_model_itself(model):
     assert other.calibration is cal and model.calibration is not cal
     records = [stream_record(model, d.times - d.times[0], d.human, dow_t=0.2, **OPTIONS)
                for d in fresh]
+    records = [(t, v[:, :len(TIMING)], k) for t, v, k in records]      # the default score
     mean = float(np.dot(model.priors, [t.mean_duration for t in model.task_models]))
     want = Calibration.from_records(records, 2, alpha=0.05, edges=np.array(EDGES) * mean,
                                     subsample=OPTIONS["subsample"], dow_t=0.2)
