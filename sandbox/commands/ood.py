@@ -138,7 +138,8 @@ def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     if args.records:
         saved = _read_records(args.records)
-        about = {k: saved.get(k) for k in ("mode", "data", "ood_data", "observe", "dow_t")}
+        about = {k: saved.get(k) for k in ("mode", "data", "ood_data", "observe", "dow_t",
+                                            "score")}
         about["mode"] = about["mode"] or MODES[0]
         records, seconds = saved["records"], float(saved.get("seconds", 0.0))
     else:
