@@ -14,7 +14,7 @@ Timed, from one run, as medians over ``repeats`` repetitions:
   arrived (:mod:`sandbox.core.statistics`); ``observe_ms`` is what that growth
   costs per kept observation.
 * ``familiarity_ms``: what the familiarity adds to that update
-  (:mod:`sandbox.core.familiarity`): the four statistics of the update's
+  (:mod:`sandbox.core.familiarity`): the five statistics of the update's
   prediction (:func:`~sandbox.core.familiarity.statistics`) and their ranking and
   Fisher combination against a calibration of the reference case's size (4
   tasks, the default time bins; its quantiles are drawn at random, as the cost

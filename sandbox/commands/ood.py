@@ -91,6 +91,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--alpha", type=_types.FRACTION, default=0.05,
                         help="calibration level of the 'calibrated' columns (0.05; with "
                              "--model: its calibration's threshold)")
+    parser.add_argument("--score", choices=("timing", "goal"), default="timing",
+                        help="what the familiarity ranks: the Mahalanobis term and the four "
+                             "timing statistics (default), or those and the goal (where the "
+                             "hand is heading; calibrate(score='goal')); with --model: its "
+                             "calibration's")
     parser.add_argument("--workers", type=_types.WORKERS, default=1,
                         help=f"processes, 1 to {_types.MAX_WORKERS} (default 1)")
     parser.add_argument("--out", type=_types.output_file, default=None,
@@ -133,7 +138,8 @@ def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     if args.records:
         saved = _read_records(args.records)
-        about = {k: saved.get(k) for k in ("mode", "data", "ood_data", "observe", "dow_t")}
+        about = {k: saved.get(k) for k in ("mode", "data", "ood_data", "observe", "dow_t",
+                                            "score")}
         about["mode"] = about["mode"] or MODES[0]
         records, seconds = saved["records"], float(saved.get("seconds", 0.0))
     else:
@@ -189,14 +195,15 @@ def _score(args) -> tuple[dict, list[dict]]:
     if sets:
         records = oodsets.score_sets(*normal, sets, config, dow_t=args.dow_t,
                                      workers=args.workers, progress=progress)
-        return {**about, "mode": MODES[1]}, ood.rank(records)
+        return {**about, "mode": MODES[1], "score": args.score}, ood.rank(records,
+                                                                         score=args.score)
     train, test = normal
     if len({d.task for d in train}) < 3:
         raise ValueError(f"--data: leave-task-out needs at least three tasks (two stay "
                          f"trained), got {sorted({d.task for d in train})}; give --ood-data")
     records = ood.score_all(train, test, config, dow_t=args.dow_t, workers=args.workers,
                             progress=progress)
-    return {**about, "mode": MODES[0]}, ood.rank(records)
+    return {**about, "mode": MODES[0], "score": args.score}, ood.rank(records, score=args.score)
 
 
 def _load(args, data: str, spec, observe, progress: bool) -> tuple[list, list]:

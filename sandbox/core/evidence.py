@@ -1,11 +1,11 @@
-"""Evidence about timing that a streaming predictor has and a static pose check lacks.
+"""Evidence about timing and goal that a streaming predictor has and a static pose check lacks.
 
 The familiarity (:mod:`sandbox.core.familiarity`) ranks, per update, a vector of
 :data:`COMPONENTS` statistics, each larger for a less usual motion. The first is
 the Mahalanobis term of the best task at its MAP speed (what it always was); a
 slow or hesitant person is absorbed by the speed factor there, so three more
-read the timing, all for the chosen task :math:`k` at the update time :math:`t`
-(s), from what the update already computed:
+read the timing and one the goal, all for the chosen task :math:`k` at the
+update time :math:`t` (s), from what the update already computed:
 
 * **not arrived** (elapsed time against the speed prior). With
   :math:`\\alpha \\sim \\mathcal{N}(\\mu_\\alpha, \\sigma_\\alpha^2)` and
@@ -47,19 +47,50 @@ read the timing, all for the chosen task :math:`k` at the update time :math:`t`
   large when the speed is uncertain late in a motion (no candidate explains
   the observations better than another) or piled at an extreme of the prior.
 
-None of them is used as a p-value directly: each is ranked against held-out
-training updates of the same task and time bin (:mod:`sandbox.core.calibration`),
-and the ranks are combined there. All are causal (the update's observations
-and estimate) and cost a few microseconds beside the update.
+* **goal** (where the hand is heading). The weights are
+  :math:`w = \\mu + U x + \\epsilon`, :math:`x \\sim \\mathcal{N}(0, I_r)` the demos'
+  modes of variation, :math:`\\epsilon \\sim \\mathcal{N}(0, \\Lambda)`. The human's end
+  (phase 1) over the :math:`d` observed dims is :math:`g = G w`,
+  :math:`G = I_d \\otimes \\psi(1)^T`, with the prior
+  :math:`\\mathcal{N}(G\\mu, \\Sigma_g)`, :math:`\\Sigma_g = G (UU^T + \\Lambda) G^T`. The
+  update's factor (:mod:`sandbox.core.likelihood`, step 3) already holds the
+  posterior of :math:`x` given the observations, :math:`\\mathcal{N}(K^{-1} e, K^{-1})`
+  (eq. 8 on the latent), so the conditioned end moves by
+  :math:`\\delta = G U K^{-1} e` and
+
+  .. math::  D = \\delta^T \\Sigma_g^{-1} \\delta, \\qquad
+             s_G = -\\log P(\\chi^2_d \\ge D).
+
+  Under the model :math:`e` has covariance :math:`(K - I) K`, so :math:`\\delta` is
+  Gaussian with covariance :math:`G U (I - K^{-1}) U^T G^T \\preceq \\Sigma_g`: :math:`D`
+  is stochastically below :math:`\\chi^2_d` and :math:`e^{-s_G}` is a valid
+  (conservative) p-value, like :math:`e^{-s_T}` (at the MAP speed and task, as all
+  the statistics). A hand
+  heading for an end outside the task moves :math:`\\delta` before the residual of
+  each observation is large, and :math:`D` tests that one direction (:math:`d`
+  degrees of freedom) where the Mahalanobis term averages over all :math:`n`
+  values. It sees an end only along the demos' modes of variation
+  (:math:`GU`): an end off in a direction no demo varied in moves
+  :math:`\\delta` little, and is left to the Mahalanobis term.
+
+``not_arrived`` and ``goal`` are p-value bounds by construction and rank as
+:math:`e^{-s}`; the others are ranked against held-out training updates of the
+same task and time bin (:mod:`sandbox.core.calibration`), and the ranks are
+combined there. All are causal (the update's observations and estimate) and
+cost a few microseconds beside the update (one :math:`r \\times r` triangular
+solve and a :math:`d \\times d` Cholesky for the goal; ``bench``'s ``familiarity_ms``).
 """
 
 from __future__ import annotations
 
+import weakref
 from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.special import log_ndtr
+from scipy.linalg import lapack
+from scipy.special import chdtrc, gammaln, log_ndtr
 
+from sandbox.core.likelihood import compress_human
 from sandbox.validation import FloatArray
 
 if TYPE_CHECKING:
@@ -67,7 +98,11 @@ if TYPE_CHECKING:
     from sandbox.core.model import IProMP
 
 #: Names of the familiarity's statistics, in the order of :func:`components`.
-COMPONENTS = ("mahalanobis", "not_arrived", "speed_change", "phase_spread")
+COMPONENTS = ("mahalanobis", "not_arrived", "speed_change", "phase_spread", "goal")
+#: The statistics of calibrations made before the goal (model files still rank them).
+TIMING = COMPONENTS[:4]
+#: Statistics that are p-value bounds by construction, ranked as :math:`e^{-s}`.
+ANALYTIC = ("not_arrived", "goal")
 #: Span (s) of observations the speed change compares.
 SPEED_WINDOW = 0.3
 
@@ -113,10 +148,66 @@ def phase_spread(model: IProMP, prediction: Prediction, k: int) -> float:
     return float(np.dot(weights, z * z))
 
 
+#: Per task's weights: the end's latent loadings and prior covariance (:func:`goal_frame`).
+_GOAL_FRAMES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def goal_frame(model: IProMP, k: int) -> tuple[FloatArray, FloatArray]:
+    """Task ``k``'s human end: :math:`G U` (P, r) in the likelihood's frame and
+    :math:`\\Sigma_g` (P, P).
+
+    The loadings are those of :func:`~sandbox.core.likelihood.compress_human`'s
+    turned factor (the frame of the update's factor; its first r columns); the
+    covariance is frame-free. Cached per weights object (a refit makes new ones).
+    """
+    weights = model.task_models[k].weights
+    cached = _GOAL_FRAMES.get(weights)
+    if cached is not None:
+        return cached
+    P, N = model.n_human, model.basis.n_basis
+    psi1 = model.basis.evaluate(np.ones(1))[0]                        # (N,), eq. 3 at z = 1
+    turned, rank = compress_human(weights, P)
+    loads = np.einsum("pnr,n->pr", turned.factor[:P * N].reshape(P, N, -1), psi1)
+    cov = loads @ loads.T + np.diag(weights.reg[:P] * float(psi1 @ psi1))
+    frame = (np.ascontiguousarray(loads[:, :rank]), cov)
+    _GOAL_FRAMES[weights] = frame
+    return frame
+
+
+def goal(model: IProMP, prediction: Prediction, k: int, values: FloatArray) -> float:
+    """:math:`s_G = -\\log P(\\chi^2_d \\ge D) \\ge 0` of task ``k`` (module docstring).
+
+    ``values`` (s, P) are the update's observations (NaN where unobserved): the
+    :math:`d` dims observed in some row are tested. 0 without factors (marginal
+    likelihood) or observed dims.
+    """
+    seen = np.isfinite(values).any(axis=0) if values.size else np.zeros(model.n_human, bool)
+    if prediction.factors is None or not seen.any():
+        return 0.0
+    loads, cov = goal_frame(model, k)
+    r, R = loads.shape[1], prediction.factors.shape[1] - 1
+    factor = prediction.factors[k]
+    x = lapack.dtrtrs(factor[:r, :r], factor[R, :r], lower=1, trans=1)[0] if r else np.zeros(0)
+    delta = loads[seen] @ x                                            # posterior end shift
+    w = lapack.dtrtrs(np.linalg.cholesky(cov[np.ix_(seen, seen)]), delta, lower=1)[0]
+    return chi2_log_survival(float(w @ w), int(seen.sum()))
+
+
+def chi2_log_survival(x: float, d: int) -> float:
+    """:math:`-\\log P(\\chi^2_d \\ge x) \\ge 0`; past the doubles' range, the leading
+    term of the upper incomplete gamma function,
+    :math:`x/2 - (d/2 - 1)\\log(x/2) + \\log\\Gamma(d/2)`."""
+    p = float(chdtrc(d, x))
+    if p > 1e-300:
+        return float(max(0.0, -np.log(p)))
+    a, h = 0.5 * d, 0.5 * x
+    return float(h - (a - 1.0) * np.log(h) + gammaln(a))
+
+
 def components(model: IProMP, prediction: Prediction, t: float, times: FloatArray,
                values: FloatArray, k: int, mahalanobis: float) -> FloatArray:
-    """The :data:`COMPONENTS` of one update, shape (4,): ``mahalanobis`` (given), then
-    :func:`not_arrived`, :func:`speed_change`, :func:`phase_spread` of task ``k``."""
+    """The :data:`COMPONENTS` of one update, shape (5,): ``mahalanobis`` (given), then
+    :func:`not_arrived`, :func:`speed_change`, :func:`phase_spread`, :func:`goal` of task ``k``."""
     return np.array([mahalanobis, not_arrived(model, prediction, t, k),
                      speed_change(model, prediction, k, times, values),
-                     phase_spread(model, prediction, k)])
+                     phase_spread(model, prediction, k), goal(model, prediction, k, values)])

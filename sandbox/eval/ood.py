@@ -34,6 +34,7 @@ import numpy as np
 from sandbox.core.conformal import conformal_threshold
 from sandbox.core.familiarity import leave_one_out, stream_record
 from sandbox.eval.loocv import EvalConfig, prepare
+from sandbox.validation import check_choice
 
 ALPHAS = (0.01, 0.02, 0.05, 0.1, 0.2)
 RULES = ("any update", "any update to the handover", "final update")
@@ -101,7 +102,7 @@ def _progress(enabled: bool, n: int, total: int) -> None:
         print(f"  scored {n}/{total} streams", file=sys.stderr, flush=True)
 
 
-def rank(records: list[dict], edges=None) -> list[dict]:
+def rank(records: list[dict], edges=None, score: str = "timing") -> list[dict]:
     """Per record: its familiarity at each update and the reference it is thresholded with.
 
     Per left-out task, the held-in records are the calibration
@@ -109,9 +110,17 @@ def rank(records: list[dict], edges=None) -> list[dict]:
     against the others, and its reference is the others' lowest familiarities;
     a left-out record is ranked against all of them, its reference is all their
     lowest familiarities. ``edges`` are the time bins as fractions of the mean
-    duration (default :data:`~sandbox.core.familiarity.EDGES`).
+    duration (default :data:`~sandbox.core.familiarity.EDGES`). ``score`` is what the
+    calibration ranks (:data:`~sandbox.core.familiarity.SCORES`): ``"timing"`` keeps the
+    first four of five recorded statistics, ``"goal"`` all five.
     """
-    from sandbox.core.familiarity import EDGES
+    from sandbox.core.familiarity import EDGES, SCORES, TIMING
+
+    keep = len(TIMING) if check_choice(score, "score", SCORES[:2]) == "timing" else None
+
+    def stats(r):   # the statistics the calibration ranks (records keep all they have)
+        v = np.asarray(r["stats"], dtype=float)
+        return v[:, :keep] if v.ndim == 2 else v
 
     fractions = np.asarray(EDGES if edges is None else edges, dtype=float)
     out = []
@@ -120,7 +129,7 @@ def rank(records: list[dict], edges=None) -> list[dict]:
         names = pool[0]["tasks"]
         mean = float(np.mean([r["mean_duration"] for r in pool]))
         full, held = leave_one_out(
-            [(r["times"], r["stats"], [names.index(k) for k in r["chosen"]]) for r in pool],
+            [(r["times"], stats(r), [names.index(k) for k in r["chosen"]]) for r in pool],
             len(names), edges=fractions * mean)
         lowest = np.array([h.min() for h in held])
         for i, r in enumerate(pool):
@@ -129,7 +138,7 @@ def rank(records: list[dict], edges=None) -> list[dict]:
         for r in records:
             if r["left_out"] == left and not r["held_in"]:
                 fam = [full.familiarity(t, v, names.index(k))
-                       for t, v, k in zip(r["times"], r["stats"], r["chosen"])]
+                       for t, v, k in zip(r["times"], stats(r), r["chosen"])]
                 out.append({**r, "familiarity": fam, "reference": lowest.tolist()})
     return out
 

@@ -153,7 +153,8 @@ def markdown(result: dict) -> str:
     lines = [f"{result['mode']} on `{result['data']}`"
              + (f" against {', '.join(f'`{s}`' for s in result['ood_data'])}"
                 if result.get("ood_data") else "")
-             + f" (observe {result['observe']}; dow_t = {result['dow_t']:g} s); "
+             + f" (observe {result['observe']}; dow_t = {result['dow_t']:g} s"
+             + (f"; score {result['score']}" if result.get("score") else "") + "); "
              f"{result['n_streams']} streams, {result['seconds']:.0f} s.", "",
              "Detection before the handover at a false-alarm rate on held-out normal motions:",
              "", "| OOD | normal | OOD motions | AUC | "

@@ -10,6 +10,7 @@ from scipy import stats
 from sandbox.core.calibration import (
     COMPONENTS,
     LEVELS,
+    NAMES,
     Calibration,
     conformal_threshold,
     fisher,
@@ -89,24 +90,46 @@ def records(rng, n: int, J: int = len(COMPONENTS), shift: float = 0.0):
             for _ in range(n)]
 
 
-def test_four_statistics_calibrate_and_a_new_record_fires_at_about_alpha():
-    """Exchangeable records of four statistics: fresh records fire at about alpha
-    (binomial 99.9 % bounds for 600 records), a shifted one fires nearly always."""
+@pytest.mark.parametrize("names", NAMES[1:], ids=["timing", "with-goal"])
+def test_several_statistics_calibrate_and_a_new_record_fires_at_about_alpha(names):
+    """Exchangeable records of four (before the goal) or five statistics: fresh records
+    fire at about alpha (binomial 99.9 % bounds for 600 records), a shifted one nearly
+    always."""
     rng = np.random.default_rng(4)
-    cal = Calibration.from_records(records(rng, 200), 2, alpha=0.1, edges=[0.0, 0.6, 1.2])
-    assert cal.components == COMPONENTS and cal.extra.shape == (3, 2, 3, LEVELS.size)
+    J = len(names)
+    cal = Calibration.from_records(records(rng, 200, J), 2, alpha=0.1, edges=[0.0, 0.6, 1.2])
+    assert cal.components == names and cal.extra.shape == (J - 1, 2, 3, LEVELS.size)
 
     def fires(recs):
         return [min(cal.familiarity(t, v, k) for t, v, k in zip(*r)) < cal.threshold
                 for r in recs]
 
-    assert 0.065 < np.mean(fires(records(rng, 600))) < 0.14
-    assert np.mean(fires(records(rng, 100, shift=1.5))) > 0.9
+    assert 0.065 < np.mean(fires(records(rng, 600, J))) < 0.14
+    assert np.mean(fires(records(rng, 100, J, shift=1.5))) > 0.9
+
+
+def test_a_calibration_before_the_goal_ranks_its_own_four_of_all_statistics():
+    """Older calibrations (four statistics) take theirs from a full vector, the goal
+    ignored. A full one takes the lower of the four's combination and the goal's
+    exp(-s), as 1 - (1 - min)^2."""
+    rng = np.random.default_rng(6)
+    five = records(rng, 30, 5)
+    old = Calibration.from_records([(t, v[:, :4], k) for t, v, k in five], 2, edges=[0.0])
+    new = Calibration.from_records(five, 2, edges=[0.0])
+    v = np.array([1.0, 0.5, 2.0, 1.5, 0.0])
+    f4 = old.familiarity(0.5, v[:4], 1)
+    assert old.familiarity(0.5, v, 1) == f4
+    assert old.familiarity(0.5, v + [0, 0, 0, 0, 30.0], 1) == f4
+    assert new.familiarity(0.5, v, 1) == pytest.approx(f4 * (2.0 - f4), rel=1e-12)
+    far = new.familiarity(0.5, v + [0, 0, 0, 0, 30.0], 1)
+    assert far == pytest.approx(2.0 * np.exp(-30.0), rel=1e-9)
+    with pytest.raises(ValueError, match="expected 1 or 4 or 5 statistics"):
+        Calibration.from_records(records(rng, 5, 3), 2, edges=[0.0])
 
 
 def test_the_statistics_vector_must_match_the_components():
     cal = Calibration.from_records(records(np.random.default_rng(5), 30), 2, edges=[0.0])
-    with pytest.raises(ValueError, match="expected 4 statistics"):
+    with pytest.raises(ValueError, match="expected 5 statistics"):
         cal.familiarity(0.5, 1.0, 0)
     one = Calibration.from_records(records(np.random.default_rng(5), 30, J=1), 2, edges=[0.0])
     assert one.components == ("mahalanobis",) and one.extra is None

@@ -9,7 +9,16 @@ import pytest
 from scipy import stats
 
 from sandbox.core import IProMP
-from sandbox.core.evidence import COMPONENTS, components, not_arrived, phase_spread, speed_change
+from sandbox.core.evidence import (
+    COMPONENTS,
+    chi2_log_survival,
+    components,
+    goal,
+    goal_frame,
+    not_arrived,
+    phase_spread,
+    speed_change,
+)
 from sandbox.core.inference import predict
 from sandbox.core.likelihood import Scorer
 
@@ -83,6 +92,67 @@ def test_components_are_in_order_and_inputs_are_not_mutated(model):
     pred, t, y = prediction_of(model, demo, 1.2)
     before = (t.copy(), y.copy())
     out = components(model, pred, 1.2, t, y, 1, 0.7)
-    assert out.shape == (len(COMPONENTS),) and out[0] == 0.7 and np.all(out >= 0)
+    assert out.shape == (len(COMPONENTS),) == (5,) and out[0] == 0.7 and np.all(out >= 0)
+    assert out[COMPONENTS.index("goal")] == goal(model, pred, 1, y)
     np.testing.assert_array_equal(t, before[0])
     np.testing.assert_array_equal(y, before[1])
+
+
+def veered(demo, shift) -> synth.Demo:
+    """``demo`` heading for an end moved by ``shift`` (m), gradually over the whole reach."""
+    z = demo.times / demo.times[-1]
+    s = z**3 * (10 - 15 * z + 6 * z**2)
+    return synth.Demo(demo.times, demo.human + s[:, None] * np.asarray(shift), demo.robot,
+                      demo.task)
+
+
+def test_a_hand_heading_for_another_end_has_a_large_goal_before_it_arrives(model):
+    """The task's ends vary by 5 % of 0.5 m; an end 0.15 m beyond (6 of those stds)
+    scores p < e^-5 at 85 % of the motion, the task's own mean motion p > 0.9."""
+    demo = synth.replay(0, model.task_models[0].nominal_duration)
+    pred, _, y = prediction_of(model, demo, 0.85 * demo.times[-1])
+    assert goal(model, pred, 0, y) < 0.1
+    odd = veered(demo, [0.0, 0.15, 0.0])
+    pred, _, y = prediction_of(model, odd, 0.85 * odd.times[-1])
+    assert goal(model, pred, 0, y) > 5.0
+    early, _, y = prediction_of(model, odd, 0.3 * odd.times[-1])       # not heading off yet
+    assert goal(model, early, 0, y) < 0.1
+
+
+def test_the_goal_is_a_valid_p_value_bound_for_motions_of_the_model(model):
+    """Motions drawn from task 0's own prior (weights, noise): e^-s_G < 0.1 in at most
+    10 % of them (binomial 99.9 % bound for 100 draws: 20)."""
+    rng = np.random.default_rng(3)
+    task, P, N = model.task_models[0], model.n_human, model.basis.n_basis
+    w = task.weights
+    t = np.arange(0.0, 0.7 * task.nominal_duration, 0.05)
+    psi = model.basis.evaluate(t / task.nominal_duration)
+    scorer, small = Scorer(model), 0
+    for _ in range(100):
+        draw = (w.mean + w.factor @ rng.standard_normal(w.factor.shape[1])
+                + np.repeat(np.sqrt(w.reg), N) * rng.standard_normal(w.mean.size))
+        y = psi @ draw[:P * N].reshape(P, N).T + np.sqrt(model.noise) * rng.standard_normal(
+            (t.size, P))
+        pred = predict(model, scorer, t, y, n_candidates=20)
+        small += np.exp(-goal(model, pred, 0, y)) < 0.1
+    assert small <= 20
+
+
+def test_the_goal_tests_the_observed_dims_and_needs_factors(model):
+    demo = veered(synth.replay(0, 2.0), [0.0, 0.15, 0.0])
+    pred, _, y = prediction_of(model, demo, 1.7)
+    assert goal(model, pred, 0, np.full_like(y, np.nan)) == 0.0       # nothing observed
+    assert goal(model, replace(pred, factors=None), 0, y) == 0.0      # marginal likelihood
+    loads, cov = goal_frame(model, 0)
+    assert loads.shape[0] == cov.shape[0] == model.n_human
+    np.testing.assert_allclose(cov, cov.T)
+    assert goal_frame(model, 0)[1] is cov                              # cached per weights
+
+
+def test_chi2_log_survival_is_scipys_and_finite_far_out():
+    for x, d in [(0.0, 3), (1.0, 3), (30.0, 3), (3.0, 1), (200.0, 9)]:
+        assert chi2_log_survival(x, d) == pytest.approx(-stats.chi2.logsf(x, d), rel=1e-9)
+    # past the doubles' range (scipy's logsf is inf there): the asymptote, continuous
+    assert chi2_log_survival(1390.0, 3) == pytest.approx(-stats.chi2.logsf(1390.0, 3), rel=1e-5)
+    far = [chi2_log_survival(x, 3) for x in (1500.0, 5000.0, 1e6)]
+    assert np.all(np.isfinite(far)) and np.all(np.diff(far) > 0)

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from sandbox.core import DynamicPredictor, IProMP
+from sandbox.core.evidence import COMPONENTS, TIMING
 from sandbox.core.familiarity import LEVELS, Calibration, statistic, stream_record
 
 from . import synth
@@ -119,11 +120,11 @@ def test_familiarity_is_in_0_1_and_falls_with_the_statistic(model):
     cal = model.calibration
     values = np.geomspace(1e-4, 1e4, 200)
     for t in (0.0, 1.0, 5.0):
-        fam = np.array([cal.familiarity(t, [v, 0.0, 0.0, 0.0], 0) for v in values])
+        fam = np.array([cal.familiarity(t, [v, 0.0, 0.0, 0.0, 0.0], 0) for v in values])
         assert np.all((fam > 0) & (fam <= 1))
         assert np.all(np.diff(fam) <= 0)
         assert fam[0] == 1.0 and fam[-1] < 1e-3
-    assert np.isnan(cal.familiarity(1.0, [float("nan"), 0.0, 0.0, 0.0], 1))
+    assert np.isnan(cal.familiarity(1.0, [float("nan"), 0.0, 0.0, 0.0, 0.0], 1))
 
 
 def test_familiarity_of_a_bin_matches_its_quantiles():
@@ -276,6 +277,40 @@ def test_files_before_the_timing_evidence_rank_the_mahalanobis_term(model, tmp_p
     np.testing.assert_allclose(fam, [u.familiarity for u in stream(old, demo).updates])
 
 
+def test_files_before_the_goal_rank_their_four_statistics(model, tmp_path):
+    """A file calibrated on the four timing statistics (before the goal) loads, and the
+    predictors rank those four of the five, as the calibration's own ranking does."""
+    path = tmp_path / "m.npz"
+    model.save(path)
+    with np.load(path) as data:
+        arrays = {k: data[k] for k in data.files}
+    meta = json.loads(str(arrays["metadata"]))
+    meta["familiarity"]["components"] = list(TIMING)
+    arrays["familiarity_extra"] = arrays["familiarity_extra"][:3]
+    np.savez(tmp_path / "old.npz", **{**arrays, "metadata": np.array(json.dumps(meta))})
+    old = IProMP.load(tmp_path / "old.npz")
+    assert old.calibration.components == TIMING and old.calibration.extra.shape[0] == 3
+    demo = unseen(0, seed=10)
+    times, stats, tasks = stream_record(old, demo.times, demo.human, **OPTIONS)
+    fam = [old.calibration.familiarity(t, v[:4], k) for t, v, k in zip(times, stats, tasks)]
+    np.testing.assert_allclose(fam, [u.familiarity for u in stream(old, demo).updates])
+
+
+def test_a_goal_calibration_ranks_five_statistics_and_round_trips(tmp_path):
+    train = synth.demos(np.random.default_rng(0), n_per_task=4, n_tasks=2)
+    bare = IProMP(n_basis=9).fit(train)
+    cal = bare.calibrate(train, score="goal", **OPTIONS)
+    assert cal.components == COMPONENTS and cal.extra.shape[0] == len(COMPONENTS) - 1
+    bare.save(tmp_path / "m.npz")
+    loaded = IProMP.load(tmp_path / "m.npz")
+    assert loaded.calibration.components == COMPONENTS
+    demo = unseen(1, seed=11)
+    times, stats, tasks = stream_record(loaded, demo.times, demo.human, **OPTIONS)
+    assert stats.shape == (times.size, len(COMPONENTS))
+    fam = [loaded.calibration.familiarity(*update) for update in zip(times, stats, tasks)]
+    np.testing.assert_allclose(fam, [u.familiarity for u in stream(loaded, demo).updates])
+
+
 def test_a_mahalanobis_calibration_round_trips(tmp_path):
     train = synth.demos(np.random.default_rng(0), n_per_task=4, n_tasks=2)
     bare = IProMP(n_basis=9).fit(train)
@@ -332,6 +367,7 @@ def test_a_calibration_on_fresh_motions_streams_them_by_the_model_itself(model):
     assert other.calibration is cal and model.calibration is not cal
     records = [stream_record(model, d.times - d.times[0], d.human, dow_t=0.2, **OPTIONS)
                for d in fresh]
+    records = [(t, v[:, :len(TIMING)], k) for t, v, k in records]      # the default score
     mean = float(np.dot(model.priors, [t.mean_duration for t in model.task_models]))
     want = Calibration.from_records(records, 2, alpha=0.05, edges=np.array(EDGES) * mean,
                                     subsample=OPTIONS["subsample"], dow_t=0.2)

@@ -116,3 +116,22 @@ def test_end_to_end_on_a_small_synthetic_set():
     for j in judged:
         if 0.05 * (len(j["reference"]) + 1) < 1:
             assert j["threshold"] <= min(j["reference"])
+
+
+def test_the_score_chooses_the_statistics_ranked_and_records_keep_all():
+    """Five statistics per update; only the goal (last, a p-value bound) of left-out
+    motions is off: ranked with it they are detected, with the four of timing at chance."""
+    recs = records(np.random.default_rng(4), shift=1.0)
+    rng = np.random.default_rng(5)
+    for r in recs:
+        base = np.asarray(r["stats"])[:, None] * rng.lognormal(0.0, 0.3, (len(r["stats"]), 4))
+        goal = np.full((len(r["stats"]), 1), 0.1 if r["held_in"] else 30.0)
+        r["stats"] = np.hstack([base, goal]).tolist()
+    detected = {}
+    for score in ("timing", "goal"):
+        judged = ood.judge(ood.rank(recs, score=score), alpha=0.05)
+        detected[score] = np.mean([j["flags"]["any update"] for j in judged if not j["held_in"]])
+        assert all(len(j["stats"][0]) == 5 for j in judged)
+    assert detected["goal"] > 0.95 and detected["timing"] < 0.3
+    with pytest.raises(ValueError, match="score"):
+        ood.rank(recs, score="mahalanobis")

@@ -112,4 +112,6 @@ def test_roc_runs_from_nothing_to_everything_and_markdown_names_every_group():
     text = rep.markdown(result)
     for g in ("p", "q", rep.ALL):
         assert f"| {g} | " in text
+    assert "score" not in text.splitlines()[0]
+    assert "; score goal)" in rep.markdown({**result, "score": "goal"}).splitlines()[0]
     assert "detection @ 5 % FA" in text
