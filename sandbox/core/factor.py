@@ -3,7 +3,8 @@
 :func:`b_part` factors the block-diagonal part B of one modality for every
 speed candidate (step 1 of the likelihood's module docstring); :func:`factor_scores`
 takes one batched Cholesky of the augmented matrices (step 3) and returns the
-log-likelihoods with the factors; :func:`condition_robot` reuses a factor to
+log-likelihoods with the factors (compiled with numba when installed:
+:mod:`sandbox.core._kernels`); :func:`condition_robot` reuses a factor to
 condition the robot weights (eq. 8). Only numpy and scipy.
 """
 
@@ -13,6 +14,7 @@ import numpy as np
 import scipy.linalg
 from scipy.linalg import lapack
 
+from sandbox.core import _kernels
 from sandbox.core.promp import WeightDistribution
 from sandbox.validation import FloatArray
 
@@ -68,7 +70,9 @@ def factor_scores(Kt: FloatArray, eps: FloatArray, gamma_term: FloatArray,
     ----------
     Kt : ndarray, shape (M, R+1, R+1)
         :math:`\\tilde K` in the padded layout (U in the first r rows/columns,
-        zeros up to R, :math:`\\mu` at R). Overwritten with the augmented matrix.
+        zeros up to R, :math:`\\mu` at R). May be overwritten with the augmented matrix
+        (the numpy path; the compiled kernel of :mod:`sandbox.core._kernels`, when
+        numba is installed, leaves it unchanged).
     eps : ndarray, shape (M, R+1)
         :math:`\\epsilon`, same layout.
     gamma_term : ndarray, shape (M,)
@@ -81,6 +85,13 @@ def factor_scores(Kt: FloatArray, eps: FloatArray, gamma_term: FloatArray,
     loglik : ndarray, shape (M,)
     factors : ndarray, shape (M, R+1, R+1)
     """
+    kernel = _kernels.factor_kernel(Kt.shape[1])
+    if kernel is not None and Kt.shape[0]:
+        loglik, L = np.empty(Kt.shape[0]), np.empty_like(Kt)
+        if kernel(np.ascontiguousarray(Kt, dtype=np.float64), np.ascontiguousarray(eps),
+                  np.ascontiguousarray(gamma_term, dtype=np.float64),
+                  np.ascontiguousarray(offset, dtype=np.float64), L, loglik, _kernels.BLOCK):
+            return loglik, L
     R = Kt.shape[1] - 1
     e = eps[:, :R] - Kt[:, :R, R]                                  # U^T Phi^T B^-1 d
     dbd = gamma_term - 2.0 * eps[:, R] + Kt[:, R, R]               # d^T B^-1 d
