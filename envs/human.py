@@ -173,28 +173,30 @@ def forearm_orientation(hand: FloatArray) -> tuple[float, float, float, float]:
     The body's y axis is horizontal (z_world x x), its z axis completes the frame.
     Written out in floats: it runs at every physics step.
     """
-    dx, dy, dz = (float(v) for v in SHOULDER - hand)
+    dx, dy, dz = (SHOULDER - hand).tolist()
     n = max(math.sqrt(dx * dx + dy * dy + dz * dz), 1e-9)
     x = (dx / n, dy / n, dz / n)
     h = max(math.hypot(x[0], x[1]), 1e-9)
     y = (-x[1] / h, x[0] / h, 0.0)
     z = (-x[2] * y[1], x[2] * y[0], x[0] * y[1] - x[1] * y[0])
-    return _quaternion(np.array([[x[0], y[0], z[0]], [x[1], y[1], z[1]], [x[2], y[2], z[2]]]))
+    return _quaternion(((x[0], y[0], z[0]), (x[1], y[1], z[1]), (x[2], y[2], z[2])))
 
 
-def _quaternion(R: FloatArray) -> tuple[float, float, float, float]:
-    """Quaternion (x, y, z, w) of a rotation matrix (3, 3), stable for any rotation."""
-    trace = R[0, 0] + R[1, 1] + R[2, 2]
+def _quaternion(R) -> tuple[float, float, float, float]:
+    """Quaternion (x, y, z, w) of a rotation matrix (3, 3) (an array or rows of floats),
+    stable for any rotation. In Python floats: it runs at every physics step."""
+    R = [[float(v) for v in row] for row in R]
+    trace = R[0][0] + R[1][1] + R[2][2]
     if trace > 0:
-        s = 2.0 * np.sqrt(1.0 + trace)
-        q = ((R[2, 1] - R[1, 2]) / s, (R[0, 2] - R[2, 0]) / s, (R[1, 0] - R[0, 1]) / s, s / 4)
+        s = 2.0 * math.sqrt(1.0 + trace)
+        q = [(R[2][1] - R[1][2]) / s, (R[0][2] - R[2][0]) / s, (R[1][0] - R[0][1]) / s, s / 4]
     else:
-        i = int(np.argmax(np.diag(R)))
+        i = max(range(3), key=lambda m: R[m][m])          # the first largest, as np.argmax
         j, k = (i + 1) % 3, (i + 2) % 3
-        s = 2.0 * np.sqrt(1.0 + R[i, i] - R[j, j] - R[k, k])
-        q = [0.0, 0.0, 0.0, (R[k, j] - R[j, k]) / s]
-        q[i], q[j], q[k] = s / 4, (R[j, i] + R[i, j]) / s, (R[k, i] + R[i, k]) / s
-    return tuple(float(v) for v in q)
+        s = 2.0 * math.sqrt(1.0 + R[i][i] - R[j][j] - R[k][k])
+        q = [0.0, 0.0, 0.0, (R[k][j] - R[j][k]) / s]
+        q[i], q[j], q[k] = s / 4, (R[j][i] + R[i][j]) / s, (R[k][i] + R[i][k]) / s
+    return (q[0], q[1], q[2], q[3])
 
 
 class HumanHand:
