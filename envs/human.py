@@ -15,6 +15,7 @@ step, its forearm pointing from the hand toward the human's shoulder.
 
 from __future__ import annotations
 
+import bisect
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -86,6 +87,7 @@ class HumanMotion:
                             ("_last_valid", last), ("_frame_row", _frame_rows(measured, last))):
             value.setflags(write=False)
             object.__setattr__(self, name, value)
+        object.__setattr__(self, "_lists", (times.tolist(), true.tolist()))   # for position()
         object.__setattr__(self, "meta", dict(self.meta))
         object.__setattr__(self, "body", _check_body(self.body, times.size))
         object.__setattr__(self, "_body_last", {
@@ -97,11 +99,16 @@ class HumanMotion:
         return float(self.times[-1])
 
     def position(self, t: float) -> FloatArray:
-        """True hand position (3,) m at time ``t`` (s), linearly interpolated; held at the ends."""
-        i = min(max(int(np.searchsorted(self.times, t, side="right")), 1), self.times.size - 1)
-        t0, t1 = float(self.times[i - 1]), float(self.times[i])
+        """True hand position (3,) m at time ``t`` (s), linearly interpolated; held at the ends.
+
+        In Python floats (the same arithmetic as on arrays): it runs at every physics step.
+        """
+        times, true = self._lists
+        i = min(max(bisect.bisect_right(times, t), 1), len(times) - 1)
+        t0, t1 = times[i - 1], times[i]
         w = min(max((t - t0) / (t1 - t0), 0.0), 1.0)
-        return (1.0 - w) * self.true[i - 1] + w * self.true[i]
+        a, b, v = true[i - 1], true[i], 1.0 - w
+        return np.array([v * a[0] + w * b[0], v * a[1] + w * b[1], v * a[2] + w * b[2]])
 
     def measurement(self, t: float) -> FloatArray:
         """Latest valid tracker sample (3,) m at or before ``t`` (s)."""
