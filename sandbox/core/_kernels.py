@@ -32,7 +32,7 @@ ENV = "SANDBOX_KERNEL"
 #: Matrices interleaved in one block.
 BLOCK = 32
 #: Largest augmented matrix (rows) the kernel factors; larger ones go to LAPACK.
-MAX_SIZE = 48
+MAX_SIZE = 56
 
 _COMPILED: list = []      # [kernel or None] once numba has been looked for
 

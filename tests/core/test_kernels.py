@@ -35,7 +35,7 @@ def _both(monkeypatch, *args):
     return ref, factor_scores(*[a.copy() for a in args])
 
 
-@pytest.mark.parametrize(("M", "R"), [(1, 1), (37, 9), (70, 30), (5, 47)])
+@pytest.mark.parametrize(("M", "R"), [(1, 1), (37, 9), (70, 30), (5, 55)])
 def test_kernel_matches_the_numpy_path(monkeypatch, M, R):
     pytest.importorskip("numba")
     (ll0, L0), (ll1, L1) = _both(monkeypatch, *_pairs(np.random.default_rng(R), M, R))
@@ -109,3 +109,16 @@ def test_without_numba_the_numpy_path_is_taken_and_numba_cannot_be_forced():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, env={**os.environ, "SANDBOX_KERNEL": ""})
     assert "numba is not installed" in out.stdout
+
+
+@pytest.mark.parametrize("choice", ["numpy", "numba"])
+def test_keep_leaves_the_statistics_unchanged(monkeypatch, choice):
+    if choice == "numba":
+        pytest.importorskip("numba")
+    monkeypatch.setenv(_kernels.ENV, choice)
+    Kt, eps, gamma, offset = _pairs(np.random.default_rng(4), 6, 4)
+    before = Kt.copy()
+    ll_kept, _ = factor_scores(Kt, eps, gamma, offset, keep=True)
+    assert np.array_equal(Kt, before)
+    ll, _ = factor_scores(Kt, eps, gamma, offset)
+    np.testing.assert_array_equal(ll_kept, ll)
