@@ -35,7 +35,7 @@ Timed, from one run, as medians over ``repeats`` repetitions:
   this machine's batched 45 x 45 Cholesky and matrix-product rates measured in the same
   run (:mod:`sandbox.bench.roofline`).
 * ``kernel``: which path factors the phase grid, ``"numba"`` (the optional compiled
-  kernel, :mod:`sandbox.core._kernels`) or ``"numpy"``; with numba,
+  kernel, ``sandbox/core/_kernels.py``) or ``"numpy"``; with numba,
   ``update_numpy_ms`` is ``update_ms`` on the numpy path (``SANDBOX_KERNEL=numpy``).
 * ``movement_primitives_condition_ms`` (if the package is installed): its ProMP
   over the same 10 dims conditioned by 40 sequential ``condition_position``

@@ -4,7 +4,7 @@
 speed candidate (step 1 of the likelihood's module docstring); :func:`factor_scores`
 takes one batched Cholesky of the augmented matrices (step 3) and returns the
 log-likelihoods with the factors (compiled with numba when installed:
-:mod:`sandbox.core._kernels`); :func:`condition_robot` reuses a factor to
+``sandbox/core/_kernels.py``); :func:`condition_robot` reuses a factor to
 condition the robot weights (eq. 8). Only numpy and scipy.
 """
 
@@ -71,7 +71,7 @@ def factor_scores(Kt: FloatArray, eps: FloatArray, gamma_term: FloatArray,
     Kt : ndarray, shape (M, R+1, R+1)
         :math:`\\tilde K` in the padded layout (U in the first r rows/columns,
         zeros up to R, :math:`\\mu` at R). Overwritten with the augmented matrix on the
-        numpy path unless ``keep`` (the compiled kernel of :mod:`sandbox.core._kernels`,
+        numpy path unless ``keep`` (the compiled kernel of ``sandbox/core/_kernels.py``,
         when numba is installed, leaves it unchanged).
     eps : ndarray, shape (M, R+1)
         :math:`\\epsilon`, same layout.
