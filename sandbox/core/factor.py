@@ -63,7 +63,8 @@ def b_parts(G: FloatArray, betas, yys, kappas) -> list:
 
 
 def factor_scores(Kt: FloatArray, eps: FloatArray, gamma_term: FloatArray,
-                  offset: FloatArray, *, keep: bool = False) -> tuple[FloatArray, FloatArray]:
+                  offset: FloatArray, *, work: FloatArray | None = None
+                  ) -> tuple[FloatArray, FloatArray]:
     """Log-likelihoods and augmented Cholesky factors from a pair's statistics.
 
     Parameters
@@ -71,16 +72,17 @@ def factor_scores(Kt: FloatArray, eps: FloatArray, gamma_term: FloatArray,
     Kt : ndarray, shape (M, R+1, R+1)
         :math:`\\tilde K` in the padded layout (U in the first r rows/columns,
         zeros up to R, :math:`\\mu` at R). Overwritten with the augmented matrix on the
-        numpy path unless ``keep`` (the compiled kernel of ``sandbox/core/_kernels.py``,
-        when numba is installed, leaves it unchanged).
+        numpy path unless ``work`` is given (the compiled kernel of
+        ``sandbox/core/_kernels.py``, when numba is installed, leaves it unchanged).
     eps : ndarray, shape (M, R+1)
         :math:`\\epsilon`, same layout.
     gamma_term : ndarray, shape (M,)
         :math:`y^T B^{-1} y = \\sum_p \\gamma_p / \\sigma_p^2`.
     offset : ndarray, shape (M,)
         :math:`sP\\log 2\\pi + \\log|B|`.
-    keep : bool
-        Leave ``Kt`` unchanged (the numpy path then works on a copy).
+    work : ndarray, shape (M, R+1, R+1), optional
+        A buffer the numpy path builds the augmented matrix in, leaving ``Kt`` unchanged
+        (a kept buffer: allocating megabytes per update costs more than copying them).
 
     Returns
     -------
@@ -94,8 +96,9 @@ def factor_scores(Kt: FloatArray, eps: FloatArray, gamma_term: FloatArray,
                   np.ascontiguousarray(gamma_term, dtype=np.float64),
                   np.ascontiguousarray(offset, dtype=np.float64), L, loglik, _kernels.BLOCK):
             return loglik, L
-    if keep:
-        Kt = Kt.copy()
+    if work is not None:
+        np.copyto(work, Kt)
+        Kt = work
     R = Kt.shape[1] - 1
     e = eps[:, :R] - Kt[:, :R, R]                                  # U^T Phi^T B^-1 d
     dbd = gamma_term - 2.0 * eps[:, R] + Kt[:, R, R]               # d^T B^-1 d

@@ -112,13 +112,13 @@ def test_without_numba_the_numpy_path_is_taken_and_numba_cannot_be_forced():
 
 
 @pytest.mark.parametrize("choice", ["numpy", "numba"])
-def test_keep_leaves_the_statistics_unchanged(monkeypatch, choice):
+def test_a_work_buffer_leaves_the_statistics_unchanged(monkeypatch, choice):
     if choice == "numba":
         pytest.importorskip("numba")
     monkeypatch.setenv(_kernels.ENV, choice)
     Kt, eps, gamma, offset = _pairs(np.random.default_rng(4), 6, 4)
     before = Kt.copy()
-    ll_kept, _ = factor_scores(Kt, eps, gamma, offset, keep=True)
+    ll_kept, _ = factor_scores(Kt, eps, gamma, offset, work=np.empty_like(Kt))
     assert np.array_equal(Kt, before)
     ll, _ = factor_scores(Kt, eps, gamma, offset)
     np.testing.assert_array_equal(ll_kept, ll)
