@@ -15,6 +15,7 @@ step, its forearm pointing from the hand toward the human's shoulder.
 
 from __future__ import annotations
 
+import bisect
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -86,6 +87,7 @@ class HumanMotion:
                             ("_last_valid", last), ("_frame_row", _frame_rows(measured, last))):
             value.setflags(write=False)
             object.__setattr__(self, name, value)
+        object.__setattr__(self, "_lists", (times.tolist(), true.tolist()))   # for position()
         object.__setattr__(self, "meta", dict(self.meta))
         object.__setattr__(self, "body", _check_body(self.body, times.size))
         object.__setattr__(self, "_body_last", {
@@ -97,11 +99,16 @@ class HumanMotion:
         return float(self.times[-1])
 
     def position(self, t: float) -> FloatArray:
-        """True hand position (3,) m at time ``t`` (s), linearly interpolated; held at the ends."""
-        i = min(max(int(np.searchsorted(self.times, t, side="right")), 1), self.times.size - 1)
-        t0, t1 = float(self.times[i - 1]), float(self.times[i])
+        """True hand position (3,) m at time ``t`` (s), linearly interpolated; held at the ends.
+
+        In Python floats (the same arithmetic as on arrays): it runs at every physics step.
+        """
+        times, true = self._lists
+        i = min(max(bisect.bisect_right(times, t), 1), len(times) - 1)
+        t0, t1 = times[i - 1], times[i]
         w = min(max((t - t0) / (t1 - t0), 0.0), 1.0)
-        return (1.0 - w) * self.true[i - 1] + w * self.true[i]
+        a, b, v = true[i - 1], true[i], 1.0 - w
+        return np.array([v * a[0] + w * b[0], v * a[1] + w * b[1], v * a[2] + w * b[2]])
 
     def measurement(self, t: float) -> FloatArray:
         """Latest valid tracker sample (3,) m at or before ``t`` (s)."""
@@ -173,28 +180,30 @@ def forearm_orientation(hand: FloatArray) -> tuple[float, float, float, float]:
     The body's y axis is horizontal (z_world x x), its z axis completes the frame.
     Written out in floats: it runs at every physics step.
     """
-    dx, dy, dz = (float(v) for v in SHOULDER - hand)
+    dx, dy, dz = (SHOULDER - hand).tolist()
     n = max(math.sqrt(dx * dx + dy * dy + dz * dz), 1e-9)
     x = (dx / n, dy / n, dz / n)
     h = max(math.hypot(x[0], x[1]), 1e-9)
     y = (-x[1] / h, x[0] / h, 0.0)
     z = (-x[2] * y[1], x[2] * y[0], x[0] * y[1] - x[1] * y[0])
-    return _quaternion(np.array([[x[0], y[0], z[0]], [x[1], y[1], z[1]], [x[2], y[2], z[2]]]))
+    return _quaternion(((x[0], y[0], z[0]), (x[1], y[1], z[1]), (x[2], y[2], z[2])))
 
 
-def _quaternion(R: FloatArray) -> tuple[float, float, float, float]:
-    """Quaternion (x, y, z, w) of a rotation matrix (3, 3), stable for any rotation."""
-    trace = R[0, 0] + R[1, 1] + R[2, 2]
+def _quaternion(R) -> tuple[float, float, float, float]:
+    """Quaternion (x, y, z, w) of a rotation matrix (3, 3) (an array or rows of floats),
+    stable for any rotation. In Python floats: it runs at every physics step."""
+    R = [[float(v) for v in row] for row in R]
+    trace = R[0][0] + R[1][1] + R[2][2]
     if trace > 0:
-        s = 2.0 * np.sqrt(1.0 + trace)
-        q = ((R[2, 1] - R[1, 2]) / s, (R[0, 2] - R[2, 0]) / s, (R[1, 0] - R[0, 1]) / s, s / 4)
+        s = 2.0 * math.sqrt(1.0 + trace)
+        q = [(R[2][1] - R[1][2]) / s, (R[0][2] - R[2][0]) / s, (R[1][0] - R[0][1]) / s, s / 4]
     else:
-        i = int(np.argmax(np.diag(R)))
+        i = max(range(3), key=lambda m: R[m][m])          # the first largest, as np.argmax
         j, k = (i + 1) % 3, (i + 2) % 3
-        s = 2.0 * np.sqrt(1.0 + R[i, i] - R[j, j] - R[k, k])
-        q = [0.0, 0.0, 0.0, (R[k, j] - R[j, k]) / s]
-        q[i], q[j], q[k] = s / 4, (R[j, i] + R[i, j]) / s, (R[k, i] + R[i, k]) / s
-    return tuple(float(v) for v in q)
+        s = 2.0 * math.sqrt(1.0 + R[i][i] - R[j][j] - R[k][k])
+        q = [0.0, 0.0, 0.0, (R[k][j] - R[j][k]) / s]
+        q[i], q[j], q[k] = s / 4, (R[j][i] + R[i][j]) / s, (R[k][i] + R[i][k]) / s
+    return (q[0], q[1], q[2], q[3])
 
 
 class HumanHand:

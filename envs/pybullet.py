@@ -21,6 +21,7 @@ from sandbox.validation import check_positive
 
 FloatArray = NDArray[np.float64]
 IDENTITY = (0.0, 0.0, 0.0, 1.0)
+_ZERO = [0.0, 0.0, 0.0]
 
 
 class Simulation:
@@ -47,6 +48,9 @@ class Simulation:
         self.time_step = 1.0 / check_positive(physics_hz, "physics_hz")
         with _quiet():  # PyBullet prints 'argv[0]=' on connecting
             self.client = BulletClient(connection_mode=pybullet.DIRECT)
+        # The calls made at every step go to pybullet with this id, not through the client
+        # (its __getattr__ builds a partial per call: a tenth of a step's Python time).
+        self._id = {"physicsClientId": self.client._client}
         self.client.setTimeStep(self.time_step)
         self.client.setGravity(0.0, 0.0, float(gravity))
         self.client.setPhysicsEngineParameter(deterministicOverlappingPairs=1)
@@ -84,18 +88,21 @@ class Simulation:
         ``at_rest`` also zeroes its velocity (for a dynamic body moved kinematically).
         """
         body = self.bodies[name]
-        self.client.resetBasePositionAndOrientation(body, _vec(position), list(orientation))
+        pybullet.resetBasePositionAndOrientation(body, _vec(position), list(orientation),
+                                                 **self._id)
         if at_rest:
-            self.client.resetBaseVelocity(body, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
+            pybullet.resetBaseVelocity(body, _ZERO, _ZERO, **self._id)
 
     def pose(self, name: str) -> tuple[FloatArray, FloatArray]:
         """Base position (3,) m and quaternion (4,) (x, y, z, w) of body ``name``."""
-        position, quaternion = self.client.getBasePositionAndOrientation(self.bodies[name])
+        position, quaternion = pybullet.getBasePositionAndOrientation(self.bodies[name],
+                                                                     **self._id)
         return np.array(position), np.array(quaternion)
 
     def link_position(self, name: str, link: int) -> FloatArray:
         """World position (3,) m of the URDF frame of ``link`` of body ``name``."""
-        state = self.client.getLinkState(self.bodies[name], link, computeForwardKinematics=True)
+        state = pybullet.getLinkState(self.bodies[name], link, computeForwardKinematics=True,
+                                      **self._id)
         return np.array(state[4])
 
     def link_pose(self, name: str, link: int) -> tuple[FloatArray, FloatArray]:
@@ -113,7 +120,7 @@ class Simulation:
     # ------------------------------------------------------------------ joints
     def joint_states(self, name: str, joints: Sequence[int]) -> tuple[FloatArray, FloatArray]:
         """Positions and velocities (n,) of ``joints`` of body ``name`` (rad or m, per s)."""
-        states = self.client.getJointStates(self.bodies[name], list(joints))
+        states = pybullet.getJointStates(self.bodies[name], list(joints), **self._id)
         return np.array([s[0] for s in states]), np.array([s[1] for s in states])
 
     def joint_limits(self, name: str, joints: Sequence[int]) -> tuple[FloatArray, FloatArray]:
@@ -129,12 +136,11 @@ class Simulation:
     def control_joints(self, name: str, joints: Sequence[int], targets: ArrayLike,
                        forces: ArrayLike, max_velocities: ArrayLike) -> None:
         """Position-control ``joints`` toward ``targets`` with effort and speed limits."""
-        body = self.bodies[name]
-        for joint, target, force, speed in zip(joints, np.asarray(targets, dtype=float),
+        body, control = self.bodies[name], pybullet.setJointMotorControl2
+        for joint, target, force, speed in zip(joints, np.asarray(targets, dtype=float).tolist(),
                                                forces, max_velocities, strict=True):
-            self.client.setJointMotorControl2(
-                body, joint, pybullet.POSITION_CONTROL, targetPosition=float(target),
-                force=float(force), maxVelocity=float(speed))
+            control(body, joint, pybullet.POSITION_CONTROL, targetPosition=target,
+                    force=float(force), maxVelocity=float(speed), **self._id)
 
     # ------------------------------------------------------------- constraints
     def attach(self, parent: str, parent_link: int, child: str, *,
@@ -159,7 +165,7 @@ class Simulation:
     # ---------------------------------------------------------------- stepping
     def step_physics(self) -> None:
         """Advance the world by one physics step."""
-        self.client.stepSimulation()
+        pybullet.stepSimulation(**self._id)
 
     def save(self) -> None:
         """Remember the current state (in memory) for :meth:`restore`."""
@@ -207,4 +213,4 @@ class Simulation:
 
 
 def _vec(x: ArrayLike) -> list[float]:
-    return [float(v) for v in np.asarray(x, dtype=float).reshape(3)]
+    return np.asarray(x, dtype=float).reshape(3).tolist()

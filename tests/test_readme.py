@@ -14,7 +14,7 @@ def _blocks(lang: str) -> list[str]:
     return re.findall(rf"```{lang}\n(.*?)```", README.read_text(), flags=re.S)
 
 
-TEST_COMMAND = 'pip install -e ".[test,dask,minari]" && pytest'
+TEST_COMMAND = 'pip install -e ".[test,dask,minari,numba]" && pytest'
 
 
 def test_the_two_commands_are_there():
@@ -31,7 +31,7 @@ def test_ci_runs_the_readme_test_command_exactly():
         import tomllib
 
         project = tomllib.loads((README.parent / "pyproject.toml").read_text())["project"]
-        assert {"test", "dask", "minari"} <= set(project["optional-dependencies"])
+        assert {"test", "dask", "minari", "numba"} <= set(project["optional-dependencies"])
 
 
 DOCS = README.parent / "docs"

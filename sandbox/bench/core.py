@@ -34,6 +34,9 @@ Timed, from one run, as medians over ``repeats`` repetitions:
 * ``roofline``: the reference update's flops, time and achieved GFLOP/s per stage, against
   this machine's batched 45 x 45 Cholesky and matrix-product rates measured in the same
   run (:mod:`sandbox.bench.roofline`).
+* ``kernel``: which path factors the phase grid, ``"numba"`` (the optional compiled
+  kernel, ``sandbox/core/_kernels.py``) or ``"numpy"``; with numba,
+  ``update_numpy_ms`` is ``update_ms`` on the numpy path (``SANDBOX_KERNEL=numpy``).
 * ``movement_primitives_condition_ms`` (if the package is installed): its ProMP
   over the same 10 dims conditioned by 40 sequential ``condition_position``
   calls, robot dims given a huge variance (it has no masked conditioning).
@@ -41,6 +44,7 @@ Timed, from one run, as medians over ``repeats`` repetitions:
 
 from __future__ import annotations
 
+import os
 import time
 from collections.abc import Callable
 
@@ -239,6 +243,7 @@ def run_core_benchmarks(repeats: int = 200, seed: int = 0) -> dict:
             "naive_repeats": naive_reps, "recognised": upd.task,
         },
     }
+    out.update(_kernel_figures(pred, t_update, repeats))
     out.update(_multimodal_figures(seed, repeats, n_cand, fast))
     out["roofline"] = roofline(_fed_predictor(model, t200, y200, n_candidates=n_cand), t_update,
                                repeats=max(repeats // 2, 1))
@@ -250,6 +255,25 @@ def run_core_benchmarks(repeats: int = 200, seed: int = 0) -> dict:
             "condition_position calls with variance 1e6 on the 7 robot dims (it has no masked "
             "conditioning); conditioning only: no phase estimation, recognition or blending")
     return out
+
+
+def _kernel_figures(pred: DynamicPredictor, t: float, repeats: int) -> dict:
+    """Which path factors the phase grid (``kernel``: "numba" when the optional compiled
+    kernel is used, else "numpy") and, with the kernel, the update on the numpy path."""
+    from sandbox.core import _kernels
+
+    if _kernels.factor_kernel(pred.scorer.R + 1) is None:
+        return {"kernel": "numpy"}
+    before = os.environ.get(_kernels.ENV)
+    os.environ[_kernels.ENV] = "numpy"
+    try:
+        numpy_ms = _median_ms(_timed_update(pred, t), repeats)
+    finally:
+        if before is None:
+            del os.environ[_kernels.ENV]
+        else:
+            os.environ[_kernels.ENV] = before
+    return {"kernel": "numba", "update_numpy_ms": round(numpy_ms, 4)}
 
 
 def _multimodal_figures(seed: int, repeats: int, n_cand: int, hand_ms: float) -> dict:

@@ -3,7 +3,8 @@
 :func:`b_part` factors the block-diagonal part B of one modality for every
 speed candidate (step 1 of the likelihood's module docstring); :func:`factor_scores`
 takes one batched Cholesky of the augmented matrices (step 3) and returns the
-log-likelihoods with the factors; :func:`condition_robot` reuses a factor to
+log-likelihoods with the factors (compiled with numba when installed:
+``sandbox/core/_kernels.py``); :func:`condition_robot` reuses a factor to
 condition the robot weights (eq. 8). Only numpy and scipy.
 """
 
@@ -13,6 +14,7 @@ import numpy as np
 import scipy.linalg
 from scipy.linalg import lapack
 
+from sandbox.core import _kernels
 from sandbox.core.promp import WeightDistribution
 from sandbox.validation import FloatArray
 
@@ -61,26 +63,42 @@ def b_parts(G: FloatArray, betas, yys, kappas) -> list:
 
 
 def factor_scores(Kt: FloatArray, eps: FloatArray, gamma_term: FloatArray,
-                  offset: FloatArray) -> tuple[FloatArray, FloatArray]:
+                  offset: FloatArray, *, work: FloatArray | None = None
+                  ) -> tuple[FloatArray, FloatArray]:
     """Log-likelihoods and augmented Cholesky factors from a pair's statistics.
 
     Parameters
     ----------
     Kt : ndarray, shape (M, R+1, R+1)
         :math:`\\tilde K` in the padded layout (U in the first r rows/columns,
-        zeros up to R, :math:`\\mu` at R). Overwritten with the augmented matrix.
+        zeros up to R, :math:`\\mu` at R). Overwritten with the augmented matrix on the
+        numpy path unless ``work`` is given (the compiled kernel of
+        ``sandbox/core/_kernels.py``, when numba is installed, leaves it unchanged).
     eps : ndarray, shape (M, R+1)
         :math:`\\epsilon`, same layout.
     gamma_term : ndarray, shape (M,)
         :math:`y^T B^{-1} y = \\sum_p \\gamma_p / \\sigma_p^2`.
     offset : ndarray, shape (M,)
         :math:`sP\\log 2\\pi + \\log|B|`.
+    work : ndarray, shape (M, R+1, R+1), optional
+        A buffer the numpy path builds the augmented matrix in, leaving ``Kt`` unchanged
+        (a kept buffer: allocating megabytes per update costs more than copying them).
 
     Returns
     -------
     loglik : ndarray, shape (M,)
     factors : ndarray, shape (M, R+1, R+1)
     """
+    kernel = _kernels.factor_kernel(Kt.shape[1])
+    if kernel is not None and Kt.shape[0]:
+        loglik, L = np.empty(Kt.shape[0]), np.empty_like(Kt)
+        if kernel(np.ascontiguousarray(Kt, dtype=np.float64), np.ascontiguousarray(eps),
+                  np.ascontiguousarray(gamma_term, dtype=np.float64),
+                  np.ascontiguousarray(offset, dtype=np.float64), L, loglik, _kernels.BLOCK):
+            return loglik, L
+    if work is not None:
+        np.copyto(work, Kt)
+        Kt = work
     R = Kt.shape[1] - 1
     e = eps[:, :R] - Kt[:, :R, R]                                  # U^T Phi^T B^-1 d
     dbd = gamma_term - 2.0 * eps[:, R] + Kt[:, R, R]               # d^T B^-1 d

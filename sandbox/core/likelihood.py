@@ -44,6 +44,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from sandbox.core import _kernels
 from sandbox.core.factor import b_parts, factor_scores
 from sandbox.core.interaction import LOG_2PI
 from sandbox.core.promp import WeightDistribution
@@ -137,6 +138,7 @@ class Scorer:
         self._raw = raw
         kappa = self.reg_h / self.sigma2                          # (K, P)
         self.groups = _make_groups(kappa, self.modality_dims, pad)
+        _kernels.factor_kernel(self.R + 1)    # numba's kernel loaded now, not in an update
 
     @property
     def kappas(self) -> list[float]:

@@ -91,7 +91,7 @@ class StreamStatistics:
         M = self.pairs.shape[1]
         self.Kt = np.zeros((M, sc.R + 1, sc.R + 1))     # packed pairs (module docstring)
         self.eps = np.zeros((M, sc.R + 1))
-        self._work = np.empty_like(self.Kt)
+        self._work = np.empty_like(self.Kt)     # factor_scores' numpy path builds in it
         self.count = 0
         self._x: list[np.ndarray] = []
         self._coef: list[np.ndarray] = []
@@ -157,8 +157,8 @@ class StreamStatistics:
             const += (member @ per_dim)[:, None] + member.sum(axis=1)[:, None] * st.logdet_a
             gamma_term += member @ (st.gamma / sc.sigma2[g.dims]).T
         pk, pc = self.pairs
-        np.copyto(self._work, self.Kt)        # factor_scores overwrites its input: a kept buffer
-        return factor_scores(self._work, self.eps, gamma_term[pk, pc], const[pk, pc])
+        return factor_scores(self.Kt, self.eps, gamma_term[pk, pc], const[pk, pc],
+                             work=self._work)
 
     def scores(self, spans: np.ndarray | None = None) -> Scores:
         """Joint log-likelihoods for every task's candidates (as :meth:`Scorer.joint`).

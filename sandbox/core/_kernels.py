@@ -1,0 +1,142 @@
+"""Optional compiled kernel of the phase stage: :func:`~sandbox.core.factor.factor_scores`.
+
+The likelihood of every (candidate, task) pair ends in one Cholesky factorisation of a
+small augmented matrix (step 3 of :mod:`sandbox.core.likelihood`). numpy factors a
+batch of them one matrix at a time through LAPACK, whose call overhead and
+scalar-bound inner loops leave most of a core unused at these sizes (tens of rows).
+When numba is installed (``pip install -e ".[numba]"``) this module compiles a
+*batch-interleaved* kernel: blocks of :data:`BLOCK` matrices are laid side by side
+so that every step of the factorisation is a vector operation across the block.
+It builds the augmented matrix, factors it and sums the log-likelihood in one pass.
+
+The kernel computes the same quantities as the numpy path in another order of
+floating-point operations: the results agree within 1e-12 (relative), not bit for
+bit (``tests/core/test_kernels.py``). It is used automatically when numba imports;
+``SANDBOX_KERNEL=numpy`` forces the numpy path, ``SANDBOX_KERNEL=numba`` asks
+for the kernel (an ``ImportError`` without numba). It is used only for matrices up
+to :data:`MAX_SIZE` rows (above, one block no longer fits the core's cache and
+LAPACK is faster). The core does not import numba at load time, only at the first
+factorisation; the compiled code is cached on disk (``cache=True``), so only the
+first use after an install pays the compilation (see the speed page of the docs).
+"""
+
+from __future__ import annotations
+
+import os
+from math import log, sqrt
+
+import numpy as np
+
+#: Environment variable choosing the kernel: "numpy", "numba" or unset (numba if installed).
+ENV = "SANDBOX_KERNEL"
+#: Matrices interleaved in one block.
+BLOCK = 32
+#: Largest augmented matrix (rows) the kernel factors; larger ones go to LAPACK.
+MAX_SIZE = 56
+
+_COMPILED: list = []      # [kernel or None] once numba has been looked for
+
+
+def factor_kernel(size: int):
+    """The compiled kernel for augmented matrices of ``size`` rows, or None (numpy path).
+
+    None when ``SANDBOX_KERNEL=numpy``, numba is not installed (and not asked for),
+    or ``size`` > :data:`MAX_SIZE`. The first call imports numba and loads the compiled
+    code (compiles it, the first time after an install): :class:`~sandbox.core.likelihood.Scorer`
+    makes that call when it is built, so that an update does not pay it.
+    """
+    choice = os.environ.get(ENV, "")
+    if choice == "numpy" or size > MAX_SIZE:
+        return None
+    if choice not in ("", "numba"):
+        raise ValueError(f"{ENV}: expected 'numpy', 'numba' or unset, got {choice!r}")
+    if not _COMPILED:
+        _COMPILED.append(_compile())
+    if _COMPILED[0] is None and choice == "numba":
+        raise ImportError(f"{ENV}=numba: numba is not installed (pip install -e '.[numba]')")
+    return _COMPILED[0]
+
+
+def _compile():
+    """The kernel, compiled (or loaded from numba's on-disk cache); None without numba."""
+    try:
+        import numba
+    except ImportError:
+        return None
+    jit = numba.njit(cache=True, nogil=True)
+    # _scores calls _factor_block by its global name: numba resolves it when compiling.
+    globals()["_factor_block"] = jit(_factor_block_py)
+    kernel = jit(_scores_py)
+    one = np.ones((1, 1, 1))          # load (or compile) the machine code now, not in an update
+    kernel(one, np.zeros((1, 1)), np.ones(1), np.zeros(1), np.empty((1, 1, 1)), np.empty(1), 1)
+    return kernel
+
+
+def _factor_block_py(buf: np.ndarray) -> bool:
+    """In-place Cholesky of ``buf`` (n, n, w): lower triangles, the matrices along the last
+    axis. The last pivot is clamped at sqrt(1e-300) as the numpy path does (a Mahalanobis
+    term lost to round-off); returns False when an earlier one is not positive (or NaN)."""
+    n, _, w = buf.shape
+    for j in range(n):
+        for k in range(j):
+            for b in range(w):
+                buf[j, j, b] -= buf[j, k, b] * buf[j, k, b]
+        for b in range(w):
+            d = buf[j, j, b]
+            if d > 0.0:
+                buf[j, j, b] = sqrt(d)
+            elif j == n - 1 and d <= 0.0:
+                buf[j, j, b] = sqrt(1e-300)
+            else:
+                return False
+        for i in range(j + 1, n):
+            for k in range(j):
+                for b in range(w):
+                    buf[i, j, b] -= buf[i, k, b] * buf[j, k, b]
+            for b in range(w):
+                buf[i, j, b] /= buf[j, j, b]
+    return True
+
+
+def _scores_py(Kt, eps, gamma_term, offset, L, loglik, block: int) -> bool:
+    """:func:`~sandbox.core.factor.factor_scores` into ``L`` (M, n, n) and ``loglik`` (M,),
+    ``block`` matrices at a time; False (outputs unfinished) when a block cannot be
+    factored: the caller then takes the numpy path, which says why."""
+    M, n, _ = Kt.shape
+    R = n - 1
+    buf = np.empty((n, n, block))
+    for s in range(0, M, block):
+        w = min(block, M - s)
+        for i in range(R):
+            for j in range(i + 1):
+                for b in range(w):
+                    buf[i, j, b] = Kt[s + b, i, j]
+                for b in range(w, block):
+                    buf[i, j, b] = 0.0
+            for b in range(block):
+                buf[i, i, b] += 1.0                                   # K = I + J
+        for j in range(R):
+            for b in range(w):
+                buf[R, j, b] = eps[s + b, j] - Kt[s + b, j, R]       # e
+            for b in range(w, block):
+                buf[R, j, b] = 0.0
+        for b in range(w):
+            buf[R, R, b] = gamma_term[s + b] - 2.0 * eps[s + b, R] + Kt[s + b, R, R]
+        for b in range(w, block):
+            buf[R, R, b] = 1.0
+        if not _factor_block(buf):
+            return False
+        for b in range(w):
+            ld = 0.0
+            for j in range(R):
+                ld += log(buf[j, j, b])
+            loglik[s + b] = -0.5 * (offset[s + b] + 2.0 * ld + buf[R, R, b] ** 2)
+            for i in range(n):
+                for j in range(i + 1):
+                    L[s + b, i, j] = buf[i, j, b]
+                for j in range(i + 1, n):
+                    L[s + b, i, j] = 0.0
+    return True
+
+
+_factor_block = _factor_block_py     # replaced by its compiled version in _compile

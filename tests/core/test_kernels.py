@@ -1,0 +1,124 @@
+"""The optional compiled kernel of the phase stage (sandbox/core/_kernels.py) against the
+numpy path, and the switch between them. The tests that compile skip without numba."""
+
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from sandbox.core import _kernels
+from sandbox.core.factor import factor_scores
+from sandbox.core.inference import predict
+from sandbox.core.likelihood import Scorer
+from sandbox.core.model import IProMP
+from sandbox.core.phase import Lattice
+from sandbox.core.statistics import StreamStatistics
+
+from . import synth
+
+
+def _pairs(rng, M, R):
+    """Statistics of M pairs as a stream makes them: Kt = X^T X, eps = X^T c, gamma = c^T c."""
+    X = rng.standard_normal((M, 3 * R, R + 1))
+    c = rng.standard_normal((M, 3 * R))
+    Kt = X.transpose(0, 2, 1) @ X
+    eps = (X.transpose(0, 2, 1) @ c[..., None])[..., 0]
+    return Kt, eps, (c * c).sum(axis=1) + 0.5, rng.standard_normal(M)
+
+
+def _both(monkeypatch, *args):
+    monkeypatch.setenv(_kernels.ENV, "numpy")
+    ref = factor_scores(*[a.copy() for a in args])
+    monkeypatch.setenv(_kernels.ENV, "numba")
+    return ref, factor_scores(*[a.copy() for a in args])
+
+
+@pytest.mark.parametrize(("M", "R"), [(1, 1), (37, 9), (70, 30), (5, 55)])
+def test_kernel_matches_the_numpy_path(monkeypatch, M, R):
+    pytest.importorskip("numba")
+    (ll0, L0), (ll1, L1) = _both(monkeypatch, *_pairs(np.random.default_rng(R), M, R))
+    np.testing.assert_allclose(ll1, ll0, rtol=1e-12, atol=0)
+    np.testing.assert_allclose(L1, L0, rtol=1e-12, atol=1e-12 * np.abs(L0).max())
+    assert np.all(np.triu(L1, 1) == 0.0)
+
+
+def test_kernel_clamps_a_lost_last_pivot_as_the_numpy_path(monkeypatch):
+    pytest.importorskip("numba")
+    Kt, eps, gamma, offset = _pairs(np.random.default_rng(1), 40, 6)
+    gamma[[3, 33]] = -1e6                     # d^T B^-1 d below e^T K^-1 e: no last pivot
+    (ll0, L0), (ll1, L1) = _both(monkeypatch, Kt, eps, gamma, offset)
+    assert L1[3, -1, -1] == L0[3, -1, -1] == np.sqrt(1e-300)
+    np.testing.assert_allclose(ll1, ll0, rtol=1e-12)
+
+
+def test_a_matrix_that_is_not_positive_definite_fails_as_on_the_numpy_path(monkeypatch):
+    pytest.importorskip("numba")
+    Kt, eps, gamma, offset = _pairs(np.random.default_rng(2), 4, 5)
+    Kt[2, 1, 1] = -10.0
+    for choice in ("numpy", "numba"):
+        monkeypatch.setenv(_kernels.ENV, choice)
+        with pytest.raises(np.linalg.LinAlgError):
+            factor_scores(Kt.copy(), eps, gamma, offset)
+
+
+def test_predictions_match_with_and_without_the_kernel(monkeypatch):
+    pytest.importorskip("numba")
+    rng = np.random.default_rng(0)
+    model = IProMP(n_basis=11).fit(synth.demos(rng, n_per_task=8, n_tasks=3, noise=0.003))
+    test = synth.replay(0, 2.1, noise=0.003, rng=rng)
+    t, y = test.times[:150:5], test.human[:150:5]
+    scorer = Scorer(model)
+    out = []
+    for choice in ("numpy", "numba"):
+        monkeypatch.setenv(_kernels.ENV, choice)
+        stats = StreamStatistics(scorer, Lattice.for_tasks(model.task_models, 20))
+        for ti, yi in zip(t, y):
+            stats.add(ti, yi)
+        out.append(predict(model, scorer, t, y, n_candidates=20, stats=stats))
+    a, b = out
+    assert a.task_index == b.task_index
+    np.testing.assert_allclose(b.durations, a.durations, rtol=1e-12)
+    np.testing.assert_allclose(b.log_likelihood, a.log_likelihood, rtol=1e-12)
+    np.testing.assert_allclose(b.task_posterior, a.task_posterior, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(b.robot.mean, a.robot.mean, rtol=1e-9, atol=1e-12)
+
+
+def test_numpy_is_forced_by_the_environment_and_large_matrices_take_lapack(monkeypatch):
+    monkeypatch.setenv(_kernels.ENV, "numpy")
+    assert _kernels.factor_kernel(10) is None
+    monkeypatch.delenv(_kernels.ENV)
+    assert _kernels.factor_kernel(_kernels.MAX_SIZE + 1) is None
+    monkeypatch.setenv(_kernels.ENV, "fast")
+    with pytest.raises(ValueError, match="SANDBOX_KERNEL: expected 'numpy', 'numba' or unset"):
+        _kernels.factor_kernel(10)
+
+
+def test_without_numba_the_numpy_path_is_taken_and_numba_cannot_be_forced():
+    code = ("import sys; sys.modules['numba'] = None\n"        # import numba -> ImportError
+            "import os, numpy as np\n"
+            "from sandbox.core import _kernels\n"
+            "from sandbox.core.factor import factor_scores\n"
+            "assert _kernels.factor_kernel(10) is None\n"
+            "ll, L = factor_scores(np.zeros((2, 3, 3)), np.zeros((2, 3)), np.ones(2),"
+            " np.zeros(2))\n"
+            "assert np.allclose(ll, -0.5) and np.allclose(L[:, :2, :2], np.eye(2))\n"
+            "os.environ['SANDBOX_KERNEL'] = 'numba'\n"
+            "try:\n    _kernels.factor_kernel(10)\nexcept ImportError as e:\n    print(e)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, env={**os.environ, "SANDBOX_KERNEL": ""})
+    assert "numba is not installed" in out.stdout
+
+
+@pytest.mark.parametrize("choice", ["numpy", "numba"])
+def test_a_work_buffer_leaves_the_statistics_unchanged(monkeypatch, choice):
+    if choice == "numba":
+        pytest.importorskip("numba")
+    monkeypatch.setenv(_kernels.ENV, choice)
+    Kt, eps, gamma, offset = _pairs(np.random.default_rng(4), 6, 4)
+    before = Kt.copy()
+    ll_kept, _ = factor_scores(Kt, eps, gamma, offset, work=np.empty_like(Kt))
+    assert np.array_equal(Kt, before)
+    ll, _ = factor_scores(Kt, eps, gamma, offset)
+    np.testing.assert_array_equal(ll_kept, ll)
