@@ -14,7 +14,7 @@ def _blocks(lang: str) -> list[str]:
     return re.findall(rf"```{lang}\n(.*?)```", README.read_text(), flags=re.S)
 
 
-TEST_COMMAND = 'pip install -e ".[test,dask,minari,numba]" && pytest'
+TEST_COMMAND = 'pip install -e ".[test,dask,minari,numba]" && pytest -n auto'
 
 
 def test_the_two_commands_are_there():
