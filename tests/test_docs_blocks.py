@@ -52,7 +52,8 @@ SHORTER = [
     (r"--episodes \d+", "--episodes 2", "2 episodes per policy instead of 20"),
 ]
 NOT_RUN = {
-    'pip install -e ".[test,dask,minari,numba]" && pytest -n auto': "the test command: .ci/run's last line",
+    'pip install -e ".[test,dask,minari,numba]" && pytest -n auto':
+        "the test command: .ci/run's last line",
     "sphinx-build -W --keep-going -n -b html docs docs/_build/html": ".ci/run builds the docs",
 }
 
