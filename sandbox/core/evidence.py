@@ -205,9 +205,12 @@ def chi2_log_survival(x: float, d: int) -> float:
 
 
 def components(model: IProMP, prediction: Prediction, t: float, times: FloatArray,
-               values: FloatArray, k: int, mahalanobis: float) -> FloatArray:
+               values: FloatArray, k: int, mahalanobis: float, *,
+               with_goal: bool = True) -> FloatArray:
     """The :data:`COMPONENTS` of one update, shape (5,): ``mahalanobis`` (given), then
-    :func:`not_arrived`, :func:`speed_change`, :func:`phase_spread`, :func:`goal` of task ``k``."""
-    return np.array([mahalanobis, not_arrived(model, prediction, t, k),
-                     speed_change(model, prediction, k, times, values),
-                     phase_spread(model, prediction, k), goal(model, prediction, k, values)])
+    :func:`not_arrived`, :func:`speed_change`, :func:`phase_spread`, :func:`goal` of task ``k``;
+    without the goal (``with_goal=False``) the four of :data:`TIMING`, shape (4,)."""
+    timing = [mahalanobis, not_arrived(model, prediction, t, k),
+              speed_change(model, prediction, k, times, values),
+              phase_spread(model, prediction, k)]
+    return np.array(timing + [goal(model, prediction, k, values)] if with_goal else timing)

@@ -111,8 +111,9 @@ def statistic(prediction: Prediction) -> float:
 
 
 def statistics(model: IProMP, prediction: Prediction, t: float, times: FloatArray,
-               values: FloatArray) -> FloatArray:
-    """All five statistics of an update, shape (5,): :data:`COMPONENTS` (module docstring).
+               values: FloatArray, *, with_goal: bool = True) -> FloatArray:
+    """All five statistics of an update, shape (5,): :data:`COMPONENTS` (module docstring);
+    with ``with_goal=False`` the first four (:data:`~sandbox.core.evidence.TIMING`), shape (4,).
 
     Parameters
     ----------
@@ -128,8 +129,9 @@ def statistics(model: IProMP, prediction: Prediction, t: float, times: FloatArra
     """
     m = statistic(prediction)
     if not np.isfinite(m):
-        return np.full(len(COMPONENTS), np.nan)
-    return components(model, prediction, t, times, values, chosen(prediction), m)
+        return np.full(len(COMPONENTS) if with_goal else len(COMPONENTS) - 1, np.nan)
+    return components(model, prediction, t, times, values, chosen(prediction), m,
+                      with_goal=with_goal)
 
 
 def chosen(prediction: Prediction) -> int:
