@@ -121,7 +121,7 @@ class HumanMotion:
 
     def _row(self, t: float) -> int:
         """The last row at or before ``t`` (s) (the first row before the recording)."""
-        return max(int(np.searchsorted(self.times, t, side="right")) - 1, 0)
+        return max(bisect.bisect_right(self._lists[0], t) - 1, 0)
 
     def body_measurement(self, name: str, t: float) -> FloatArray:
         """Latest valid sample (dims,) of body modality ``name`` at or before ``t`` (s).

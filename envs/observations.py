@@ -66,6 +66,9 @@ class Observer:
 
     def __init__(self, space: spaces.Dict, observe_body: bool) -> None:
         self.space, self.observe_body = space, observe_body
+        #: Each Box entry's bounds, looked up once (the observation is built at every step).
+        self._bounds = {k: (v.low, v.high) for k, v in space.items()
+                        if isinstance(v, spaces.Box)}
         self.reset()
 
     def reset(self) -> None:
@@ -76,10 +79,16 @@ class Observer:
         """The observation at episode time ``t`` (s) of ``motion`` and the robot ``state``
         (``object``, ``q``, ``dq``, ``gripper``)."""
         obs = {"hand": motion.measurement(t), **state, "time": np.array([t])}
-        obs = {k: np.clip(v, self.space[k].low, self.space[k].high) for k, v in obs.items()}
+        obs = {k: self._clip(k, v) for k, v in obs.items()}
         if not self.observe_body:
             return obs
         return {**obs, **self._hand_frame(motion, t), **self._body(motion, t)}
+
+    def _clip(self, key: str, value: np.ndarray) -> np.ndarray:
+        """``value`` clipped to entry ``key``'s bounds (``np.clip``'s result, without its
+        wrapper's cost; NaN stays NaN)."""
+        low, high = self._bounds[key]
+        return np.minimum(np.maximum(value, low), high)
 
     def _hand_frame(self, motion: Any, t: float) -> dict[str, np.ndarray]:
         """``hand_valid`` (1 for a frame not given before) and ``hand_time`` (the frame's
@@ -88,7 +97,7 @@ class Observer:
         new = frame != self._given
         self._given = frame
         return {"hand_valid": np.array([new], dtype=np.int8),
-                "hand_time": np.clip(np.array([min(frame, float(t))]), 0.0, TIME_MAX)}
+                "hand_time": np.array([min(max(min(frame, float(t)), 0.0), TIME_MAX)])}
 
     def _body(self, motion: Any, t: float) -> dict[str, np.ndarray]:
         """``arm``/``emg`` (0 where unmeasured) and their ``*_valid`` flags (int8 (1,))."""
@@ -96,7 +105,6 @@ class Observer:
         for name in BODY_DIMS:
             value = motion.body_measurement(name, t)
             valid = bool(np.isfinite(value).all())
-            space = self.space[name]
-            out[name] = np.clip(value, space.low, space.high) if valid else np.zeros_like(value)
+            out[name] = self._clip(name, value) if valid else np.zeros_like(value)
             out[f"{name}_valid"] = np.array([valid], dtype=np.int8)
         return out

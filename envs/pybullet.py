@@ -137,10 +137,10 @@ class Simulation:
                        forces: ArrayLike, max_velocities: ArrayLike) -> None:
         """Position-control ``joints`` toward ``targets`` with effort and speed limits."""
         body, control = self.bodies[name], pybullet.setJointMotorControl2
-        for joint, target, force, speed in zip(joints, np.asarray(targets, dtype=float).tolist(),
-                                               forces, max_velocities, strict=True):
+        for joint, target, force, speed in zip(joints, _floats(targets), _floats(forces),
+                                               _floats(max_velocities), strict=True):
             control(body, joint, pybullet.POSITION_CONTROL, targetPosition=target,
-                    force=float(force), maxVelocity=float(speed), **self._id)
+                    force=force, maxVelocity=speed, **self._id)
 
     # ------------------------------------------------------------- constraints
     def attach(self, parent: str, parent_link: int, child: str, *,
@@ -210,6 +210,10 @@ class Simulation:
         if not self._closed:
             self._closed = True
             self.client.disconnect()
+
+
+def _floats(x: ArrayLike) -> list[float]:
+    return np.asarray(x, dtype=float).reshape(-1).tolist()
 
 
 def _vec(x: ArrayLike) -> list[float]:

@@ -113,7 +113,7 @@ class RobotArm:
             opening = 0.5 * (q[0] - q[1]) / self._finger_travel
         else:
             opening = float(np.mean((q - self._closed) / (self._open - self._closed)))
-        return float(np.clip(opening, 0.0, 1.0))
+        return min(max(float(opening), 0.0), 1.0)
 
     def gripper_closed(self) -> bool:
         """Whether the fingers have closed past :data:`CLOSED_BELOW` of their travel."""
