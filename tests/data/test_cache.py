@@ -11,6 +11,7 @@ from sandbox.data import cache as cache_module
 from sandbox.data.cache import TrialCache, default_folder, resolve_cache
 from sandbox.data.filtering import FilterConfig
 from sandbox.data.recorded import TrialError, load_recorded, load_trial
+from sandbox.data.spec import DataSpec
 from tests.data.test_recorded import HEADER, make_bad, trial_rows, write_csv
 
 
@@ -156,8 +157,6 @@ def _parts_trial(folder: Path, shift: float = 0.0) -> None:
 
 
 def test_a_trial_folder_of_part_files_is_cached_and_keyed_by_each_part(tmp_path):
-    from sandbox.data.spec import DataSpec
-
     spec = DataSpec.from_dict({"rate_hz": 20, "files": {"h": "*_hand.csv", "r": "arm.csv"},
                                "robot": ["r.j"], "modalities": {"hand": {
                                    "columns": ["h.x", "h.y", "h.z"]}}})
