@@ -9,7 +9,9 @@ that. What a cached entry was made from is its key (:meth:`TrialCache.key`):
 * the file's bytes (SHA-256), its path and its task label; the file is hashed
   only if it is a regular file within ``MAX_FILE_BYTES`` (checked on the open
   file, read no further than that limit plus one byte): anything else has no
-  key and goes straight to the loader, which refuses it with its reason;
+  key and goes straight to the loader, which refuses it with its reason. A
+  trial folder of a spec's ``files`` (one file per part) is keyed by the name
+  and bytes of each of its part files, under the same rules;
 * what was asked of the loader: the spec's columns and modalities, the
   observed modalities, the preprocessing mode and options, the longest duration;
 * the package version and the source code of the modules that load and
@@ -44,6 +46,7 @@ import os
 import stat
 import sys
 import tempfile
+from collections.abc import Sequence
 from dataclasses import asdict, is_dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -123,15 +126,26 @@ class TrialCache:
         self.hits = 0
         self.misses = 0
 
-    def key(self, path: Path, **asked: Any) -> str | None:
+    def key(self, path: Path, members: Sequence[Path] | None = None,
+            **asked: Any) -> str | None:
         """The entry name of ``path`` loaded with the options ``asked``.
 
         None, without reading it, if ``path`` is not a regular file within
         :data:`~sandbox.data.limits.MAX_FILE_BYTES` (a folder, FIFO, device,
         dangling link, a file too large or that cannot be opened): such a file
-        is the loader's to refuse, and is never cached.
+        is the loader's to refuse, and is never cached. A trial folder of the
+        spec's ``files`` (``path`` a folder) gives its part files as ``members``:
+        it is keyed by each one's name and bytes, and has no key if any has none.
         """
-        h = _file_digest(Path(path))
+        if members is None:
+            h = _file_digest(Path(path))
+        else:
+            h = hashlib.sha256(b"members")
+            for member in members:
+                part = _file_digest(Path(member))
+                if part is None:
+                    return None
+                h.update(f"{Path(member).name}\0{part.hexdigest()}\0".encode())
         if h is None:
             return None
         h.update(json.dumps({"path": str(path), "code": _code_digest(),

@@ -69,6 +69,7 @@ from sandbox.data.spec_read import (  # noqa: F401 - find_trials, count_trials r
     cut_rows,
     find_trials,
     layout_trials,
+    part_files,
     read_spec_table,
     trial_list,
 )
@@ -177,8 +178,9 @@ def load_trial(
     path = _path(path, "path")
     task = task or path.parent.name
     store = resolve_cache(cache)
+    members = part_files(path, spec) if spec.layout.files else None
     key = None if store is None else store.key(
-        path, task=task, spec=spec.to_dict(), observe=[m.name for m in modalities],
+        path, members, task=task, spec=spec.to_dict(), observe=[m.name for m in modalities],
         preprocess=preprocess, max_duration=max_duration, options=options)
     if key is None:               # no cache, or not a regular file within the limits
         store, key = None, ""

@@ -48,6 +48,21 @@ def _part_file(folder: Path, pattern: str, part: str) -> Path:
     return hits[0]
 
 
+def part_files(folder: Path, spec: DataSpec) -> list[Path] | None:
+    """The files of a trial folder, one per part of the spec's ``files`` (in its order),
+    or None if ``folder`` is no folder or a part matches no file or several (the loader
+    refuses such a trial with its reason; the trial cache keys a trial by these files)."""
+    if not folder.is_dir():
+        return None
+    out = []
+    for pattern in spec.layout.files.values():
+        hits = sorted(p for p in folder.glob(pattern) if p.is_file())
+        if len(hits) != 1:
+            return None
+        out.append(hits[0])
+    return out
+
+
 def _part_fix(part: str, fix: Callable[[str], str], column: str) -> str:
     """What the message of a missing column of ``files.<part>`` adds."""
     return f" in files.{part}{fix(f'{part}.{column}')}"

@@ -11,6 +11,7 @@ from sandbox.data import cache as cache_module
 from sandbox.data.cache import TrialCache, default_folder, resolve_cache
 from sandbox.data.filtering import FilterConfig
 from sandbox.data.recorded import TrialError, load_recorded, load_trial
+from sandbox.data.spec import DataSpec
 from tests.data.test_recorded import HEADER, make_bad, trial_rows, write_csv
 
 
@@ -146,3 +147,32 @@ def test_resolve_and_bad_arguments(tmp_path):
         resolve_cache(3)
     with pytest.raises(ValueError, match="cache folder: expected a path"):
         TrialCache(3)
+
+
+def _parts_trial(folder: Path, shift: float = 0.0) -> None:
+    """A trial folder of two part files (hand and robot), no time column."""
+    write_csv(folder / "giver_hand.csv", ["x", "y", "z"],
+              [[0.01 * i + shift, 0.5, 1.0] for i in range(40)])
+    write_csv(folder / "arm.csv", ["j"], [[0.02 * i] for i in range(40)])
+
+
+def test_a_trial_folder_of_part_files_is_cached_and_keyed_by_each_part(tmp_path):
+    spec = DataSpec.from_dict({"rate_hz": 20, "files": {"h": "*_hand.csv", "r": "arm.csv"},
+                               "robot": ["r.j"], "modalities": {"hand": {
+                                   "columns": ["h.x", "h.y", "h.z"]}}})
+    trial = tmp_path / "reach" / "trial0"
+    _parts_trial(trial)
+    store = TrialCache(tmp_path / "cache")
+    fresh = load_trial(trial, spec=spec, preprocess="none")
+    load_trial(trial, spec=spec, preprocess="none", cache=store)
+    assert_same_demo(load_trial(trial, spec=spec, preprocess="none", cache=store), fresh)
+    assert (store.misses, store.hits) == (1, 1)
+    _parts_trial(trial, shift=0.1)                           # one part's bytes change: a miss
+    changed = load_trial(trial, spec=spec, preprocess="none", cache=store)
+    assert (store.misses, store.hits) == (2, 1)
+    np.testing.assert_allclose(changed.human[:, 0] - fresh.human[:, 0], 0.1)
+    (trial / "other_hand.csv").write_text("x,y,z\n0,0,0\n")  # two files match 'h': no key
+    assert store.key(trial, [trial / "arm.csv", tmp_path / "missing.csv"]) is None
+    with pytest.raises(TrialError, match="2 files matching"):
+        load_trial(trial, spec=spec, preprocess="none", cache=store)
+    assert (store.misses, store.hits) == (2, 1)

@@ -14,6 +14,7 @@ from sandbox.data.segment import Bound, Segment, bounds, hand_speed, thin
 from sandbox.data.signals import preprocess_signal
 from sandbox.data.spec import DataSpec
 from sandbox.data.spec_frame import parse_frame, suggest_frame
+from sandbox.data.spec_read import part_files
 
 HAND = {"columns": ["hx", "hy", "hz"], "kind": "position"}
 
@@ -244,3 +245,17 @@ def test_a_modalitys_own_frame_and_units_override_the_global_ones(tmp_path):
     demo = load_trial(tmp_path / "a" / "1.csv", spec=spec, preprocess="none")
     np.testing.assert_allclose(demo.human[0, :3], [1, 0, 0.1], atol=1e-12)   # mm, y up
     np.testing.assert_allclose(demo.human[0, 3:], [0, 0.1, 0], atol=1e-12)   # cm, yaw 90
+
+
+def test_part_files_are_one_per_part_in_the_specs_order_or_none(tmp_path):
+    spec = _spec(rate_hz=5, files={"r": "arm.csv", "h": "*_hand.csv"}, robot=["r.j"],
+                 modalities={"hand": {"columns": ["h.x", "h.y", "h.z"]}})
+    _write(tmp_path / "t" / "a_hand.csv", ["x", "y", "z"], [[0, 0, 0]])
+    _write(tmp_path / "t" / "arm.csv", ["j"], [[0]])
+    assert part_files(tmp_path / "t", spec) == [tmp_path / "t" / "arm.csv",
+                                                tmp_path / "t" / "a_hand.csv"]
+    assert part_files(tmp_path / "t" / "arm.csv", spec) is None          # not a folder
+    _write(tmp_path / "t" / "b_hand.csv", ["x", "y", "z"], [[0, 0, 0]])
+    assert part_files(tmp_path / "t", spec) is None                      # two match 'h'
+    (tmp_path / "t" / "arm.csv").unlink()
+    assert part_files(tmp_path / "t", spec) is None                      # none match 'r'
