@@ -64,19 +64,21 @@ def _compile():
     except ImportError:
         return None
     jit = numba.njit(cache=True, nogil=True)
-    # _scores calls _factor_block by its global name: numba resolves it when compiling.
+    # _scores calls the helpers by their global names: numba resolves them when compiling.
     globals()["_factor_block"] = jit(_factor_block_py)
+    globals()["_active_rows"] = jit(_active_rows_py)
+    globals()["_write_factor"] = jit(_write_factor_py)
     kernel = jit(_scores_py)
     one = np.ones((1, 1, 1))          # load (or compile) the machine code now, not in an update
     kernel(one, np.zeros((1, 1)), np.ones(1), np.zeros(1), np.empty((1, 1, 1)), np.empty(1), 1)
     return kernel
 
 
-def _factor_block_py(buf: np.ndarray) -> bool:
-    """In-place Cholesky of ``buf`` (n, n, w): lower triangles, the matrices along the last
-    axis. The last pivot is clamped at sqrt(1e-300) as the numpy path does (a Mahalanobis
-    term lost to round-off); returns False when an earlier one is not positive (or NaN)."""
-    n, _, w = buf.shape
+def _factor_block_py(buf: np.ndarray, n: int, w: int) -> bool:
+    """In-place Cholesky of ``buf[:n, :n, :w]`` (buf (>= n, >= n, >= w)): lower triangles,
+    the matrices along the last axis. The last pivot is clamped at sqrt(1e-300) as the numpy
+    path does (a Mahalanobis term lost to round-off); returns False when an earlier one is
+    not positive (or NaN)."""
     for j in range(n):
         for k in range(j):
             for b in range(w):
@@ -98,45 +100,87 @@ def _factor_block_py(buf: np.ndarray) -> bool:
     return True
 
 
+def _active_rows_py(Kt, eps, m: int) -> int:
+    """Rows of pair ``m``'s K that are not trailing padding: 1 + the last row j < R with a
+    nonzero in ``Kt[m, j]`` or ``eps[m, j]`` (0 if none).
+
+    A trailing row of zeros (a task of rank r < R in the padded layout, or a
+    direction no observation has reached) is an identity row of K with a zero in e:
+    its factor row is the identity, it adds log 1 = 0 to the log-determinant and
+    0 to the Mahalanobis term, and it comes after every other row in the elimination.
+    Leaving it out gives the same numbers, bit for bit, at (r+1)^3 instead of (R+1)^3."""
+    R = Kt.shape[1] - 1
+    for j in range(R - 1, -1, -1):
+        if eps[m, j] != 0.0:
+            return j + 1
+        for k in range(R + 1):
+            if Kt[m, j, k] != 0.0:
+                return j + 1
+    return 0
+
+
 def _scores_py(Kt, eps, gamma_term, offset, L, loglik, block: int) -> bool:
     """:func:`~sandbox.core.factor.factor_scores` into ``L`` (M, n, n) and ``loglik`` (M,),
-    ``block`` matrices at a time; False (outputs unfinished) when a block cannot be
-    factored: the caller then takes the numpy path, which says why."""
+    up to ``block`` matrices at a time; False (outputs unfinished) when a block cannot be
+    factored: the caller then takes the numpy path, which says why. A block holds
+    consecutive pairs with the same active rows (:func:`_active_rows`: one task's pairs),
+    and factors only those rows and the augmented row, in as many lanes as it has
+    pairs; the lanes are independent, so none of this changes a result."""
     M, n, _ = Kt.shape
     R = n - 1
-    buf = np.empty((n, n, block))
-    for s in range(0, M, block):
-        w = min(block, M - s)
-        for i in range(R):
+    buf = np.empty((n, n, min(block, M)))
+    active = np.empty(M, dtype=np.int64)
+    for m in range(M):
+        active[m] = _active_rows(Kt, eps, m)
+    s = 0
+    while s < M:
+        r = active[s]
+        w = 1
+        while w < block and s + w < M and active[s + w] == r:
+            w += 1
+        for i in range(r):
             for j in range(i + 1):
                 for b in range(w):
                     buf[i, j, b] = Kt[s + b, i, j]
-                for b in range(w, block):
-                    buf[i, j, b] = 0.0
-            for b in range(block):
-                buf[i, i, b] += 1.0                                   # K = I + J
-        for j in range(R):
             for b in range(w):
-                buf[R, j, b] = eps[s + b, j] - Kt[s + b, j, R]       # e
-            for b in range(w, block):
-                buf[R, j, b] = 0.0
+                buf[i, i, b] += 1.0                                   # K = I + J
+        for j in range(r):
+            for b in range(w):
+                buf[r, j, b] = eps[s + b, j] - Kt[s + b, j, R]       # e
         for b in range(w):
-            buf[R, R, b] = gamma_term[s + b] - 2.0 * eps[s + b, R] + Kt[s + b, R, R]
-        for b in range(w, block):
-            buf[R, R, b] = 1.0
-        if not _factor_block(buf):
+            buf[r, r, b] = gamma_term[s + b] - 2.0 * eps[s + b, R] + Kt[s + b, R, R]
+        if not _factor_block(buf, r + 1, w):
             return False
         for b in range(w):
+            _write_factor(buf, b, r, L[s + b])
             ld = 0.0
-            for j in range(R):
+            for j in range(r):
                 ld += log(buf[j, j, b])
-            loglik[s + b] = -0.5 * (offset[s + b] + 2.0 * ld + buf[R, R, b] ** 2)
-            for i in range(n):
-                for j in range(i + 1):
-                    L[s + b, i, j] = buf[i, j, b]
-                for j in range(i + 1, n):
-                    L[s + b, i, j] = 0.0
+            loglik[s + b] = -0.5 * (offset[s + b] + 2.0 * ld + buf[r, r, b] ** 2)
+        s += w
     return True
 
 
-_factor_block = _factor_block_py     # replaced by its compiled version in _compile
+def _write_factor_py(buf, b: int, r: int, out) -> None:
+    """Lane ``b`` of a factored block (active rows ``r``) into ``out`` (R+1, R+1), padded:
+    the identity on the padding's rows, the augmented row at R."""
+    R = out.shape[0] - 1
+    for i in range(r):
+        for j in range(i + 1):
+            out[i, j] = buf[i, j, b]
+        for j in range(i + 1, R + 1):
+            out[i, j] = 0.0
+    for i in range(r, R):
+        for j in range(R + 1):
+            out[i, j] = 0.0
+        out[i, i] = 1.0
+    for j in range(r):
+        out[R, j] = buf[r, j, b]
+    for j in range(r, R):
+        out[R, j] = 0.0
+    out[R, R] = buf[r, r, b]
+
+
+_factor_block = _factor_block_py     # replaced by their compiled versions in _compile
+_active_rows = _active_rows_py
+_write_factor = _write_factor_py

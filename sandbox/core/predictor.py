@@ -34,6 +34,7 @@ range the model was fitted on (with a margin) are rejected and counted
 
 from __future__ import annotations
 
+import copy
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -149,6 +150,21 @@ class DynamicPredictor(PredictorBase):
         self.dow_t = float(BOUNDS["dow_t"].check(dow_t, "dow_t"))   # the one table's range
         self.window = check_choice(window, "window", WINDOW_MODES)
         super().__init__(model, **options)
+
+    def with_window(self, dow_t: float) -> DynamicPredictor:
+        """A new predictor with this one's model and options but the window ``dow_t`` (s),
+        as if just made (no observation, no update).
+
+        It shares what depends only on the model and is never changed: the likelihood's
+        :class:`~sandbox.core.likelihood.Scorer`, the speed lattice, the prior plan and the
+        stream's bounds, which together cost more to build than an update (an
+        evaluation runs every window over the same model).
+        """
+        other = copy.copy(self)
+        other.dow_t = float(BOUNDS["dow_t"].check(dow_t, "dow_t"))
+        other.stream = copy.copy(self.stream)    # reset() gives the copy its own lists
+        other.reset()
+        return other
 
     def reset(self) -> None:
         super().reset()

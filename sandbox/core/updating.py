@@ -64,8 +64,7 @@ class Update:
     alpha, duration : float
         Those of the chosen task.
     jump : float
-        Euclidean change (rad) of the planned command at the first step after
-        the update.
+        Euclidean change (rad) of the planned command at the first step after the update.
     seconds : float
         Wall time the update took.
     after_end : bool
@@ -131,6 +130,7 @@ class PredictorBase:
         self.subsample = self.stream.subsample
         self._lattice = Lattice.for_tasks(model.task_models, self.n_candidates, self.width)
         self._check_sizes()
+        self._prior = Plan.prior(model, self.dt)        # immutable: every reset() starts from it
         self.reset()
 
     def _check_sizes(self) -> None:
@@ -159,7 +159,7 @@ class PredictorBase:
         self.updates: list[Update] = []
         self._prediction: Prediction | None = None
         self._stats = StreamStatistics(self.scorer, self._lattice) if self._incremental else None
-        self._plan = Plan.prior(self.model, self.dt)
+        self._plan = self._prior
 
     def observe(self, t: float, y) -> Update | None:
         """Receive one human observation; update if a window boundary was reached.

@@ -30,13 +30,27 @@ def load_pair(data: str, *, seed: int = 0, tasks=None, n_per_task=None, spec=Non
             bar(2 * (folder or 0), "loading", progress and folder is not None) as shown:
         warnings.simplefilter("always")
         kw["on_trial"] = shown.update if folder is not None else None
-        train = load_dataset(data, preprocess="smooth", **kw)
-        test = load_dataset(data, preprocess="causal", **kw)
+        if isinstance(data, str) and data.startswith("synthetic"):
+            train, test = _synthetic_pair(data, kw)
+        else:
+            train = load_dataset(data, preprocess="smooth", **kw)
+            test = load_dataset(data, preprocess="causal", **kw)
     skipped = sorted({str(w.message) for w in caught})
     keep = {d.source for d in train} & {d.source for d in test}
     train = [d for d in train if d.source in keep]
     test = [d for d in test if d.source in keep]
     return train, test, skipped
+
+
+def _synthetic_pair(data: str, kw: dict) -> tuple[list, list]:
+    """A synthetic set generated once, then preprocessed both ways: the same demonstrations
+    as two ``load_dataset`` calls (same seed), without generating them twice."""
+    from sandbox.data.datasets import load_dataset
+    from sandbox.data.preprocess import preprocess_demonstration
+
+    raw = load_dataset(data, preprocess="none", **kw)
+    return ([preprocess_demonstration(d, "smooth") for d in raw],
+            [preprocess_demonstration(d, "causal") for d in raw])
 
 
 def _n_files(data, tasks) -> int | None:

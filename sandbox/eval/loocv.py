@@ -29,8 +29,7 @@ from multiprocessing import get_context
 
 import numpy as np
 
-from sandbox.core import DynamicPredictor, IProMP, familiarity, predict
-from sandbox.core.likelihood import Scorer
+from sandbox.core import DynamicPredictor, IProMP, _kernels, familiarity, predict
 from sandbox.core.model import SIGNAL_FLOOR
 from sandbox.core.phase import Lattice
 from sandbox.core.statistics import StreamStatistics
@@ -134,7 +133,11 @@ def evaluate_trial(model: IProMP, test, config: EvalConfig, fk, truth=None) -> d
     T = float(t[model.motion_end(t, q, truth.human)])
     k = model.task_index(test.task)
     goal = fk(q[-1])
-    scorer = Scorer(model)
+    # one predictor built per trial: every window's is its copy (with_window), sharing its
+    # Scorer, prior plan and bounds, which depend only on the model
+    template = DynamicPredictor(model, dow_t=WINDOWS[0], window=config.window_mode,
+                                incremental=False, **config.predictor_options())
+    scorer = template.scorer
     t_obs, y_obs = kept_observations(model, t, test.human, config.subsample)
     opts = dict(likelihood=config.likelihood, n_candidates=config.n_candidates,
                 refine_steps=config.refine_steps)
@@ -152,8 +155,8 @@ def evaluate_trial(model: IProMP, test, config: EvalConfig, fk, truth=None) -> d
         res = _score(pred.trajectory(model.basis, t), q, goal, fk, abs(pred.duration - T))
         res["recognition"] = float(pred.task_index == k)
         out["static"][f"{f:.1f}"] = res
-    out["dynamic"] = {f"{w:.1f}": _dynamic(model, test, t, q, T, goal, fk, w, config,
-                                           windows[w], preds, t_obs)
+    out["dynamic"] = {f"{w:.1f}": _dynamic(template.with_window(w), test, t, q, T, goal, fk,
+                                           config, windows[w], preds, t_obs)
                       for w in config.windows}
     out["recording"] = float(t[-1])
     return out
@@ -189,9 +192,8 @@ def _score(traj, q, goal, fk, e_phi) -> dict:
             "nll": metrics.gaussian_nll(q, mean, cov), "coverage": metrics.coverage(q, mean, cov)}
 
 
-def _dynamic(model, test, t, q, T, goal, fk, window, config, times, preds, t_obs) -> dict:
-    pred = DynamicPredictor(model, dow_t=window, window=config.window_mode, incremental=False,
-                            **config.predictor_options())
+def _dynamic(pred, test, t, q, T, goal, fk, config, times, preds, t_obs) -> dict:
+    model = pred.model
     goal_err, believed, at_recording = [], [], []
 
     def record(upd):
@@ -352,6 +354,7 @@ def map_trials(run_one, n: int, init, initargs: tuple, *, workers: int = 1,
                 results.append(run_one(i))
                 shown.update()
             return results
+        _kernels.factor_kernel(1)    # numba's kernel loaded once here, not in every worker
         with ProcessPoolExecutor(workers, mp_context=get_context("fork"),
                                  initializer=_init_worker, initargs=(init, initargs)) as pool:
             with _sigint_blocked():      # the workers are forked here, by the first submit

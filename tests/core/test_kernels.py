@@ -122,3 +122,33 @@ def test_a_work_buffer_leaves_the_statistics_unchanged(monkeypatch, choice):
     assert np.array_equal(Kt, before)
     ll, _ = factor_scores(Kt, eps, gamma, offset)
     np.testing.assert_array_equal(ll_kept, ll)
+
+
+def _padded(Kt, eps, R):
+    """The statistics in the padded layout of rank R > r: zero rows and columns from r on,
+    the augmented row and column moved to R (as a task of lower rank than another's)."""
+    M, r1, _ = Kt.shape
+    idx = list(range(r1 - 1)) + [R]
+    big = np.zeros((M, R + 1, R + 1))
+    big[:, np.array(idx)[:, None], np.array(idx)] = Kt
+    e = np.zeros((M, R + 1))
+    e[:, idx] = eps
+    return big, e
+
+
+def test_the_kernel_skips_a_padding_of_zero_rows_bit_for_bit(monkeypatch):
+    pytest.importorskip("numba")
+    monkeypatch.setenv(_kernels.ENV, "numba")
+    Kt, eps, gamma, offset = _pairs(np.random.default_rng(5), 45, 7)      # rank 7, 45 pairs
+    ll, L = factor_scores(Kt.copy(), eps, gamma, offset)
+    big, e = _padded(Kt, eps, 12)
+    ll_pad, L_pad = factor_scores(big, e, gamma, offset)
+    np.testing.assert_array_equal(ll_pad, ll)                         # the same numbers
+    np.testing.assert_array_equal(L_pad[:, :7, :7], L[:, :7, :7])
+    np.testing.assert_array_equal(L_pad[:, 12, :7], L[:, 7, :7])
+    np.testing.assert_array_equal(L_pad[:, 12, 12], L[:, 7, 7])
+    assert np.all(L_pad[:, 7:12, 7:12] == np.eye(5)) and np.all(L_pad[:, 12, 7:12] == 0.0)
+    monkeypatch.setenv(_kernels.ENV, "numpy")                         # and as LAPACK does
+    ll_np, L_np = factor_scores(big, e, gamma, offset)
+    np.testing.assert_allclose(ll_pad, ll_np, rtol=1e-12, atol=0)
+    np.testing.assert_allclose(L_pad, L_np, rtol=1e-12, atol=1e-12 * np.abs(L_np).max())

@@ -275,3 +275,23 @@ def test_a_drift_back_after_the_meeting_does_not_move_the_task_posterior(model, 
     decided = next(i for i, u in enumerate(pred.updates) if u.after_end) - 1
     assert pred.updates[decided].time <= 2.0 + 0.4 + 1e-9
     assert decided <= next(i for i, u in enumerate(late.updates) if u.after_end) - 1
+
+
+def test_with_window_predicts_as_a_new_predictor_and_shares_only_the_model_parts(model):
+    demo = synth.replay(1, 2.0, noise=0.003, rng=np.random.default_rng(3))
+    first = DynamicPredictor(model, dow_t=0.2, subsample=2)
+    _stream(first, demo)
+    copy = first.with_window(0.5)
+    assert copy.dow_t == 0.5 and not copy.updates and copy.observations()[0].size == 0
+    assert copy.scorer is first.scorer and copy.subsample == 2
+    fresh = _stream(DynamicPredictor(model, dow_t=0.5, subsample=2), demo)
+    _stream(copy, demo)
+    assert [u.time for u in copy.updates] == [u.time for u in fresh.updates] == [0.5, 1.0, 1.5,
+                                                                                  2.0]
+    for a, b in zip(copy.updates, fresh.updates):
+        np.testing.assert_array_equal(a.task_posterior, b.task_posterior)
+    for a, b in zip(copy.plan(), fresh.plan()):
+        np.testing.assert_array_equal(a, b)
+    assert len(first.updates) == 10 and first.observations()[0].size == fresh.observations()[0].size
+    with pytest.raises(ValueError, match="dow_t"):
+        first.with_window(0.0)
