@@ -1,6 +1,9 @@
 """Human-motion filter: a gated constant-velocity Kalman filter and an RTS smoother.
 
-This is the only module that imports :mod:`filterpy`.
+This is the only module that imports :mod:`filterpy`, and only where it is used
+(:class:`HandFilter` and the reference functions): the loader's vectorised path
+(:mod:`sandbox.data.kalman`) does not need it, and filterpy pulls in
+:mod:`scipy.stats`, about a second of every command's start-up.
 
 Model (per hand coordinate, state ``x = [p, v]`` stacked as ``[p_1..p_P, v_1..v_P]``):
 
@@ -40,10 +43,8 @@ from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
-from filterpy.common import Q_continuous_white_noise
-from filterpy.kalman import KalmanFilter
 from numpy.typing import ArrayLike
-from scipy.stats import chi2
+from scipy.special import gammaincinv
 
 from sandbox.data import kalman
 from sandbox.validation import FloatArray, check_array, check_fraction, check_positive
@@ -98,11 +99,15 @@ class FilterConfig:
 
     def gate(self, n_dims: int) -> float:
         """Threshold on the squared Mahalanobis distance for ``n_dims`` coordinates."""
-        return float(chi2.ppf(self.gate_prob, n_dims)) if self.gate_prob < 1 else np.inf
+        # the chi-square quantile, as scipy.stats.chi2.ppf computes it (equal to the bit)
+        return float(2.0 * gammaincinv(n_dims / 2.0, self.gate_prob)) if self.gate_prob < 1 \
+            else np.inf
 
 
 def transition(dt: float, n_dims: int, config: FilterConfig) -> tuple[FloatArray, FloatArray]:
     """State transition ``F`` and process noise ``Q`` over ``dt`` seconds, shapes (2P, 2P)."""
+    from filterpy.common import Q_continuous_white_noise
+
     F = np.eye(2 * n_dims)
     F[:n_dims, n_dims:] = dt * np.eye(n_dims)
     Q = Q_continuous_white_noise(
@@ -163,6 +168,8 @@ class HandFilter:
         self.zero_is_missing = bool(zero_is_missing)
         self._recent: deque[bytes] = deque(maxlen=int(repeat_window))
         self._gate = self.config.gate(self.n_dims)
+        from filterpy.kalman import KalmanFilter
+
         self._kf = KalmanFilter(dim_x=2 * self.n_dims, dim_z=self.n_dims)
         self._kf.H = np.hstack([np.eye(self.n_dims), np.zeros((self.n_dims, self.n_dims))])
         self._kf.R = self.config.noise_std**2 * np.eye(self.n_dims)
@@ -381,6 +388,8 @@ def smooth_track(run: FilterRun, config: FilterConfig | None = None) -> FloatArr
 
 def smooth_track_reference(run: FilterRun, config: FilterConfig | None = None) -> FloatArray:
     """:func:`smooth_track` computed by :meth:`filterpy.kalman.KalmanFilter.rts_smoother`."""
+    from filterpy.kalman import KalmanFilter
+
     kf = KalmanFilter(dim_x=run.means.shape[1], dim_z=run.filtered.shape[1])
 
     def means(xs, ps, fs, qs):
