@@ -175,3 +175,13 @@ def test_motion_the_tasks_share_leaves_the_posterior_near_the_prior():
     prior = 1.0 / len(fresh)
     assert max(tops["auto"]) <= prior + 0.2, tops
     assert max(tops["none"]) > prior + 0.3, tops       # what the tasks' own covariances did
+
+
+def test_settings_files_take_every_shrinkage(tmp_path):
+    from sandbox.commands._settings import CHOICES, load
+    from sandbox.core.shrinkage import SHRINKAGE
+
+    assert CHOICES["shrinkage"] == SHRINKAGE
+    path = tmp_path / "s.json"
+    path.write_text('{"shrinkage": "robot"}')
+    assert load(str(path))["shrinkage"] == "robot"
