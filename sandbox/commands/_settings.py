@@ -8,7 +8,7 @@ predictor options, the names of :class:`~sandbox.eval.loocv.EvalConfig`::
     regularizer: 0.001
     noise_floor: 0.02        # m, or auto: learned per position modality from the demos
     jitter_floor: 15         # opt-in: position floors max(2 mm, 15 x the data's raw jitter)
-    shrinkage: auto          # auto | none: task covariances shrunk toward the pooled one
+    shrinkage: auto          # auto | none | robot: covariances shrunk toward the pooled one
     settle_tol: 0.05         # rad, or null: the whole recording is the motion
     likelihood: joint        # predictor options: joint | marginal
     window_mode: all         # all | latest
@@ -43,7 +43,7 @@ KEYS = ("observe", *MODEL_KEYS, *PREDICTOR_KEYS)
 PLAY_PREDICTOR_KEYS = ("likelihood", "window_mode", "n_candidates", "refine_steps",
                        "blend_rate", "blend_delay", "end_prob")
 CHOICES = {"likelihood": ("joint", "marginal"), "window_mode": ("all", "latest"),
-           "shrinkage": ("auto", "none")}
+           "shrinkage": ("auto", "none", "robot")}   # sandbox.core.shrinkage.SHRINKAGE
 #: Keys whose values are numbers, each in its range of :data:`sandbox.limits.BOUNDS`
 #: (``None`` allowed for the tolerances: "not used").
 NUMBERS = ("n_basis", "n_candidates", "refine_steps", "subsample", "regularizer", "noise_scale",

@@ -20,7 +20,7 @@ from sandbox.core.basis import GaussianBasis
 from sandbox.core.limits import MAX_ABS_VALUE, MAX_ALPHA_STD, MIN_NOISE_STD
 from sandbox.core.modality import Modality
 from sandbox.core.promp import WeightDistribution, check_human_conditioning, fit_weights
-from sandbox.core.shrinkage import intensity, pooled_factor, shrink
+from sandbox.core.shrinkage import shrunk
 from sandbox.limits import BOUNDS
 from sandbox.validation import FloatArray, check_positive
 
@@ -53,6 +53,9 @@ class TaskModel:
     alpha_mean, alpha_std : float
         Prior of the speed factor :math:`\\alpha = T/T_{nom}`.
     n_demos : int
+    robot : WeightDistribution or None
+        The same weights with the shrunk covariance that conditions the robot
+        (``shrinkage="robot"``, :mod:`sandbox.core.shrinkage`); None: ``weights`` do.
     """
 
     name: str
@@ -61,6 +64,7 @@ class TaskModel:
     alpha_mean: float
     alpha_std: float
     n_demos: int
+    robot: WeightDistribution | None = None
 
     @property
     def mean_duration(self) -> float:
@@ -266,8 +270,9 @@ def task_models(weights: Mapping[str, FloatArray], durations: Mapping[str, Float
     n_basis : int
     min_alpha_std : float
         Lower bound of the speed prior's standard deviation.
-    shrinkage : {"auto", "none"}
-        Covariance shrinkage toward the pooled one (:mod:`sandbox.core.shrinkage`).
+    shrinkage : {"auto", "none", "robot"}
+        Covariance shrinkage toward the pooled one (:mod:`sandbox.core.shrinkage`);
+        ``"robot"``: in :attr:`TaskModel.robot` only.
 
     Returns
     -------
@@ -278,7 +283,9 @@ def task_models(weights: Mapping[str, FloatArray], durations: Mapping[str, Float
     P = sigma2.size
     dists = {k: WeightDistribution.from_weights(w, regularizer, n_basis)
              for k, w in weights.items()}
-    dists, intensities = shrunk(weights, dists, shrinkage)
+    shrunk_dists, intensities = shrunk(weights, dists, shrinkage)
+    if shrinkage != "robot":
+        dists = shrunk_dists
     kappa = np.empty(P)
     start = 0
     for m in modalities:       # one kappa per modality, from its own dims only
@@ -291,24 +298,17 @@ def task_models(weights: Mapping[str, FloatArray], durations: Mapping[str, Float
         reg = dist.reg.copy()
         reg[:P] = kappa * sigma2
         dist = WeightDistribution(dist.mean, dist.factor, reg, n_basis)
+        robot = (WeightDistribution(dist.mean, shrunk_dists[k].factor, reg, n_basis)
+                 if shrinkage == "robot" else None)
         T = durations[k]
         t_nom = float(T.mean())
         a_std = float(np.std(T / t_nom, ddof=1)) if T.size > 1 else 0.0   # eq. 10
         check_speed_spread(k, a_std, T)
         check_human_conditioning(dist, sigma2, k)
-        tasks.append(TaskModel(k, dist, t_nom, 1.0, max(a_std, min_alpha_std), int(T.size)))
+        tasks.append(TaskModel(k, dist, t_nom, 1.0, max(a_std, min_alpha_std), int(T.size),
+                               robot))
     return tuple(tasks), intensities
 
-
-def shrunk(weights: Mapping[str, FloatArray], dists: Mapping[str, WeightDistribution],
-           shrinkage: str) -> tuple[dict[str, WeightDistribution], dict[str, float]]:
-    """``dists`` shrunk toward the pooled covariance (``"auto"``), or as they are, and
-    each task's intensity (:mod:`sandbox.core.shrinkage`)."""
-    if shrinkage == "none" or len(weights) < 2:
-        return dict(dists), {k: 0.0 for k in dists}
-    pooled = pooled_factor(weights)
-    lams = {k: intensity(w, pooled) for k, w in weights.items()}
-    return {k: shrink(d, pooled, lams[k]) for k, d in dists.items()}, lams
 
 
 def check_speed_spread(task: str, alpha_std: float, durations: FloatArray) -> None:

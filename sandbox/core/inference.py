@@ -53,6 +53,10 @@ class Prediction:
     motion_probability : float
         Probability that the hand had started moving, against the rest
         hypothesis (:mod:`sandbox.core.rest`); 1 when it was not weighed.
+    observations : tuple of ndarray or None
+        With ``shrinkage="robot"``, the (times, values) it was made from: what
+        :meth:`for_task` conditions another task's robot on with the scorer's
+        ``conditioner`` (the shrunk weights); None otherwise.
     """
 
     task_index: int
@@ -66,6 +70,7 @@ class Prediction:
     grid: list | None = None
     n_values: int | None = None
     motion_probability: float = 1.0
+    observations: tuple[FloatArray, FloatArray] | None = None
 
     def trajectory(self, basis, times) -> tuple[FloatArray, FloatArray]:
         """Robot mean (T, Q) and covariance (T, Q, Q) at ``times`` (s); holds after the end."""
@@ -90,8 +95,12 @@ class Prediction:
         if self.factors is None:
             raise ValueError("for_task: this prediction kept no factors (marginal likelihood)")
         scorer = Scorer(model) if scorer is None else scorer
-        robot = condition_robot(scorer.weights[k], self.factors[k], model.n_human,
-                                scorer.rank[k])
+        factor = self.factors[k]
+        if self.observations is not None and scorer.conditioner is not None:
+            scorer = scorer.conditioner
+            factor = scorer.joint_pairs(*self.observations, self.durations[k:k + 1],
+                                        np.array([k]))[1][0]
+        robot = condition_robot(scorer.weights[k], factor, model.n_human, scorer.rank[k])
         return replace(self, task_index=int(k), robot=robot, duration=float(self.durations[k]),
                        task_posterior=self.task_posterior if posterior is None else posterior)
 
@@ -144,10 +153,13 @@ def predict(model: IProMP, scorer: Scorer, times: FloatArray, values: FloatArray
         chosen = post
     k = chosen_task(post, chosen) if task is None else int(task)
     T = float(est.durations[k]) if duration is None else float(duration)
-    if duration is None and est.factors is not None:
+    cond = scorer if scorer.conditioner is None else scorer.conditioner   # shrinkage="robot"
+    if duration is None and est.factors is not None and cond is scorer:
         factor = est.factors[k]
     else:
-        factor = scorer.joint_pairs(times, values, np.array([T]), np.array([k]))[1][0]
-    robot = condition_robot(scorer.weights[k], factor, model.n_human, scorer.rank[k])
+        factor = cond.joint_pairs(times, values, np.array([T]), np.array([k]))[1][0]
+    robot = condition_robot(cond.weights[k], factor, model.n_human, cond.rank[k])
+    observations = None if cond is scorer else (times, values)
     return Prediction(k, post, est.alphas, est.durations, est.log_likelihood, robot, T,
-                      est.factors, est.grid, int(np.isfinite(values).sum()), p_motion)
+                      est.factors, est.grid, int(np.isfinite(values).sum()), p_motion,
+                      observations)

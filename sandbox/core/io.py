@@ -138,6 +138,8 @@ def save_model(model: IProMP, path: str | os.PathLike) -> None:
         arrays[f"task{i}_mean"] = t.weights.mean
         arrays[f"task{i}_factor"] = t.weights.factor
         arrays[f"task{i}_reg"] = t.weights.reg
+        if t.robot is not None:                  # shrinkage="robot": same mean and reg
+            arrays[f"task{i}_robot_factor"] = t.robot.factor
     path = _output_path(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
@@ -193,6 +195,9 @@ class ModelFile:
         (name, nominal_duration, alpha_mean, alpha_std, n_demos, prior per task).
     weights : tuple of WeightDistribution
         Each task's weights over P + Q dims, in the order of ``meta["tasks"]``.
+    robot : tuple of WeightDistribution or None
+        With ``shrinkage="robot"``, each task's weights that condition the robot
+        (:attr:`~sandbox.core.fitting.TaskModel.robot`); else None.
     noise, scale : ndarray, shape (P,)
         Observation noise variances and the scale of every human dim.
     calibration : Calibration or None
@@ -204,6 +209,7 @@ class ModelFile:
     noise: np.ndarray
     scale: np.ndarray
     calibration: Calibration | None
+    robot: tuple[WeightDistribution, ...] | None = None
 
 
 def read_model(path: str | os.PathLike) -> ModelFile:
@@ -246,8 +252,13 @@ def _read_model(path: Path) -> ModelFile:
             check_robot_definite(dist, P, t["name"])
             check_human_conditioning(dist, noise, t["name"])
             weights.append(dist)
+        robot = None
+        if meta["hyperparameters"].get("shrinkage") == "robot":
+            robot = tuple(WeightDistribution(w.mean, _factor(
+                archive, f"task{i}_robot_factor", w.mean.size, t["n_demos"], pooled_rank),
+                w.reg, N) for i, (t, w) in enumerate(zip(meta["tasks"], weights)))
         calibration = _calibration(archive, meta.get("familiarity"), len(weights))
-    return ModelFile(meta, tuple(weights), noise, scale, calibration)
+    return ModelFile(meta, tuple(weights), noise, scale, calibration, robot)
 
 
 def _calibration(archive, entry, n_tasks: int):
@@ -356,7 +367,8 @@ def model_from_file(cls, f: ModelFile):
                 **meta["hyperparameters"])
     model.task_models = tuple(
         TaskModel(t["name"], w, t["nominal_duration"], t["alpha_mean"], t["alpha_std"],
-                  t["n_demos"]) for t, w in zip(meta["tasks"], f.weights))
+                  t["n_demos"], None if f.robot is None else f.robot[i])
+        for i, (t, w) in enumerate(zip(meta["tasks"], f.weights)))
     model.noise = f.noise
     model.scale = f.scale
     model.modalities = meta["modalities"]

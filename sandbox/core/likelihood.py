@@ -39,7 +39,8 @@ observation instead, as older public code does.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import copy
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -98,6 +99,14 @@ class Group:
     blocks: FloatArray
 
 
+def _robot_view(model: IProMP) -> IProMP:
+    """A shallow copy of ``model`` whose tasks' weights are their robot-conditioning ones."""
+    view = copy.copy(model)
+    view.task_models = tuple(replace(t, weights=t.robot or t.weights, robot=None)
+                             for t in model.task_models)
+    return view
+
+
 class Scorer:
     """Precomputed, per fitted model, everything the likelihood needs.
 
@@ -138,6 +147,10 @@ class Scorer:
         self._raw = raw
         kappa = self.reg_h / self.sigma2                          # (K, P)
         self.groups = _make_groups(kappa, self.modality_dims, pad)
+        #: The scorer whose factors condition the robot (``shrinkage="robot"``: the tasks'
+        #: :attr:`~sandbox.core.fitting.TaskModel.robot` weights), else None (this one).
+        self.conditioner = (None if all(t.robot is None for t in model.task_models) else
+                            Scorer(_robot_view(model)))
         _kernels.factor_kernel(self.R + 1)    # numba's kernel loaded now, not in an update
 
     @property

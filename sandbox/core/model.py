@@ -156,10 +156,11 @@ class IProMP:
         good, not before the motion's end (None: at it); not stored in model files.
     min_alpha_std : float
         Lower bound of :math:`\\sigma_\\alpha`, in [limits.MIN_ALPHA_STD, limits.MAX_ALPHA_STD].
-    shrinkage : {"auto", "none"}
+    shrinkage : {"auto", "none", "robot"}
         ``"auto"``: each task's weight covariance shrunk toward the tasks' pooled one
         by an intensity learned from its demos (:mod:`sandbox.core.shrinkage`; used:
-        :attr:`shrinkage_used`); ``"none"``: each task keeps its own.
+        :attr:`shrinkage_used`); ``"none"``: each task keeps its own; ``"robot"``: the shrunk
+        covariance conditions the robot only (eq. 8), recognition and speeds keep their own.
     ridge : float
         Relative ridge of the per-demo weight fit (eq. 2).
     priors : mapping of str to float, optional

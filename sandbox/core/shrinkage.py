@@ -58,8 +58,10 @@ import numpy as np
 from sandbox.core.promp import WeightDistribution, thin
 from sandbox.validation import FloatArray, check_choice
 
-#: Choices of ``IProMP(shrinkage=...)``: the learned intensity, or none (each task its own).
-SHRINKAGE = ("auto", "none")
+#: Choices of ``IProMP(shrinkage=...)``: the learned intensity, none (each task its own), or
+#: the learned intensity for the robot's conditioning only (eq. 8; the task posterior and the
+#: speeds keep each task's own covariance).
+SHRINKAGE = ("auto", "none", "robot")
 
 
 def check_shrinkage(value) -> str:
@@ -136,3 +138,14 @@ def shrink(dist: WeightDistribution, pooled: FloatArray, lam: float) -> WeightDi
         return dist
     factor = thin(np.hstack([np.sqrt(1.0 - lam) * dist.factor, np.sqrt(lam) * pooled]))
     return WeightDistribution(dist.mean, factor, dist.reg, dist.n_basis)
+
+
+def shrunk(weights: Mapping[str, FloatArray], dists: Mapping[str, WeightDistribution],
+           shrinkage: str) -> tuple[dict[str, WeightDistribution], dict[str, float]]:
+    """``dists`` shrunk toward the pooled covariance (``"auto"`` or ``"robot"``), or as they
+    are (``"none"``, or a single task), and each task's intensity."""
+    if shrinkage == "none" or len(weights) < 2:
+        return dict(dists), {k: 0.0 for k in dists}
+    pooled = pooled_factor(weights)
+    lams = {k: intensity(w, pooled) for k, w in weights.items()}
+    return {k: shrink(d, pooled, lams[k]) for k, d in dists.items()}, lams

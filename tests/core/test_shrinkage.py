@@ -106,6 +106,51 @@ def test_shrinkage_is_saved_with_the_model(demos, tmp_path):
                                   model.task_models[2].weights.factor)
 
 
+def _halfway(model, demo):
+    from sandbox.eval.loocv import kept_observations
+
+    t, y = kept_observations(model, demo.times - demo.times[0], demo.human, 2)
+    return t[: t.size // 2], y[: t.size // 2]
+
+
+def test_robot_shrinkage_conditions_the_robot_as_auto_and_recognises_as_none(demos):
+    """Issue 21: the shrunk covariance conditions the robot only (eq. 8)."""
+    from sandbox.core import predict
+    from sandbox.core.likelihood import Scorer
+
+    models = {mode: IProMP(n_basis=11, shrinkage=mode).fit(demos)
+              for mode in ("none", "auto", "robot")}
+    for o, r in zip(models["none"].task_models, models["robot"].task_models):
+        np.testing.assert_array_equal(r.weights.factor, o.weights.factor)
+        assert o.robot is None and r.robot.factor.shape[1] > o.weights.factor.shape[1]
+    times, values = _halfway(models["none"], demos[5])
+    pred = {mode: predict(m, Scorer(m), times, values) for mode, m in models.items()}
+    np.testing.assert_allclose(pred["robot"].task_posterior, pred["none"].task_posterior)
+    np.testing.assert_allclose(pred["robot"].durations, pred["none"].durations)
+    k, T = pred["robot"].task_index, pred["robot"].duration
+    auto = predict(models["auto"], Scorer(models["auto"]), times, values, task=k, duration=T)
+    np.testing.assert_allclose(pred["robot"].robot.mean, auto.robot.mean, atol=1e-9)
+    assert np.abs(pred["robot"].robot.mean - pred["none"].robot.mean).max() > 1e-3
+    other = (k + 1) % len(models["robot"].tasks)           # the hold's re-conditioning too
+    held = pred["robot"].for_task(models["robot"], other)
+    want = predict(models["auto"], Scorer(models["auto"]), times, values, task=other,
+                   duration=float(pred["robot"].durations[other]))
+    np.testing.assert_allclose(held.robot.mean, want.robot.mean, atol=1e-9)
+
+
+def test_robot_shrinkage_is_saved_with_the_model(demos, tmp_path):
+    model = IProMP(n_basis=11, shrinkage="robot").fit(demos)
+    model.save(tmp_path / "m.npz")
+    back = IProMP.load(tmp_path / "m.npz")
+    assert back.shrinkage == "robot"
+    for a, b in zip(model.task_models, back.task_models):
+        np.testing.assert_array_equal(b.robot.factor, a.robot.factor)
+        np.testing.assert_array_equal(b.weights.factor, a.weights.factor)
+    plain = IProMP(n_basis=11).fit(demos)
+    plain.save(tmp_path / "p.npz")
+    assert all(t.robot is None for t in IProMP.load(tmp_path / "p.npz").task_models)
+
+
 def test_an_unknown_shrinkage_is_refused():
     with pytest.raises(ValueError, match="shrinkage"):
         IProMP(shrinkage="pooled")
@@ -130,3 +175,13 @@ def test_motion_the_tasks_share_leaves_the_posterior_near_the_prior():
     prior = 1.0 / len(fresh)
     assert max(tops["auto"]) <= prior + 0.2, tops
     assert max(tops["none"]) > prior + 0.3, tops       # what the tasks' own covariances did
+
+
+def test_settings_files_take_every_shrinkage(tmp_path):
+    from sandbox.commands._settings import CHOICES, load
+    from sandbox.core.shrinkage import SHRINKAGE
+
+    assert CHOICES["shrinkage"] == SHRINKAGE
+    path = tmp_path / "s.json"
+    path.write_text('{"shrinkage": "robot"}')
+    assert load(str(path))["shrinkage"] == "robot"
