@@ -1,9 +1,6 @@
 """Human-motion filter: a gated constant-velocity Kalman filter and an RTS smoother.
 
-This is the only module that imports :mod:`filterpy`, and only where it is used
-(:class:`HandFilter` and the reference functions): the loader's vectorised path
-(:mod:`sandbox.data.kalman`) does not need it, and filterpy pulls in
-:mod:`scipy.stats`, about a second of every command's start-up.
+The only module that imports :mod:`filterpy`, where used (it pulls in :mod:`scipy.stats`).
 
 Model (per hand coordinate, state ``x = [p, v]`` stacked as ``[p_1..p_P, v_1..v_P]``):
 
@@ -21,20 +18,18 @@ the ``gate_prob`` quantile of a chi-square with P degrees of freedom is rejected
 (not used). After ``max_rejects`` consecutive rejections the filter concludes
 that the track itself has moved and re-initialises on the current sample.
 
-:class:`HandFilter` is causal: its output at time t depends only on samples
-received up to t. :func:`filter_track` runs it over a recorded track and keeps
-what :func:`smooth_track` (filterpy's Rauch-Tung-Striebel smoother) needs.
+:class:`HandFilter` is causal: its output at time t depends only on samples received up
+to t. :func:`filter_track` runs it over a track, keeping what :func:`smooth_track` needs.
 The defaults were measured on the 174 recorded handovers (:mod:`sandbox.data.filtercheck`).
 
-Limits (measured): the gate is loose at these settings. On a 30 Hz
-constant-velocity track (0.37 m/s, 3 mm noise) isolated spikes of 15 cm pass
-and of 20 cm are rejected with the defaults; with ``accel_std=3`` 81 % of the
-10 cm spikes are rejected, with ``accel_std=0.2`` (which a real reach does not
-allow) all 5 cm spikes. The recorded tracker's 5 cm+ jumps are mostly
-multi-frame occlusion excursions near the handover; no causal gate tells their
-first frames from a real fast motion, so the causal output follows them. The
-offline ``"smooth"`` preprocessing of the loader sets them aside first with a
-running median (:func:`sandbox.data.glitches.excursions`).
+Limits (measured): the gate is loose at these settings. On a 30 Hz constant-velocity
+track (0.37 m/s, 3 mm noise) isolated spikes of 15 cm pass and of 20 cm are rejected
+with the defaults; with ``accel_std=3`` 81 % of the 10 cm spikes are rejected, with
+``accel_std=0.2`` (which a real reach does not allow) all 5 cm spikes. The recorded
+tracker's 5 cm+ jumps are mostly multi-frame occlusion excursions near the handover; no
+causal gate tells their first frames from a real fast motion, so the causal output
+follows them. The offline ``"smooth"`` preprocessing of the loader sets them aside
+first with a running median (:func:`sandbox.data.glitches.excursions`).
 """
 
 from __future__ import annotations
@@ -99,15 +94,13 @@ class FilterConfig:
 
     def gate(self, n_dims: int) -> float:
         """Threshold on the squared Mahalanobis distance for ``n_dims`` coordinates."""
-        # the chi-square quantile, as scipy.stats.chi2.ppf computes it (equal to the bit)
-        return float(2.0 * gammaincinv(n_dims / 2.0, self.gate_prob)) if self.gate_prob < 1 \
-            else np.inf
+        q = 2.0 * gammaincinv(n_dims / 2.0, self.gate_prob)   # = scipy.stats.chi2.ppf
+        return float(q) if self.gate_prob < 1 else np.inf
 
 
 def transition(dt: float, n_dims: int, config: FilterConfig) -> tuple[FloatArray, FloatArray]:
     """State transition ``F`` and process noise ``Q`` over ``dt`` seconds, shapes (2P, 2P)."""
     from filterpy.common import Q_continuous_white_noise
-
     F = np.eye(2 * n_dims)
     F[:n_dims, n_dims:] = dt * np.eye(n_dims)
     Q = Q_continuous_white_noise(
@@ -169,7 +162,6 @@ class HandFilter:
         self._recent: deque[bytes] = deque(maxlen=int(repeat_window))
         self._gate = self.config.gate(self.n_dims)
         from filterpy.kalman import KalmanFilter
-
         self._kf = KalmanFilter(dim_x=2 * self.n_dims, dim_z=self.n_dims)
         self._kf.H = np.hstack([np.eye(self.n_dims), np.zeros((self.n_dims, self.n_dims))])
         self._kf.R = self.config.noise_std**2 * np.eye(self.n_dims)
@@ -389,7 +381,6 @@ def smooth_track(run: FilterRun, config: FilterConfig | None = None) -> FloatArr
 def smooth_track_reference(run: FilterRun, config: FilterConfig | None = None) -> FloatArray:
     """:func:`smooth_track` computed by :meth:`filterpy.kalman.KalmanFilter.rts_smoother`."""
     from filterpy.kalman import KalmanFilter
-
     kf = KalmanFilter(dim_x=run.means.shape[1], dim_z=run.filtered.shape[1])
 
     def means(xs, ps, fs, qs):
