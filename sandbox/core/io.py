@@ -127,6 +127,9 @@ def save_model(model: IProMP, path: str | os.PathLike) -> None:
         meta["hyperparameters"]["jitter_floor"] = model.jitter_floor
     if getattr(model, "noise_floor", None) == "auto":     # the floors it learned (m)
         meta["floors_used"] = np.asarray(model.floors_used, dtype=float).tolist()
+    if getattr(model, "condition_noise", None) is not None:   # Sigma_c (core.condfloor)
+        meta["hyperparameters"]["condition_floor"] = model.condition_floor
+        meta["condition_noise"] = np.asarray(model.condition_noise, dtype=float).tolist()
     if getattr(model, "shrinkage", "none") != "none":
         meta["hyperparameters"]["shrinkage"] = model.shrinkage
     arrays = {"noise": model.noise, "scale": model.scale}
@@ -369,5 +372,8 @@ def model_from_file(cls, f: ModelFile):
     model.session = dict(meta["session"])
     if meta.get("floors_used") is not None:
         model.floors_used = np.asarray(meta["floors_used"], dtype=np.float64)
+    if meta.get("condition_noise") is not None:     # files before it condition with noise
+        model.condition_noise = np.asarray(meta["condition_noise"], dtype=np.float64)
+    model.condition_floor = meta["hyperparameters"].get("condition_floor")
     model._fitted = True
     return model

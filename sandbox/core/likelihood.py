@@ -110,14 +110,24 @@ class Scorer:
     ----------
     model : IProMP
         A fitted model.
+    noise : ndarray, shape (P,), optional
+        Observation variances instead of ``model.noise``.
+
+    Attributes
+    ----------
+    conditioner : Scorer
+        What conditions the robot (eq. 7-9): a scorer of ``model.condition_noise``
+        (:mod:`sandbox.core.condfloor`), or this one when the model has none.
     """
 
-    def __init__(self, model: IProMP) -> None:
+    def __init__(self, model: IProMP, noise: FloatArray | None = None) -> None:
         model._require_fit()
         self.basis = model.basis
         P, N = model.n_human, model.basis.n_basis
         self.P, self.N, self.K = P, N, len(model.task_models)
-        self.sigma2 = np.asarray(model.noise, dtype=np.float64)
+        self.sigma2 = np.asarray(model.noise if noise is None else noise, dtype=np.float64)
+        cond = getattr(model, "condition_noise", None)
+        self.conditioner = self if cond is None or noise is not None else Scorer(model, cond)
         self.log_sigma2 = np.log(self.sigma2)
         self.start_mean, self.start_var = start_distribution(model)   # the rest hypothesis
         #: Each task's weights with the factor's columns turned so that the human block
