@@ -127,9 +127,7 @@ def save_model(model: IProMP, path: str | os.PathLike) -> None:
         meta["hyperparameters"]["jitter_floor"] = model.jitter_floor
     if getattr(model, "noise_floor", None) == "auto":     # the floors it learned (m)
         meta["floors_used"] = np.asarray(model.floors_used, dtype=float).tolist()
-    if getattr(model, "condition_noise", None) is not None:   # Sigma_c (core.condfloor)
-        meta["hyperparameters"]["condition_floor"] = model.condition_floor
-        meta["condition_noise"] = np.asarray(model.condition_noise, dtype=float).tolist()
+    _put_condition(model, meta)
     if getattr(model, "shrinkage", "none") != "none":
         meta["hyperparameters"]["shrinkage"] = model.shrinkage
     arrays = {"noise": model.noise, "scale": model.scale}
@@ -150,6 +148,14 @@ def save_model(model: IProMP, path: str | os.PathLike) -> None:
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
+
+
+def _put_condition(model, meta: dict) -> None:
+    """The conditioning noise of a ``condition_floor`` (:mod:`sandbox.core.condfloor`), if
+    any, in the file's metadata, in place."""
+    if getattr(model, "condition_noise", None) is not None:
+        meta["hyperparameters"]["condition_floor"] = model.condition_floor
+        meta["condition_noise"] = np.asarray(model.condition_noise, dtype=float).tolist()
 
 
 def _put_calibration(cal, meta: dict, arrays: dict) -> None:
