@@ -123,3 +123,16 @@ def test_a_settings_file_takes_the_condition_floor(tmp_path):
     with pytest.raises(ValueError, match=r"condition_floor: expected a number \(m\), auto or "
                                          r"null, got 'automatic'"):
         load(path)
+
+
+def test_fit_prints_the_conditioning_noise_and_the_file_keeps_it(tmp_path, capsys):
+    from sandbox.cli import main
+
+    settings = tmp_path / "s.yaml"
+    settings.write_text("condition_floor: 0.05\n")
+    out = tmp_path / "m.npz"
+    assert main(["fit", "--data", "synthetic:two_task", "--n-per-task", "3", "--n-basis", "9",
+                 "--config", str(settings), "--out", str(out)]) == 0
+    assert "hand conditioning noise (mm, the robot's, eq. 7-9): 50.0, 50.0, 50.0" in (
+        capsys.readouterr().out)
+    assert np.allclose(IProMP.load(out).condition_noise, 0.05**2)
