@@ -53,9 +53,10 @@ class Prediction:
     motion_probability : float
         Probability that the hand had started moving, against the rest
         hypothesis (:mod:`sandbox.core.rest`); 1 when it was not weighed.
-    condition_factors : ndarray or None, shape (K, R+1, R+1)
-        Every task's factor at its duration under the conditioning noise
-        (:mod:`sandbox.core.condfloor`); None when it is the observation noise.
+    observed : tuple or None
+        The observations ``(times, values)`` it was made from when the robot is
+        conditioned under a noise of its own (:mod:`sandbox.core.condfloor`): what
+        :meth:`for_task` conditions another task with; None otherwise.
     """
 
     task_index: int
@@ -69,7 +70,7 @@ class Prediction:
     grid: list | None = None
     n_values: int | None = None
     motion_probability: float = 1.0
-    condition_factors: FloatArray | None = None
+    observed: tuple | None = None
 
     def trajectory(self, basis, times) -> tuple[FloatArray, FloatArray]:
         """Robot mean (T, Q) and covariance (T, Q, Q) at ``times`` (s); holds after the end."""
@@ -94,8 +95,9 @@ class Prediction:
         if self.factors is None:
             raise ValueError("for_task: this prediction kept no factors (marginal likelihood)")
         scorer = Scorer(model) if scorer is None else scorer
-        factors = self.factors if self.condition_factors is None else self.condition_factors
-        robot = condition_robot(scorer.weights[k], factors[k], model.n_human, scorer.rank[k])
+        factor = (self.factors[k] if self.observed is None else scorer.conditioner.joint_pairs(
+            *self.observed, self.durations[k:k + 1], np.array([k]))[1][0])
+        robot = condition_robot(scorer.weights[k], factor, model.n_human, scorer.rank[k])
         return replace(self, task_index=int(k), robot=robot, duration=float(self.durations[k]),
                        task_posterior=self.task_posterior if posterior is None else posterior)
 
@@ -148,18 +150,13 @@ def predict(model: IProMP, scorer: Scorer, times: FloatArray, values: FloatArray
         chosen = post
     k = chosen_task(post, chosen) if task is None else int(task)
     T = float(est.durations[k]) if duration is None else float(duration)
-    conditioned = None
-    if scorer.conditioner is not scorer:       # every task's factor under Sigma_c (condfloor)
-        durations = np.array(est.durations, dtype=np.float64)
-        durations[k] = T
-        conditioned = scorer.conditioner.joint_pairs(times, values, durations,
-                                                     np.arange(durations.size))[1]
-        factor = conditioned[k]
-    elif duration is None and est.factors is not None:
+    observed = None if scorer.conditioner is scorer else (times, values)
+    if observed is None and duration is None and est.factors is not None:
         factor = est.factors[k]
-    else:
-        factor = scorer.joint_pairs(times, values, np.array([T]), np.array([k]))[1][0]
+    else:                                      # under Sigma_c (condfloor) or at a given T
+        factor = scorer.conditioner.joint_pairs(times, values, np.array([T]),
+                                                np.array([k]))[1][0]
     robot = condition_robot(scorer.weights[k], factor, model.n_human, scorer.rank[k])
     return Prediction(k, post, est.alphas, est.durations, est.log_likelihood, robot, T,
                       est.factors, est.grid, int(np.isfinite(values).sum()), p_motion,
-                      conditioned)
+                      observed)
