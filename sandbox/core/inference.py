@@ -95,8 +95,12 @@ class Prediction:
         if self.factors is None:
             raise ValueError("for_task: this prediction kept no factors (marginal likelihood)")
         scorer = Scorer(model) if scorer is None else scorer
-        factor = (self.factors[k] if self.observed is None else scorer.conditioner.joint_pairs(
-            *self.observed, self.durations[k:k + 1], np.array([k]))[1][0])
+        if self.observed is None:
+            factor = self.factors[k]
+        else:                                  # under Sigma_c (condfloor)
+            times, values = self.observed
+            factor = scorer.conditioner.joint_pairs(times, values, self.durations[k:k + 1],
+                                                    np.array([k]))[1][0]
         robot = condition_robot(scorer.weights[k], factor, model.n_human, scorer.rank[k])
         return replace(self, task_index=int(k), robot=robot, duration=float(self.durations[k]),
                        task_posterior=self.task_posterior if posterior is None else posterior)
