@@ -7,6 +7,7 @@ predictor options, the names of :class:`~sandbox.eval.loocv.EvalConfig`::
     n_basis: 21              # model (IProMP) options
     regularizer: 0.001
     noise_floor: 0.02        # m, or auto: learned per position modality from the demos
+    condition_floor: auto    # m, auto or null: the floor conditioning the robot (eq. 7-9)
     jitter_floor: 15         # opt-in: position floors max(2 mm, 15 x the data's raw jitter)
     shrinkage: auto          # auto | none | robot: covariances shrunk toward the pooled one
     settle_tol: 0.05         # rad, or null: the whole recording is the motion
@@ -32,8 +33,9 @@ from pathlib import Path
 from typing import Any
 
 #: Options of the model (:class:`~sandbox.core.IProMP`).
-MODEL_KEYS = ("n_basis", "regularizer", "noise_scale", "noise_floor", "signal_floor",
-              "noise_floors", "jitter_floor", "shrinkage", "settle_tol", "arrive_tol")
+MODEL_KEYS = ("n_basis", "regularizer", "noise_scale", "noise_floor", "condition_floor",
+              "signal_floor", "noise_floors", "jitter_floor", "shrinkage", "settle_tol",
+              "arrive_tol")
 #: Options of the predictor (:class:`~sandbox.core.DynamicPredictor`).
 PREDICTOR_KEYS = ("likelihood", "window_mode", "n_candidates", "refine_steps", "blend_rate",
                   "blend_delay", "until_end", "end_prob", "subsample")
@@ -114,6 +116,12 @@ def _check(path: Path, key: str, value: Any) -> Any:
         if value != "auto":
             raise fail("a number (m) or auto")
         return value
+    if key == "condition_floor":
+        if value is None or value == "auto":
+            return value
+        if isinstance(value, str) and not _numeric(value):
+            raise fail("a number (m), auto or null")
+        return _bounded(path, key, "noise_floor", value)
     if value is None and key in OPTIONAL:
         return None
     assert key in NUMBERS and key in BOUNDS, key

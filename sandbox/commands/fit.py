@@ -128,6 +128,9 @@ def _summary(model, args: argparse.Namespace, out: Path, n_demos: int, skipped: 
         "observe": [m.name for m in model.modalities], "robot_space": model.robot_space,
         "noise_std": {m.name: [float(s) for s in np.sqrt(model.noise[sl]) * model.scale[sl]]
                       for m, sl in zip(model.modalities, _slices(model))},
+        "condition_noise_std": (None if model.condition_noise is None else {
+            m.name: [float(s) for s in np.sqrt(model.condition_noise[sl]) * model.scale[sl]]
+            for m, sl in zip(model.modalities, _slices(model))}),
         "units": {m.name: m.units for m in model.modalities},
         "signal_scale": {m.name: [float(v) for v in model.scale[sl]]
                          for m, sl in zip(model.modalities, _slices(model))
@@ -188,6 +191,11 @@ def _format(s: dict) -> str:
         else:
             values, unit = ", ".join(f"{v:.3g}" for v in noise), s["units"][name]
         lines.append(f"  {name} observation noise ({unit}): {values}")
+    for name, noise in (s["condition_noise_std"] or {}).items():
+        values = ", ".join(f"{1e3 * v:.1f}" if s["units"][name] == "m" else f"{v:.3g}"
+                           for v in noise)
+        unit = "mm" if s["units"][name] == "m" else s["units"][name]
+        lines.append(f"  {name} conditioning noise ({unit}, the robot's, eq. 7-9): {values}")
     if "noise_floor" in s:
         from sandbox.data.noisefloor import format_floors
 

@@ -85,6 +85,15 @@ class HeldOut:
         log_task = logs[self.task] - (top + np.log(np.exp(values - top).sum(axis=0)))
         return log_task + self._goal_log(*own)
 
+    def goal_error(self, sigma2: FloatArray) -> FloatArray:
+        """Squared error of the goal's conditional mean (eq. 7-9), shape (C,), for
+        observation variances ``sigma2`` (C, P): a point score no covariance can game."""
+        inv = 1.0 / np.atleast_2d(np.asarray(sigma2, dtype=np.float64))
+        equal = bool(np.all(inv == inv[:, :1]))
+        shift = (_equal if equal else _general)(inv, self.parts[self.task], self.goal[2])[3][0]
+        diff, _, _, e, _ = self.goal
+        return ((diff - (inv @ e - shift)) ** 2).sum(axis=1)
+
     def _goal_log(self, inv: FloatArray, shift: FloatArray, xbx: FloatArray) -> FloatArray:
         """log N(goal) under the conditional (eq. 7-9), shape (C,): mean shift
         :math:`X H^T C^{-1} d`, covariance :math:`\\Sigma_{gg} - X H^T C^{-1} H X^T`

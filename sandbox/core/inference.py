@@ -54,9 +54,10 @@ class Prediction:
         Probability that the hand had started moving, against the rest
         hypothesis (:mod:`sandbox.core.rest`); 1 when it was not weighed.
     observations : tuple of ndarray or None
-        With ``shrinkage="robot"``, the (times, values) it was made from: what
-        :meth:`for_task` conditions another task's robot on with the scorer's
-        ``conditioner`` (the shrunk weights); None otherwise.
+        The observations ``(times, values)`` it was made from when the robot is
+        conditioned by a scorer of its own (``shrinkage="robot"``'s weights or a
+        ``condition_floor``'s noise, :mod:`sandbox.core.condfloor`): what
+        :meth:`for_task` conditions another task's robot with; None otherwise.
     """
 
     task_index: int
@@ -96,7 +97,7 @@ class Prediction:
             raise ValueError("for_task: this prediction kept no factors (marginal likelihood)")
         scorer = Scorer(model) if scorer is None else scorer
         factor = self.factors[k]
-        if self.observations is not None and scorer.conditioner is not None:
+        if self.observations is not None:          # the robot's own scorer (conditioner)
             scorer = scorer.conditioner
             factor = scorer.joint_pairs(*self.observations, self.durations[k:k + 1],
                                         np.array([k]))[1][0]
@@ -153,8 +154,8 @@ def predict(model: IProMP, scorer: Scorer, times: FloatArray, values: FloatArray
         chosen = post
     k = chosen_task(post, chosen) if task is None else int(task)
     T = float(est.durations[k]) if duration is None else float(duration)
-    cond = scorer if scorer.conditioner is None else scorer.conditioner   # shrinkage="robot"
-    if duration is None and est.factors is not None and cond is scorer:
+    cond = scorer.conditioner     # shrinkage="robot" or condition_floor: another scorer
+    if cond is scorer and duration is None and est.factors is not None:
         factor = est.factors[k]
     else:
         factor = cond.joint_pairs(times, values, np.array([T]), np.array([k]))[1][0]

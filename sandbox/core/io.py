@@ -15,15 +15,13 @@ Optional, for a model with a familiarity calibration
 (:mod:`sandbox.core.familiarity`): a ``familiarity`` entry in the metadata
 (threshold, alpha, likelihood, subsample, dow_t, n_motions, and ``components``
 when more than the Mahalanobis term is ranked) and the members
-``familiarity_edges`` (B,), ``familiarity_quantiles`` (K, B, L),
-``familiarity_counts`` (K, B), and ``familiarity_extra`` (J - 1, K, B, L) with
-``components``. Files without ``components`` (before the timing evidence)
-load as a calibration of the Mahalanobis term alone.
+``familiarity_edges`` (B,), ``familiarity_quantiles`` (K, B, L), ``familiarity_counts``
+(K, B), and ``familiarity_extra`` (J - 1, K, B, L) with ``components``; without
+``components`` (before the timing evidence), a calibration of the Mahalanobis term.
 
-Optional: a ``session`` object in the metadata, what a recording session taught
-besides the model (e.g. the meeting geometry, :mod:`sandbox.data.geometry`),
-kept as :attr:`IProMP.session` and never interpreted here; files without it load
-with an empty one.
+Optional: a ``session`` object in the metadata, what a recording session taught besides
+the model (e.g. the meeting geometry, :mod:`sandbox.data.geometry`), kept as
+:attr:`IProMP.session`, never interpreted here; files without it load with an empty one.
 
 Version history: 1 (package 0.1.0) had the hand only (``human_names``, no
 modalities, no scale); such files still load, as one position modality
@@ -123,12 +121,7 @@ def save_model(model: IProMP, path: str | os.PathLike) -> None:
             for t, p in zip(model.task_models, model.priors)
         ],
     }
-    if getattr(model, "jitter_floor", None) is not None:
-        meta["hyperparameters"]["jitter_floor"] = model.jitter_floor
-    if getattr(model, "noise_floor", None) == "auto":     # the floors it learned (m)
-        meta["floors_used"] = np.asarray(model.floors_used, dtype=float).tolist()
-    if getattr(model, "shrinkage", "none") != "none":
-        meta["hyperparameters"]["shrinkage"] = model.shrinkage
+    _put_options(model, meta)
     arrays = {"noise": model.noise, "scale": model.scale}
     _put_calibration(getattr(model, "calibration", None), meta, arrays)
     if getattr(model, "session", None):
@@ -149,6 +142,25 @@ def save_model(model: IProMP, path: str | os.PathLike) -> None:
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
+
+
+def _put_options(model: IProMP, meta: dict) -> None:
+    """Write the options older files lack into ``meta``, only when set (older readers)."""
+    if getattr(model, "jitter_floor", None) is not None:
+        meta["hyperparameters"]["jitter_floor"] = model.jitter_floor
+    if getattr(model, "noise_floor", None) == "auto":     # the floors it learned (m)
+        meta["floors_used"] = np.asarray(model.floors_used, dtype=float).tolist()
+    _put_condition(model, meta)
+    if getattr(model, "shrinkage", "none") != "none":
+        meta["hyperparameters"]["shrinkage"] = model.shrinkage
+
+
+def _put_condition(model, meta: dict) -> None:
+    """The conditioning noise of a ``condition_floor`` (:mod:`sandbox.core.condfloor`), if
+    any, in the file's metadata, in place."""
+    if getattr(model, "condition_noise", None) is not None:
+        meta["hyperparameters"]["condition_floor"] = model.condition_floor
+        meta["condition_noise"] = np.asarray(model.condition_noise, dtype=float).tolist()
 
 
 def _put_calibration(cal, meta: dict, arrays: dict) -> None:
@@ -381,5 +393,8 @@ def model_from_file(cls, f: ModelFile):
     model.session = dict(meta["session"])
     if meta.get("floors_used") is not None:
         model.floors_used = np.asarray(meta["floors_used"], dtype=np.float64)
+    if meta.get("condition_noise") is not None:     # files before it condition with noise
+        model.condition_noise = np.asarray(meta["condition_noise"], dtype=np.float64)
+    model.condition_floor = meta["hyperparameters"].get("condition_floor")
     model._fitted = True
     return model

@@ -107,6 +107,16 @@ def _robot_view(model: IProMP) -> IProMP:
     return view
 
 
+def _conditioner(scorer: Scorer, model: IProMP) -> Scorer:
+    """The scorer that conditions the robot (see :attr:`Scorer.conditioner`)."""
+    noise = getattr(model, "condition_noise", None)
+    robot = any(t.robot is not None for t in model.task_models)
+    if noise is None and not robot:
+        return scorer
+    return Scorer(_robot_view(model) if robot else model,
+                  model.noise if noise is None else noise)
+
+
 class Scorer:
     """Precomputed, per fitted model, everything the likelihood needs.
 
@@ -119,14 +129,24 @@ class Scorer:
     ----------
     model : IProMP
         A fitted model.
+    noise : ndarray, shape (P,), optional
+        Observation variances instead of ``model.noise``.
+
+    Attributes
+    ----------
+    conditioner : Scorer
+        What conditions the robot (eq. 7-9): a scorer of the tasks' robot weights
+        (``shrinkage="robot"``, :attr:`~sandbox.core.fitting.TaskModel.robot`) and of
+        ``model.condition_noise`` (:mod:`sandbox.core.condfloor`), or this one when the
+        model has neither.
     """
 
-    def __init__(self, model: IProMP) -> None:
+    def __init__(self, model: IProMP, noise: FloatArray | None = None) -> None:
         model._require_fit()
         self.basis = model.basis
         P, N = model.n_human, model.basis.n_basis
         self.P, self.N, self.K = P, N, len(model.task_models)
-        self.sigma2 = np.asarray(model.noise, dtype=np.float64)
+        self.sigma2 = np.asarray(model.noise if noise is None else noise, dtype=np.float64)
         self.log_sigma2 = np.log(self.sigma2)
         self.start_mean, self.start_var = start_distribution(model)   # the rest hypothesis
         #: Each task's weights with the factor's columns turned so that the human block
@@ -147,10 +167,7 @@ class Scorer:
         self._raw = raw
         kappa = self.reg_h / self.sigma2                          # (K, P)
         self.groups = _make_groups(kappa, self.modality_dims, pad)
-        #: The scorer whose factors condition the robot (``shrinkage="robot"``: the tasks'
-        #: :attr:`~sandbox.core.fitting.TaskModel.robot` weights), else None (this one).
-        self.conditioner = (None if all(t.robot is None for t in model.task_models) else
-                            Scorer(_robot_view(model)))
+        self.conditioner = self if noise is not None else _conditioner(self, model)
         _kernels.factor_kernel(self.R + 1)    # numba's kernel loaded now, not in an update
 
     @property

@@ -1,21 +1,19 @@
 """The fitted interaction model: one IProMP per task plus per-modality observation noise.
 
-:class:`IProMP` is what users fit and save. For every task k it holds the
-weight distribution over P human + Q robot dims (:mod:`sandbox.core.promp`), the
-nominal duration :math:`T_{nom,k}` and the Gaussian prior of the speed factor
-:math:`\\alpha = T / T_{nom,k}` (paper eq. 10); shared by all tasks are the
-basis, the observation modalities (:mod:`sandbox.core.modality`), their
-observation noise :math:`\\Sigma_y`, the scale of signal modalities and the
-task priors p(k).
+:class:`IProMP` is what users fit and save. For every task k it holds the weight
+distribution over P human + Q robot dims (:mod:`sandbox.core.promp`), the nominal
+duration :math:`T_{nom,k}` and the Gaussian prior of the speed factor
+:math:`\\alpha = T / T_{nom,k}` (eq. 10); shared by all tasks are the basis, the
+modalities (:mod:`sandbox.core.modality`), their observation noise
+:math:`\\Sigma_y`, the scale of signal modalities and the task priors p(k).
 
 Choices this project makes (DESIGN.md section 3):
 
 * **A demonstration's motion ends when both partners have arrived**: the robot
   stays within ``settle_tol`` (rad) of its final configuration and the hand has
   come within ``arrive_tol`` (m) of its farthest reach (:func:`motion_end`).
-  Recordings run on after the handover (0.6 +/- 0.3 s in the recorded set:
-  the hand idles, retracts or is occluded); that idle tail is not part of the
-  motion's phase.
+  Recordings run on after the handover (0.6 +/- 0.3 s in the recorded set: the hand
+  idles, retracts or is occluded); that idle tail is not part of the motion's phase.
   Past its end a motion holds its final state (the phase is clipped at 1), for
   the robot and the human alike; :mod:`sandbox.core.phase` scores observations
   past a candidate's end that way instead of excluding short candidates.
@@ -29,18 +27,17 @@ Choices this project makes (DESIGN.md section 3):
   (:attr:`IProMP.scale`; 1 for positions). Only the training demos reach it
   (:meth:`IProMP.fit_demo_fits` pools per-demo moments), and it is stored with
   the model; predictors divide incoming signal values by it.
-* :math:`\\Sigma_y` is diagonal and estimated from the data: the residuals of each
-  training demo's own basis fit of the human dims (normalised units), pooled
-  over demos and tasks, divided by the residual degrees of freedom (sum of
-  valid samples minus N per demo and dim), scaled by ``noise_scale`` and
-  floored per modality: ``noise_floor`` (m) for positions, ``signal_floor``
-  (normalised units) for signals, or ``noise_floors[name]``. The residuals
-  measure how far a track departs from a smooth N-basis curve (sensor noise,
-  30 Hz steps, jitter); the floor stands for what a live track departs from
-  the model by, which smoothed training demos cannot show. Both defaults were
-  chosen by leave-one-out on the recorded handovers. With ``jitter_floor=k`` a
-  position modality's floor is ``max(MIN_JITTER_FLOOR, k x jitter)`` instead,
-  the jitter measured on the demos' raw samples (:mod:`sandbox.core.jitter`).
+* :math:`\\Sigma_y` is diagonal: the residuals of each training demo's own basis
+  fit of the human dims (normalised units), pooled over demos and tasks, divided
+  by the residual degrees of freedom (valid samples minus N per demo and dim),
+  scaled by ``noise_scale`` and floored per modality: ``noise_floor`` (m) for
+  positions, ``signal_floor`` (normalised) for signals, or ``noise_floors[name]``.
+  The residuals measure how far a track departs from a smooth N-basis curve; the
+  floor, what a live track departs from the model by, which smoothed demos cannot
+  show (defaults chosen by leave-one-out on the recorded handovers). With
+  ``jitter_floor=k`` a position floor is ``max(MIN_JITTER_FLOOR, k x jitter)``
+  (:mod:`sandbox.core.jitter`). ``condition_floor`` gives the robot's conditioning
+  its own noise :math:`\\Sigma_c` (:mod:`sandbox.core.condfloor`).
 * The robot part is joint angles (rad) or, ``robot_space == "task"`` (taken from
   the demos), a position (m); the core treats both alike (tolerances in its units).
 * The regulariser :math:`\\Lambda` (see :mod:`sandbox.core.promp`) is relative:
@@ -64,6 +61,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from sandbox.core.basis import GaussianBasis
+from sandbox.core.condfloor import check_condition_floor, condition_noise
 from sandbox.core.demos import as_demo_list, check_demo, check_demos, check_spread, modalities_of
 from sandbox.core.fitting import (
     DemoFit,
@@ -109,17 +107,15 @@ class IProMP:
     Parameters
     ----------
     n_basis : int
-        Basis functions per dim (N). Default 21, chosen by leave-one-out on the
-        recorded handovers (``python -m sandbox tune``; 15, 21 and 31 were within
-        noise of each other; the paper uses 31).
+        Basis functions per dim (N). Default 21, chosen by leave-one-out on the recorded
+        handovers (``tune``; 15, 21 and 31 within noise; the paper uses 31).
     basis_width : float or None
         Variance of each basis function in phase units (see :class:`GaussianBasis`).
     basis_margin : float
         Centres spread over ``[-margin, 1 + margin]``.
     normalized_basis : bool
-        Use normalised basis functions (default). Plain Gaussians (the paper's
-        eq. 1) without a margin misfit the ends of a motion by centimetres, where
-        the handover happens; normalised ones represent constants exactly.
+        Use normalised basis functions (default): plain Gaussians (eq. 1) without a
+        margin misfit the ends of a motion, where the handover happens, by cm.
     regularizer : float
         Relative size of the weight-covariance regulariser (module docstring);
         default chosen by leave-one-out on the recorded handovers. In
@@ -136,6 +132,10 @@ class IProMP:
         every prediction worse, including the oracle's. ``"auto"``: each position
         modality's floor is chosen from a grid (2 to 40 mm) by a held-out score on the
         training demos (:mod:`sandbox.core.floorsearch`; scores: :attr:`floor_scores`).
+    condition_floor : float, "auto" or None
+        A second floor (m) for conditioning the robot on the observations (eq. 7-9;
+        :attr:`condition_noise`), the likelihood keeping ``noise_floor``; ``"auto"``
+        learns it from the demos (:mod:`sandbox.core.condfloor`); None: ``noise_floor``.
     jitter_floor : float or None
         k: a position modality's floor becomes ``max(MIN_JITTER_FLOOR, k x its
         jitter)`` (:mod:`sandbox.core.jitter`) instead of ``noise_floor``; None (the
@@ -158,17 +158,15 @@ class IProMP:
         Lower bound of :math:`\\sigma_\\alpha`, in [limits.MIN_ALPHA_STD, limits.MAX_ALPHA_STD].
     shrinkage : {"auto", "none", "robot"}
         ``"auto"``: each task's weight covariance shrunk toward the tasks' pooled one
-        by an intensity learned from its demos (:mod:`sandbox.core.shrinkage`; used:
-        :attr:`shrinkage_used`); ``"none"``: each task keeps its own; ``"robot"``: the shrunk
-        covariance conditions the robot only (eq. 8), recognition and speeds keep their own.
+        (:mod:`sandbox.core.shrinkage`; :attr:`shrinkage_used`); ``"none"``: its own;
+        ``"robot"``: shrunk only where it conditions the robot (eq. 8).
     ridge : float
         Relative ridge of the per-demo weight fit (eq. 2).
     priors : mapping of str to float, optional
-        Task priors p(k); uniform by default. Normalised after fitting.
+        Task priors p(k); uniform by default, normalised after fitting.
     max_duration : float
         Longest demonstration :meth:`fit` accepts (s); default
-        :data:`~sandbox.core.limits.MAX_DURATION_S`. Longer spans are refused with a
-        hint when they look like milliseconds or nanoseconds.
+        :data:`~sandbox.core.limits.MAX_DURATION_S` (a hint names ms or ns spans).
 
     Raises
     ------
@@ -197,6 +195,7 @@ class IProMP:
         regularizer: float = 1e-3,
         noise_scale: float = 1.0,
         noise_floor: float | str = 0.02,
+        condition_floor: float | str | None = None,
         signal_floor: float = SIGNAL_FLOOR,
         noise_floors: Mapping[str, float] | None = None,
         jitter_floor: float | None = None,
@@ -214,6 +213,9 @@ class IProMP:
         self.noise_scale = check_positive(noise_scale, "noise_scale", high=MAX_RELATIVE)
         self.noise_floor = check_noise_floor(noise_floor, check_floor)
         self.floor_scores: dict[str, dict[float, float]] = {}   #: of noise_floor="auto"
+        self.condition_floor = check_condition_floor(condition_floor, check_floor)
+        self.condition_scores: dict[str, dict[float, float]] = {}   #: of its "auto"
+        self.condition_noise: FloatArray | None = None   #: Sigma_c (P,), None: Sigma_y
         self.signal_floor = check_floor(signal_floor, "signal_floor", "signal_floor")
         self.noise_floors = {k: check_floor(v, f"noise_floors[{k!r}]", "noise_floors")
                              for k, v in check_mapping(noise_floors, "noise_floors").items()}
@@ -233,8 +235,7 @@ class IProMP:
                              for k, v in check_mapping(priors, "priors").items()})
         self._fitted = False
         self.calibration: Calibration | None = None
-        #: What a recording session taught besides the model (JSON-able; e.g. the meeting
-        #: geometry of :mod:`sandbox.data.geometry`): saved and loaded, never interpreted here.
+        #: What a session taught besides the model (JSON-able; e.g. :mod:`sandbox.data.geometry`).
         self.session: dict[str, Any] = {}
         self.robot_space = "joint"   #: what the robot dims are: "joint" (rad) or "task" (m)
 
@@ -292,17 +293,18 @@ class IProMP:
         scale = signal_scale(modalities, np.sum([f.moments for f in fits], axis=0))
         self.floors_used = self.floors(modalities, fits, scale)
         sigma2 = observation_noise(fits, scale, self.floors_used, self.noise_scale)
+        cond = condition_noise(self, modalities, fits, scale, self.floors_used)
         divide = np.r_[scale, np.ones(Q)].repeat(self.basis.n_basis)
         arrays = {k: np.array(v) / divide for k, v in weights.items()}
         for k, w in arrays.items():
             check_spread(k, w)
         self._set_fit(arrays, durations, sigma2, P, Q, names_from, modalities, scale)
+        self.condition_noise = cond
         return self
 
     def floors(self, modalities: Sequence[Modality], fits: Sequence[DemoFit] = (),
                scale: FloatArray | None = None) -> FloatArray:
-        """Noise floor of every human dim (normalised units), shape (P,):
-        :func:`~sandbox.core.floorsearch.model_floors`."""
+        """Noise floors (P,), normalised: :func:`~sandbox.core.floorsearch.model_floors`."""
         return model_floors(self, modalities, fits, scale)
 
     def _set_fit(self, weights, durations, sigma2, P, Q, first, modalities, scale) -> None:

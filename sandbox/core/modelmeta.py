@@ -34,7 +34,8 @@ READABLE_VERSIONS = (1, 2)
 HYPERPARAMETERS = {
     1: {"regularizer", "noise_scale", "noise_floor", "min_alpha_std", "ridge"},
     2: {"regularizer", "noise_scale", "noise_floor", "signal_floor", "noise_floors",
-        "jitter_floor", "settle_tol", "arrive_tol", "min_alpha_std", "shrinkage", "ridge"},
+        "jitter_floor", "settle_tol", "arrive_tol", "min_alpha_std", "shrinkage", "ridge",
+        "condition_floor"},
 }
 TASK_KEYS = {"name", "nominal_duration", "alpha_mean", "alpha_std", "n_demos", "prior"}
 #: Spaces a model's robot dims may be in: joint angles (rad) or a task-space position (m).
@@ -69,7 +70,8 @@ def check_metadata(meta, path: Path) -> dict:
             "tasks": _tasks(meta["tasks"], _min_alpha_std(meta["hyperparameters"])),
             "familiarity": meta.get("familiarity"),
             "session": _session(meta.get("session", {})),
-            "floors_used": _floors_used(meta.get("floors_used"), P)}
+            "floors_used": _floors_used(meta.get("floors_used"), P),
+            "condition_noise": _floors_used(meta.get("condition_noise"), P, "condition_noise")}
 
 
 
@@ -97,15 +99,16 @@ def _check_speed(where: str, nominal: float, a_mean: float, a_std: float, n_demo
                          f"got {a_std:g}")
 
 
-def _floors_used(value, P: int) -> list | None:
-    """``floors_used``: the P floors a ``noise_floor="auto"`` fit learned (absent before)."""
+def _floors_used(value, P: int, name: str = "floors_used") -> list | None:
+    """``floors_used``: the P floors a ``noise_floor="auto"`` fit learned (absent before);
+    likewise ``condition_noise``, the P variances of a ``condition_floor``."""
     if value is None:
         return None
     ok = isinstance(value, list) and len(value) == P and all(
         isinstance(v, (int, float)) and not isinstance(v, bool) and 0 < v < np.inf
         for v in value)
     if not ok:
-        raise ValueError(f"metadata floors_used: expected {P} positive numbers, "
+        raise ValueError(f"metadata {name}: expected {P} positive numbers, "
                          f"got {str(value)[:60]}")
     return value
 

@@ -20,8 +20,8 @@ from sandbox.eval.loocv import EvalConfig, evaluate_trial, map_trials
 #: The value of ``report["config"]["mode"]`` of a test-only evaluation.
 MODE = "test-only"
 #: Options of a fitted model that :class:`EvalConfig` also names (copied into the report).
-MODEL_OPTIONS = ("regularizer", "noise_scale", "noise_floor", "signal_floor", "jitter_floor",
-                 "shrinkage", "settle_tol", "arrive_tol")
+MODEL_OPTIONS = ("regularizer", "noise_scale", "noise_floor", "condition_floor",
+                 "signal_floor", "jitter_floor", "shrinkage", "settle_tol", "arrive_tol")
 
 _STATE: dict = {}
 

@@ -54,8 +54,8 @@ class EvalConfig:
     likelihood, window_mode, n_candidates, refine_steps, blend_rate, blend_delay, until_end,
     end_prob :
         predictor options (:class:`~sandbox.core.DynamicPredictor`).
-    n_basis, regularizer, noise_scale, noise_floor, signal_floor, noise_floors, jitter_floor,
-    shrinkage, settle_tol, arrive_tol, robot_tol :
+    n_basis, regularizer, noise_scale, noise_floor, condition_floor, signal_floor, noise_floors,
+    jitter_floor, shrinkage, settle_tol, arrive_tol, robot_tol :
         model options (:class:`~sandbox.core.IProMP`).
     observe : modalities the models observe (None: all the demonstrations carry).
     goal_tol : distance (m) for time-to-correct.
@@ -77,6 +77,7 @@ class EvalConfig:
     regularizer: float = 1e-3
     noise_scale: float = 1.0
     noise_floor: float | str = 0.02
+    condition_floor: float | str | None = None
     signal_floor: float = SIGNAL_FLOOR
     noise_floors: tuple[tuple[str, float], ...] = ()
     jitter_floor: float | None = None
@@ -92,6 +93,7 @@ class EvalConfig:
         """An unfitted model with these options."""
         return IProMP(n_basis=self.n_basis, regularizer=self.regularizer,
                       noise_scale=self.noise_scale, noise_floor=self.noise_floor,
+                      condition_floor=self.condition_floor,
                       signal_floor=self.signal_floor, noise_floors=dict(self.noise_floors),
                       jitter_floor=self.jitter_floor, shrinkage=self.shrinkage,
                       settle_tol=self.settle_tol, arrive_tol=self.arrive_tol,
