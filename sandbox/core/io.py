@@ -13,12 +13,14 @@ Layout of the file (a numpy ``.npz`` archive, written atomically; any reader of
 
 Optional, for a model with a familiarity calibration
 (:mod:`sandbox.core.familiarity`): a ``familiarity`` entry in the metadata
-(threshold, alpha, likelihood, subsample, dow_t, n_motions, and ``components``
-when more than the Mahalanobis term is ranked) and the members
+(threshold, alpha, likelihood, subsample, dow_t, n_motions, ``components``
+when more than the Mahalanobis term is ranked, and ``end_prob`` when it is gated
+to the ongoing motion) and the members
 ``familiarity_edges`` (B,), ``familiarity_quantiles`` (K, B, L),
 ``familiarity_counts`` (K, B), and ``familiarity_extra`` (J - 1, K, B, L) with
 ``components``. Files without ``components`` (before the timing evidence)
-load as a calibration of the Mahalanobis term alone.
+load as a calibration of the Mahalanobis term alone; files without ``end_prob``
+as one of every update.
 
 Optional: a ``session`` object in the metadata, what a recording session taught
 besides the model (e.g. the meeting geometry, :mod:`sandbox.data.geometry`),
@@ -161,6 +163,8 @@ def _put_calibration(cal, meta: dict, arrays: dict) -> None:
     if cal.extra is not None:
         meta["familiarity"]["components"] = list(cal.components)
         arrays["familiarity_extra"] = cal.extra
+    if cal.end_prob is not None:
+        meta["familiarity"]["end_prob"] = cal.end_prob
 
 
 def _output_path(path) -> Path:
@@ -257,7 +261,7 @@ def _calibration(archive, entry, n_tasks: int):
     if entry is None:
         return None
     keys = {"threshold", "alpha", "likelihood", "subsample", "dow_t", "n_motions"}
-    if not isinstance(entry, dict) or set(entry) - {"components"} != keys:
+    if not isinstance(entry, dict) or set(entry) - {"components", "end_prob"} != keys:
         got = sorted(map(str, entry)) if isinstance(entry, dict) else entry
         raise ValueError(f"metadata familiarity: expected the keys {sorted(keys)}, got {got!r}")
     edges = _read(archive, "familiarity_edges", (None,))
