@@ -96,6 +96,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "timing statistics (default), or those and the goal (where the "
                              "hand is heading; calibrate(score='goal')); with --model: its "
                              "calibration's")
+    parser.add_argument("--end-prob", type=_types.bounded("end_prob"), default=None, metavar="P",
+                        help="calibrate and rank only the updates before each motion's "
+                             "estimated end (once the probability that it ended reached P, "
+                             "e.g. 0.5; calibrate(end_prob=P)); default every update; with "
+                             "--model: its calibration's")
     parser.add_argument("--workers", type=_types.WORKERS, default=1,
                         help=f"processes, 1 to {_types.MAX_WORKERS} (default 1)")
     parser.add_argument("--out", type=_types.output_file, default=None,
@@ -139,7 +144,7 @@ def run(args: argparse.Namespace) -> int:
     if args.records:
         saved = _read_records(args.records)
         about = {k: saved.get(k) for k in ("mode", "data", "ood_data", "observe", "dow_t",
-                                            "score")}
+                                            "score", "end_prob")}
         about["mode"] = about["mode"] or MODES[0]
         records, seconds = saved["records"], float(saved.get("seconds", 0.0))
     else:
@@ -195,15 +200,16 @@ def _score(args) -> tuple[dict, list[dict]]:
     if sets:
         records = oodsets.score_sets(*normal, sets, config, dow_t=args.dow_t,
                                      workers=args.workers, progress=progress)
-        return {**about, "mode": MODES[1], "score": args.score}, ood.rank(records,
-                                                                         score=args.score)
+        return ({**about, "mode": MODES[1], "score": args.score, "end_prob": args.end_prob},
+                ood.rank(records, score=args.score, gate=args.end_prob))
     train, test = normal
     if len({d.task for d in train}) < 3:
         raise ValueError(f"--data: leave-task-out needs at least three tasks (two stay "
                          f"trained), got {sorted({d.task for d in train})}; give --ood-data")
     records = ood.score_all(train, test, config, dow_t=args.dow_t, workers=args.workers,
                             progress=progress)
-    return {**about, "mode": MODES[0], "score": args.score}, ood.rank(records, score=args.score)
+    return ({**about, "mode": MODES[0], "score": args.score, "end_prob": args.end_prob},
+            ood.rank(records, score=args.score, gate=args.end_prob))
 
 
 def _load(args, data: str, spec, observe, progress: bool) -> tuple[list, list]:

@@ -47,6 +47,12 @@ exchangeable with the calibration ones, :math:`\\ell` is below
 :math:`\\ell_{(k)}` with probability :math:`k / (n + 1)` for an integer
 :math:`k` (the rank of :math:`\\ell` among the :math:`n + 1` is uniform),
 whatever the statistics' distribution: about ``alpha``.
+
+**Gated to the ongoing motion (opt-in).** With ``end_prob`` (e.g. 0.5), the
+updates from the first whose probability that the motion had ended reached it
+(:func:`~sandbox.core.conformal.ongoing`) are neither calibrated nor ranked: what
+people do after the handover no longer sets the threshold. A hand that stops mid-reach or reaches an
+odd end looks arrived, though, so it is not the default (issue 30; docs, Results).
 """
 
 from __future__ import annotations
@@ -59,6 +65,7 @@ from sandbox.core.conformal import (
     LEVELS,
     conformal_threshold,
     fisher,
+    ongoing,
     rank,
 )
 from sandbox.core.evidence import ANALYTIC, COMPONENTS, TIMING
@@ -120,6 +127,11 @@ class Calibration:
         goal) or :data:`~sandbox.core.evidence.COMPONENTS`.
     extra : ndarray or None, shape (J - 1, K, B, L)
         Quantiles of the statistics after the first, like ``quantiles``; None for one.
+    end_prob : float or None
+        Gate to the ongoing motion: an update at or after the first whose posterior
+        probability that the motion had ended reached ``end_prob``
+        (:func:`~sandbox.core.conformal.ongoing`) is neither calibrated nor ranked;
+        None (files before the gate): every update.
     """
 
     edges: FloatArray
@@ -133,6 +145,7 @@ class Calibration:
     n_motions: int = 0
     components: tuple = ("mahalanobis",)
     extra: FloatArray | None = None
+    end_prob: float | None = None
 
     def __post_init__(self) -> None:
         check(self)
@@ -149,8 +162,12 @@ class Calibration:
             return self.quantiles[None]
         return np.concatenate([self.quantiles[None], self.extra])
 
-    def familiarity(self, t: float, value, task: int) -> float:
+    def familiarity(self, t: float, value, task: int, ended: float = 0.0) -> float:
         """Familiarity in (0, 1] of the statistics ``value`` at elapsed time ``t`` (s), task chosen.
+
+        ``ended`` is the highest posterior probability so far that the motion had
+        ended: at or above :attr:`end_prob` the update is past the motion's
+        estimated end and not ranked (NaN).
 
         ``value`` is one float per statistic of :attr:`components` (a float for
         one), or all :data:`~sandbox.core.evidence.COMPONENTS` (those of
@@ -171,7 +188,7 @@ class Calibration:
         if v.shape != (len(names),):
             raise ValueError(f"value: expected {len(names)} statistics {names}, got shape "
                              f"{v.shape}")
-        if not np.isfinite(v[0]):
+        if not np.isfinite(v[0]) or (self.end_prob is not None and ended >= self.end_prob):
             return float("nan")
         b = max(int(np.searchsorted(self.edges, t, side="right")) - 1, 0)
         q = self.stack[:, int(task), b]
@@ -196,11 +213,13 @@ class Calibration:
 
         Parameters
         ----------
-        records : sequence of (times, values, tasks)
+        records : sequence of (times, values, tasks[, ended])
             Per calibration motion: update times (s,) in seconds, their
             statistics, (s,) (:func:`~sandbox.core.familiarity.statistic`) or
-            (s, J) (J statistics of one of :data:`NAMES`), and the task each
-            chose (s,) (int in [0, K)).
+            (s, J) (J statistics of one of :data:`NAMES`), the task each
+            chose (s,) (int in [0, K)) and, with ``end_prob``, each update's
+            probability that the motion had ended (s,)
+            (:func:`~sandbox.core.conformal.ongoing`).
         n_tasks : int
             K.
         alpha : float
@@ -208,7 +227,8 @@ class Calibration:
         edges : array_like, shape (B,), optional
             Left bin edges (s); bins holding no update are merged into the one before.
         **settings
-            ``likelihood``, ``subsample``, ``dow_t`` as stored.
+            ``likelihood``, ``subsample``, ``dow_t``, ``end_prob`` as stored (with
+            ``end_prob``, the updates past each motion's estimated end are left out).
         """
         alpha = check_fraction(alpha, "alpha")
         full, held_out = leave_one_out(records, n_tasks, edges=edges, **settings)
@@ -238,7 +258,10 @@ def leave_one_out(records, n_tasks: int, *, edges=None,
         Familiarity of record i's finite updates against the other records.
     """
     n_tasks = check_integer(n_tasks, "n_tasks", 1)
-    times, values, tasks, owner = _pool(records, n_tasks)
+    end_prob = settings.get("end_prob")
+    if end_prob is not None:
+        settings["end_prob"] = check_fraction(end_prob, "end_prob")
+    times, values, tasks, owner = _pool(records, n_tasks, settings.get("end_prob"))
     edges = check_array(EDGES if edges is None else edges, "edges", 1)
     edges = _populated(np.sort(edges), times)
     bins = np.searchsorted(edges, times, side="right") - 1
@@ -308,6 +331,8 @@ def check(cal: Calibration) -> Calibration:
     check_integer(cal.subsample, "calibration subsample", 1, MAX_SUBSAMPLE)
     check_positive(cal.dow_t, "calibration dow_t", high=MAX_TIME_S)
     check_integer(cal.n_motions, "calibration n_motions", 0)
+    if cal.end_prob is not None:
+        check_fraction(cal.end_prob, "calibration end_prob")
     return cal
 
 
@@ -326,14 +351,14 @@ def _check_extra(cal: Calibration, q: FloatArray) -> None:
         raise ValueError("calibration extra quantiles: expected non-negative, non-decreasing rows")
 
 
-def _pool(records, n_tasks: int):
+def _pool(records, n_tasks: int, end_prob: float | None = None):
     if len(records) == 0:
         raise ValueError("records: expected at least one calibration motion, got none")
     time_parts: list[np.ndarray] = []
     value_parts: list[np.ndarray] = []
     tasks, owner = [], []
-    for i, (t, v, k) in enumerate(records):
-        t, v = np.asarray(t, dtype=np.float64), np.asarray(v, dtype=np.float64)
+    for i, (t, v, k, *ended) in enumerate(records):
+        t, v = np.asarray(t, dtype=np.float64), np.array(v, dtype=np.float64)
         v = v[:, None] if v.ndim == 1 else v
         k = np.asarray(k)
         if (t.ndim != 1 or v.ndim != 2 or t.shape != k.shape or v.shape[0] != t.size
@@ -344,6 +369,12 @@ def _pool(records, n_tasks: int):
         if k.size and (k.dtype.kind not in "iu" or k.min() < 0 or k.max() >= n_tasks):
             raise ValueError(f"records[{i}]: expected task indices in [0, {n_tasks}), got "
                              f"{k.tolist()[:10]}")
+        if end_prob is not None:
+            if not ended or np.shape(ended[0]) != t.shape:
+                raise ValueError(f"records[{i}]: expected each update's ended probability "
+                                 f"(a fourth entry, shape {t.shape}) to gate on, got "
+                                 f"{np.shape(ended[0]) if ended else 'none'}")
+            v[~ongoing(ended[0], end_prob)] = np.nan       # past the estimated end
         ok = np.isfinite(v[:, 0]) & np.isfinite(t)
         time_parts.append(t[ok])
         value_parts.append(np.where(np.isfinite(v[ok]), v[ok], 0.0))   # later NaN: no evidence

@@ -87,3 +87,19 @@ def conformal_threshold(lowest: FloatArray, alpha: float) -> float:
         return float(values[-1])
     lo, hi = np.log(max(values[k - 1], TINY)), np.log(max(values[k], TINY))
     return float(np.exp(lo + (r - k) * (hi - lo)))
+
+
+def ongoing(ended, level: float | None) -> np.ndarray:
+    """Which updates of one motion are ranked: those before its estimated end, shape (u,).
+
+    ``ended`` (u,) is each update's posterior probability that the motion had
+    ended (:meth:`~sandbox.core.inference.Prediction.ended_probability`); once it
+    reached ``level`` at an update, that update and every later one are past the
+    end (the same latch as a predictor's ``until_end``, causal). ``level`` None:
+    every update is ranked.
+    """
+    ended = np.asarray(ended, dtype=np.float64)
+    if level is None:
+        return np.ones(ended.shape, dtype=bool)
+    return np.maximum.accumulate(np.nan_to_num(ended, nan=0.0)) < level if ended.size else \
+        np.zeros(0, dtype=bool)

@@ -158,7 +158,7 @@ def update_times(times: FloatArray, kept: FloatArray, dow_t: float) -> FloatArra
 
 def stream_record(model: IProMP, times, human, *, dow_t: float = 0.2, subsample: int = 2,
                   n_candidates: int = 50, width: float = 3.0, refine_steps: int = 1,
-                  score: str = "timing") -> tuple[FloatArray, FloatArray, np.ndarray]:
+                  score: str = "timing", ended: bool = False) -> tuple:
     """Update times (u,), statistics and chosen task (u,) of a stream, as a predictor sees it.
 
     The statistics are :func:`statistics` (u, 5) with ``score="timing"``
@@ -178,6 +178,10 @@ def stream_record(model: IProMP, times, human, *, dow_t: float = 0.2, subsample:
         all observations so far).
     score : {"timing", "goal", "mahalanobis"}
         What to record (:data:`SCORES`).
+    ended : bool
+        Also return, fourth, each update's posterior probability that the chosen
+        task's motion had ended (u,) (:meth:`~sandbox.core.inference.Prediction.ended_probability`),
+        what :func:`~sandbox.core.conformal.ongoing` gates on.
     """
     times = check_array(times, "times", 1)
     timing = check_choice(score, "score", SCORES) != "mahalanobis"
@@ -189,7 +193,7 @@ def stream_record(model: IProMP, times, human, *, dow_t: float = 0.2, subsample:
     stats = StreamStatistics(scorer, Lattice.for_tasks(model.task_models, n_candidates, width))
     at = update_times(times, t_obs, dow_t)
     out = np.empty((at.size, len(COMPONENTS)) if timing else at.size)
-    task, fed = np.zeros(at.size, dtype=np.int64), 0
+    task, fed, done = np.zeros(at.size, dtype=np.int64), 0, np.zeros(at.size)
     for j, tau in enumerate(at):
         n = int(np.searchsorted(t_obs, tau, side="right"))
         for i in range(fed, n):
@@ -199,7 +203,8 @@ def stream_record(model: IProMP, times, human, *, dow_t: float = 0.2, subsample:
                        width=width, refine_steps=refine_steps, stats=stats)
         out[j] = statistics(model, pred, tau, t_obs[:n], y_obs[:n]) if timing else statistic(pred)
         task[j] = chosen(pred)
-    return at, out, task
+        done[j] = min(1.0, pred.ended_probability(tau, task[j]))     # sums may round over 1
+    return (at, out, task, done) if ended else (at, out, task)
 
 
 def loo_records(model: IProMP, demos, streams=None, **options) -> list[tuple]:
@@ -224,7 +229,7 @@ def loo_records(model: IProMP, demos, streams=None, **options) -> list[tuple]:
 
 def calibrate(model: IProMP, demos, streams=None, *, alpha: float = 0.05, dow_t: float = 0.2,
               subsample: int = 2, score: str = "timing", refit: bool = True,
-              **options) -> Calibration:
+              end_prob: float | None = None, **options) -> Calibration:
     """Leave-one-out calibration of the familiarity of ``model`` (fitted on ``demos``).
 
     Sets ``model.calibration`` and returns it. Cost: one stream of every demo
@@ -249,22 +254,27 @@ def calibrate(model: IProMP, demos, streams=None, *, alpha: float = 0.05, dow_t:
         without it. False: ``demos`` are motions the model was not fitted on (a fresh
         draw of a synthetic family, a held-out set), each streamed by ``model`` itself:
         no refit, the split-conformal calibration of the same statistics.
+    end_prob : float or None
+        Calibrate (and rank) only the updates before each motion's estimated end, where
+        the probability that it had ended first reached ``end_prob``
+        (:func:`~sandbox.core.conformal.ongoing`); None: every update.
     """
     if refit:
         records = loo_records(model, demos, streams, dow_t=dow_t, subsample=subsample,
-                              score=score, **options)
+                              score=score, ended=True, **options)
     else:
         streams = demos if streams is None else streams
         records = []
         for s in streams:
             t = np.asarray(s.times, dtype=np.float64)
             records.append(stream_record(model, t - t[0], s.human, dow_t=dow_t,
-                                         subsample=subsample, score=score, **options))
+                                         subsample=subsample, score=score, ended=True,
+                                         **options))
     if score == "timing":
-        records = [(t, np.asarray(v)[:, :len(TIMING)], k) for t, v, k in records]
+        records = [(t, np.asarray(v)[:, :len(TIMING)], k, *rest) for t, v, k, *rest in records]
     mean = float(np.dot(model.priors, [t.mean_duration for t in model.task_models]))
     cal = Calibration.from_records(records, len(model.task_models), alpha=alpha,
                                    edges=np.array(EDGES) * mean,
-                                   subsample=subsample, dow_t=dow_t)
+                                   subsample=subsample, dow_t=dow_t, end_prob=end_prob)
     model.calibration = cal
     return cal

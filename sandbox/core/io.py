@@ -13,35 +13,34 @@ Layout of the file (a numpy ``.npz`` archive, written atomically; any reader of
 
 Optional, for a model with a familiarity calibration
 (:mod:`sandbox.core.familiarity`): a ``familiarity`` entry in the metadata
-(threshold, alpha, likelihood, subsample, dow_t, n_motions, and ``components``
-when more than the Mahalanobis term is ranked) and the members
+(threshold, alpha, likelihood, subsample, dow_t, n_motions, ``components`` when more than
+the Mahalanobis term is ranked, ``end_prob`` when gated to the ongoing motion) and the members
 ``familiarity_edges`` (B,), ``familiarity_quantiles`` (K, B, L), ``familiarity_counts``
 (K, B), and ``familiarity_extra`` (J - 1, K, B, L) with ``components``; without
-``components`` (before the timing evidence), a calibration of the Mahalanobis term.
+``components`` (before the timing evidence), a calibration of the Mahalanobis term; without
+``end_prob``, one of every update.
 
 Optional: a ``session`` object in the metadata, what a recording session taught besides
 the model (e.g. the meeting geometry, :mod:`sandbox.data.geometry`), kept as
 :attr:`IProMP.session`, never interpreted here; files without it load with an empty one.
 
-Version history: 1 (package 0.1.0) had the hand only (``human_names``, no
-modalities, no scale); such files still load, as one position modality
-``"hand"``. Version 2 adds the modalities, the scale and the floors. The
-familiarity section is optional within version 2: files without it load with
-``calibration = None`` (the predictors' familiarity is then None, never
-computed lazily: calibrating needs the training streams), and readers that
-predate it ignore it.
+Version history: 1 (package 0.1.0) had the hand only (``human_names``, no modalities, no
+scale); such files still load, as one position modality ``"hand"``. Version 2 adds the
+modalities, the scale and the floors. The familiarity section is optional within
+version 2: files without it load with ``calibration = None`` (the predictors' familiarity
+is then None, never computed lazily: calibrating needs the training streams), and readers
+that predate it ignore it.
 
-Loading trusts nothing in the file (:mod:`sandbox.core.archive`): the file's
-size and number of members are checked first; the metadata is read and
-checked (:mod:`sandbox.core.modelmeta`: types, ranges, the priors a probability
-vector, the speed priors as a fit makes them, durations within
-:data:`~sandbox.core.limits.MAX_TIME_S`) before any array; only the members it
-declares are read, each after its ``.npy`` header declared the dtype and shape
-the metadata implies, within the limits; every
-array must be finite, within :data:`~sandbox.core.limits.MAX_MODEL_VALUE`, each
-task's covariance factor of rank 1 to n_demos - 1, the human regularisers at most
-:data:`~sandbox.core.limits.MAX_KAPPA` times the noise, the
-noise, scale and regularisers positive (so every weight covariance
+Loading trusts nothing in the file (:mod:`sandbox.core.archive`): the file's size and
+number of members are checked first; the metadata is read and checked
+(:mod:`sandbox.core.modelmeta`: types, ranges, the priors a probability vector, the speed
+priors as a fit makes them, durations within :data:`~sandbox.core.limits.MAX_TIME_S`)
+before any array; only the members it declares are read, each after its ``.npy`` header
+declared the dtype and shape the metadata implies, within the limits; every array must be
+finite, within :data:`~sandbox.core.limits.MAX_MODEL_VALUE`, each task's covariance factor
+of rank 1 to n_demos - 1, the human regularisers at most
+:data:`~sandbox.core.limits.MAX_KAPPA` times the noise, the noise, scale and regularisers
+positive (so every weight covariance
 :math:`UU^T + \\Lambda` is symmetric positive definite; the robot's regulariser
 at least half :data:`~sandbox.core.limits.MIN_REGULARIZER` of its weights'
 variance, so it stays so in floating point). A corrupt, truncated,
@@ -156,8 +155,7 @@ def _put_options(model: IProMP, meta: dict) -> None:
 
 
 def _put_condition(model, meta: dict) -> None:
-    """The conditioning noise of a ``condition_floor`` (:mod:`sandbox.core.condfloor`), if
-    any, in the file's metadata, in place."""
+    """A ``condition_floor``'s noise (:mod:`sandbox.core.condfloor`), if any, into ``meta``."""
     if getattr(model, "condition_noise", None) is not None:
         meta["hyperparameters"]["condition_floor"] = model.condition_floor
         meta["condition_noise"] = np.asarray(model.condition_noise, dtype=float).tolist()
@@ -175,6 +173,8 @@ def _put_calibration(cal, meta: dict, arrays: dict) -> None:
     if cal.extra is not None:
         meta["familiarity"]["components"] = list(cal.components)
         arrays["familiarity_extra"] = cal.extra
+    if cal.end_prob is not None:
+        meta["familiarity"]["end_prob"] = cal.end_prob
 
 
 def _output_path(path) -> Path:
@@ -280,7 +280,7 @@ def _calibration(archive, entry, n_tasks: int):
     if entry is None:
         return None
     keys = {"threshold", "alpha", "likelihood", "subsample", "dow_t", "n_motions"}
-    if not isinstance(entry, dict) or set(entry) - {"components"} != keys:
+    if not isinstance(entry, dict) or set(entry) - {"components", "end_prob"} != keys:
         got = sorted(map(str, entry)) if isinstance(entry, dict) else entry
         raise ValueError(f"metadata familiarity: expected the keys {sorted(keys)}, got {got!r}")
     edges = _read(archive, "familiarity_edges", (None,))

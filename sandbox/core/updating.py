@@ -73,7 +73,8 @@ class Update:
     familiarity : float or None
         How well the observations fit the best task, against held-out training
         motions (:mod:`sandbox.core.familiarity`), in (0, 1]; None when the
-        model carries no calibration or the likelihood is marginal.
+        model carries no calibration, the likelihood is marginal, or the update
+        is past the motion's estimated end and the calibration is gated to it.
     motion_probability : float
         Probability that the hand had started moving, against the hypothesis
         that it rests at its start (:mod:`sandbox.core.rest`); the task
@@ -144,9 +145,8 @@ class PredictorBase:
                              f"n_candidates (now {self.n_candidates}) or width "
                              f"(now {self.width:g})")
         spans = {"the longest candidate duration": float(self._lattice.durations.max()),
-                 "horizon": self.horizon,
-                 "the blend (blend_delay + 10/blend_rate)": self.blend_delay
-                 + 10.0 / self.blend_rate}
+                 "horizon": self.horizon, "the blend (blend_delay + 10/blend_rate)":
+                 self.blend_delay + 10.0 / self.blend_rate}
         for what, span in spans.items():
             check_steps(span / self.dt, f"{what}, {span:g} s,", self.dt)
 
@@ -154,8 +154,7 @@ class PredictorBase:
     def reset(self) -> None:
         """Forget all observations and updates; the plan is the prior mixture again."""
         self.stream.reset()
-        self.ended = False
-        self._last_time = -np.inf
+        self.ended, self._past_end, self._last_time = False, 0.0, -np.inf   # _past_end: ongoing()
         self.updates: list[Update] = []
         self._prediction: Prediction | None = None
         self._stats = StreamStatistics(self.scorer, self._lattice) if self._incremental else None
@@ -257,16 +256,14 @@ class PredictorBase:
     @property
     def alpha(self) -> float:
         """Speed factor of the chosen task (its prior mean before any update)."""
-        if self.updates:
-            return self.updates[-1].alpha
-        return float(self.model.task_models[self.model.task_index(self.task)].alpha_mean)
+        return (self.updates[-1].alpha if self.updates else
+                float(self.model.task_models[self.model.task_index(self.task)].alpha_mean))
 
     @property
     def duration(self) -> float:
         """Estimated duration of the motion (s); before any update, the prior mean."""
-        if self.updates:
-            return self.updates[-1].duration
-        return float(np.dot(self.model.priors, [t.mean_duration for t in self.model.task_models]))
+        return (self.updates[-1].duration if self.updates else
+                float(np.dot(self.model.priors, [t.mean_duration for t in self.model.task_models])))
 
     def update(self, t: float | None = None) -> Update | None:
         """Update now (at ``t``, default: the last observation time) with the observations kept.
@@ -356,7 +353,8 @@ class PredictorBase:
 
         None before the first update, and when the model carries no calibration
         (``model.calibration``, made by :func:`~sandbox.core.familiarity.calibrate`;
-        model files saved without one load with None) or the likelihood is marginal.
+        model files saved without one load with None), the likelihood is marginal
+        or, for a calibration gated to the ongoing motion, past its estimated end.
         """
         return self.updates[-1].familiarity if self.updates else None
 
@@ -365,18 +363,20 @@ class PredictorBase:
         """False when :attr:`familiarity` is below the calibration's threshold (an
         unknown motion); None when there is no familiarity."""
         fam, cal = self.familiarity, getattr(self.model, "calibration", None)
-        if fam is None or cal is None:
-            return None
-        return bool(fam >= cal.threshold)
+        return None if fam is None or cal is None else bool(fam >= cal.threshold)
 
     def _familiarity_of(self, t: float, prediction: Prediction) -> float | None:
         cal = getattr(self.model, "calibration", None)
         if cal is None or prediction.factors is None:
             return None
+        k = chosen(prediction)                # past the estimated end (latched): not judged
+        self._past_end = max(self._past_end, prediction.ended_probability(t, k))
+        if cal.end_prob is not None and self._past_end >= cal.end_prob:
+            return None
         value: float | FloatArray = (statistic(prediction) if len(cal.components) == 1 else
                                      statistics(self.model, prediction, t, *self._window(t),
                                                 with_goal=COMPONENTS[-1] in cal.components))
-        return cal.familiarity(t, value, chosen(prediction))
+        return cal.familiarity(t, value, k)
 
     @property
     def _last_update(self) -> float:

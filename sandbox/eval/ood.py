@@ -67,13 +67,14 @@ def _score(job) -> dict:
     d = test[i]
     t = d.times - d.times[0]
     end = float(t[model.motion_end(t, d.robot, train[i].human)])
-    times, stats, tasks = stream_record(model, t, d.human, dow_t=dow_t,
-                                        subsample=config.subsample,
-                                        n_candidates=config.n_candidates,
-                                        refine_steps=config.refine_steps)
+    times, stats, tasks, ended = stream_record(model, t, d.human, dow_t=dow_t,
+                                               subsample=config.subsample,
+                                               n_candidates=config.n_candidates,
+                                               refine_steps=config.refine_steps, ended=True)
     return {"left_out": left, "trial": i, "task": d.task, "held_in": d.task != left,
             "source": d.source, "end": end, "times": times.tolist(), "stats": stats.tolist(),
-            "chosen": [model.tasks[k] for k in tasks], "tasks": list(model.tasks),
+            "ended": ended.tolist(), "chosen": [model.tasks[k] for k in tasks],
+            "tasks": list(model.tasks),
             "mean_duration": float(np.dot(model.priors,
                                           [m.mean_duration for m in model.task_models]))}
 
@@ -102,7 +103,8 @@ def _progress(enabled: bool, n: int, total: int) -> None:
         print(f"  scored {n}/{total} streams", file=sys.stderr, flush=True)
 
 
-def rank(records: list[dict], edges=None, score: str = "timing") -> list[dict]:
+def rank(records: list[dict], edges=None, score: str = "timing",
+         gate: float | None = None) -> list[dict]:
     """Per record: its familiarity at each update and the reference it is thresholded with.
 
     Per left-out task, the held-in records are the calibration
@@ -112,15 +114,22 @@ def rank(records: list[dict], edges=None, score: str = "timing") -> list[dict]:
     lowest familiarities. ``edges`` are the time bins as fractions of the mean
     duration (default :data:`~sandbox.core.familiarity.EDGES`). ``score`` is what the
     calibration ranks (:data:`~sandbox.core.familiarity.SCORES`): ``"timing"`` keeps the
-    first four of five recorded statistics, ``"goal"`` all five.
+    first four of five recorded statistics, ``"goal"`` all five. ``gate``: only the
+    updates before the motion's estimated end are calibrated and ranked
+    (:func:`~sandbox.core.conformal.ongoing` at that level of the records'
+    ``ended``; the others' familiarity is NaN), None: all.
     """
+    from sandbox.core.calibration import ongoing
     from sandbox.core.familiarity import EDGES, SCORES, TIMING
 
     keep = len(TIMING) if check_choice(score, "score", SCORES[:2]) == "timing" else None
 
     def stats(r):   # the statistics the calibration ranks (records keep all they have)
-        v = np.asarray(r["stats"], dtype=float)
-        return v[:, :keep] if v.ndim == 2 else v
+        v = np.array(r["stats"], dtype=float)
+        v = v[:, :keep] if v.ndim == 2 else v
+        if gate is not None:
+            v[~ongoing(r["ended"], gate)] = np.nan
+        return v
 
     fractions = np.asarray(EDGES if edges is None else edges, dtype=float)
     out = []
@@ -131,9 +140,12 @@ def rank(records: list[dict], edges=None, score: str = "timing") -> list[dict]:
         full, held = leave_one_out(
             [(r["times"], stats(r), [names.index(k) for k in r["chosen"]]) for r in pool],
             len(names), edges=fractions * mean)
-        lowest = np.array([h.min() for h in held])
+        lowest = np.array([h.min(initial=np.inf) for h in held])
         for i, r in enumerate(pool):
-            out.append({**r, "familiarity": held[i].tolist(),
+            fam = np.full(len(r["times"]), np.nan)
+            v = stats(r)
+            fam[np.isfinite(v[:, 0] if v.ndim == 2 else v)] = held[i]
+            out.append({**r, "familiarity": fam.tolist(),
                         "reference": np.delete(lowest, i).tolist()})
         for r in records:
             if r["left_out"] == left and not r["held_in"]:

@@ -154,7 +154,9 @@ def markdown(result: dict) -> str:
              + (f" against {', '.join(f'`{s}`' for s in result['ood_data'])}"
                 if result.get("ood_data") else "")
              + f" (observe {result['observe']}; dow_t = {result['dow_t']:g} s"
-             + (f"; score {result['score']}" if result.get("score") else "") + "); "
+             + (f"; score {result['score']}" if result.get("score") else "")
+             + (f"; until the estimated end, P >= {result['end_prob']:g}"
+                if result.get("end_prob") is not None else "") + "); "
              f"{result['n_streams']} streams, {result['seconds']:.0f} s.", "",
              "Detection before the handover at a false-alarm rate on held-out normal motions:",
              "", "| OOD | normal | OOD motions | AUC | "

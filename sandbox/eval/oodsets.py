@@ -48,14 +48,14 @@ def handover_time(model, stream, truth) -> float:
 def _record(model, stream, truth, dow_t: float, config: EvalConfig, **about) -> dict:
     """One stream's statistics under ``model`` (:func:`~sandbox.core.familiarity.stream_record`)."""
     t = stream.times - stream.times[0]
-    times, stats, tasks = stream_record(model, t, stream.human, dow_t=dow_t,
-                                        subsample=config.subsample,
-                                        n_candidates=config.n_candidates,
-                                        refine_steps=config.refine_steps)
+    times, stats, tasks, ended = stream_record(model, t, stream.human, dow_t=dow_t,
+                                               subsample=config.subsample,
+                                               n_candidates=config.n_candidates,
+                                               refine_steps=config.refine_steps, ended=True)
     return {**about, "task": stream.task, "source": stream.source,
             "end": handover_time(model, stream, truth), "times": times.tolist(),
-            "stats": stats.tolist(), "chosen": [model.tasks[k] for k in tasks],
-            "tasks": list(model.tasks),
+            "stats": stats.tolist(), "ended": ended.tolist(),
+            "chosen": [model.tasks[k] for k in tasks], "tasks": list(model.tasks),
             "mean_duration": float(np.dot(model.priors,
                                           [m.mean_duration for m in model.task_models]))}
 
@@ -153,8 +153,9 @@ def score_with_model(model, normal: tuple, sets: dict, config: EvalConfig, *,
                 r = _record(model, stream, truth, cal.dow_t, config, left_out=NORMAL, trial=i,
                             held_in=group is None, group=group)
                 index = [model.tasks.index(k) for k in r["chosen"]]
-                r["familiarity"] = [cal.familiarity(t, v, k)
-                                    for t, v, k in zip(r["times"], r["stats"], index)]
+                past = np.maximum.accumulate(r["ended"]) if r["ended"] else []  # as predictors
+                r["familiarity"] = [cal.familiarity(t, v, k, e) for t, v, k, e
+                                    in zip(r["times"], r["stats"], index, past)]
                 r["reference"], r["threshold"] = None, float(cal.threshold)
                 out.append(r)
                 shown.update()

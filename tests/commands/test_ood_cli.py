@@ -46,14 +46,17 @@ def test_a_small_run_writes_the_report_and_rereports_it(tmp_path, capsys):
     out, md, png = tmp_path / "r.json", tmp_path / "r.md", tmp_path / "roc.png"
     argv = ["ood", "--data", "synthetic:objects", "--ood-data", "synthetic-ood:still@objects",
             "--n-per-task", "3", "--dow-t", "0.5", "--no-progress", "--out", str(out),
-            "--markdown", str(md), "--plot", str(png)]
+            "--markdown", str(md), "--plot", str(png), "--end-prob", "0.5"]
     assert main(argv) == 0
     result = json.loads(out.read_text())
     assert result["mode"] == "ood-sets" and result["n_streams"] == 18
+    assert result["end_prob"] == 0.5 and all(len(r["ended"]) == len(r["times"])
+                                             for r in result["records"])
     group = result["groups"]["synthetic-ood:still@objects"]
     assert group["n_normal"] == 9 and group["n_ood"] == 9
     assert set(group["at_false_alarm"]) == {"0.01", "0.02", "0.05", "0.1"}
     assert png.stat().st_size > 1000 and "| synthetic-ood:still@objects |" in md.read_text()
+    assert "until the estimated end, P >= 0.5" in md.read_text()
     capsys.readouterr()
     assert main(["ood", "--records", str(out), "--alpha", "0.1"]) == 0
     assert "calibrated alpha 0.1" in capsys.readouterr().out

@@ -14,6 +14,7 @@ from sandbox.core.calibration import (
     Calibration,
     conformal_threshold,
     fisher,
+    ongoing,
     rank,
 )
 
@@ -135,3 +136,52 @@ def test_the_statistics_vector_must_match_the_components():
     assert one.components == ("mahalanobis",) and one.extra is None
     with pytest.raises(ValueError, match="expected 1 statistics"):
         one.familiarity(0.5, np.ones(4), 0)
+
+
+def test_ongoing_latches_at_the_first_update_past_the_level():
+    ended = np.array([0.0, 0.2, 0.6, 0.3, 0.9])
+    assert ongoing(ended, 0.5).tolist() == [True, True, False, False, False]
+    assert ongoing(ended, None).all() and ongoing(ended, 0.95).all()
+    assert ongoing(np.empty(0), 0.5).size == 0
+
+
+def tailed(rng, n: int, anomaly: float = 0.0):
+    """Records of 10 updates whose last 3 are past the motion's end (ended 1) and scatter
+    far more than the 7 before them; ``anomaly`` raises update 3's statistics."""
+    out = []
+    for _ in range(n):
+        v = rng.lognormal(0.0, 0.3, (10, 4))
+        v[7:] *= rng.lognormal(1.0, 1.0, (3, 1))
+        v[3] += anomaly
+        out.append((np.arange(10) * 0.2, v, np.zeros(10, int), np.r_[np.zeros(7), np.ones(3)]))
+    return out
+
+
+def test_a_gated_calibration_ignores_the_updates_past_the_end():
+    """Tails past the motion's end that vary more than the motion set an ungated
+    threshold low; gated to the ongoing motion, a raised update mid-motion fires far
+    more often, at the same false-alarm rate on fresh records (about alpha)."""
+    rng = np.random.default_rng(8)
+    gated = Calibration.from_records(tailed(rng, 200), 1, alpha=0.1, edges=[0.0, 0.7],
+                                     end_prob=0.5)
+    plain = Calibration.from_records([r[:3] for r in tailed(rng, 200)], 1, alpha=0.1,
+                                     edges=[0.0, 0.7])
+    assert gated.end_prob == 0.5 and plain.end_prob is None
+    assert np.isnan(gated.familiarity(1.6, np.ones(4), 0, ended=0.9))
+    assert np.isfinite(plain.familiarity(1.6, np.ones(4), 0, ended=0.9))
+
+    def fires(cal, recs):
+        return np.mean([np.nanmin([cal.familiarity(t, v, k, e) for t, v, k, e in
+                                   zip(*r)]) < cal.threshold for r in recs])
+
+    assert 0.05 < fires(gated, tailed(rng, 400)) < 0.16
+    odd = tailed(rng, 100, anomaly=3.0)
+    assert fires(gated, odd) > fires(plain, odd) + 0.3
+
+
+def test_a_gated_calibration_needs_the_ended_probabilities():
+    rng = np.random.default_rng(9)
+    with pytest.raises(ValueError, match="ended probability"):
+        Calibration.from_records([r[:3] for r in tailed(rng, 5)], 1, end_prob=0.5)
+    with pytest.raises(ValueError, match="end_prob"):
+        Calibration.from_records(tailed(rng, 5), 1, end_prob=1.5)

@@ -373,3 +373,33 @@ def test_a_calibration_on_fresh_motions_streams_them_by_the_model_itself(model):
                                     subsample=OPTIONS["subsample"], dow_t=0.2)
     np.testing.assert_array_equal(cal.quantiles, want.quantiles)
     assert cal.threshold == want.threshold
+
+
+def test_a_calibration_gated_to_the_ongoing_motion_judges_no_update_past_its_end(model,
+                                                                                tmp_path):
+    """``end_prob``: the predictor's familiarity is None from the first update whose
+    probability that the motion ended reached it (latched), as the calibration's records
+    were cut; before, the calibration ranks as always. The file keeps the gate."""
+    import copy
+
+    rng = np.random.default_rng(13)
+    fresh = [noisy(d, rng) for d in synth.demos(rng, n_per_task=6, n_tasks=2)]
+    gated = copy.copy(model)
+    cal = gated.calibrate(fresh, refit=False, end_prob=0.5, **OPTIONS)
+    assert cal.end_prob == 0.5
+    demo = unseen(0, seed=14)                          # held 1 s at its end: it has ended
+    dt = demo.times[1] - demo.times[0]
+    times = np.r_[demo.times, demo.times[-1] + dt * np.arange(1, int(1.0 / dt))]
+    human = np.vstack([demo.human, np.repeat(demo.human[-1:], times.size - demo.times.size, 0)])
+    held = synth.Demo(times, human + NOISE * rng.standard_normal(human.shape), demo.robot, "0")
+    at, stats, tasks, ended = stream_record(gated, held.times, held.human, ended=True, **OPTIONS)
+    past = np.maximum.accumulate(ended) >= 0.5
+    assert past.any() and not past[0]
+    fam = [u.familiarity for u in stream(gated, held).updates]
+    assert all(f is None for f, p in zip(fam, past) if p)
+    np.testing.assert_allclose([f for f, p in zip(fam, past) if not p],
+                               [cal.familiarity(*u) for u in zip(at[~past], stats[~past],
+                                                                 tasks[~past])], rtol=1e-9)
+    gated.save(tmp_path / "gated.npz")
+    assert IProMP.load(tmp_path / "gated.npz").calibration.end_prob == 0.5
+    assert model.calibration.end_prob is None
