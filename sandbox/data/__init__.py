@@ -1,7 +1,8 @@
 """Demonstrations: the container, recorded-data loading and synthetic handovers.
 
-``load_recorded``, ``load_trial``, ``HandFilter`` and ``FilterConfig`` are
-imported on first use (they pull in filterpy), so ``import sandbox.data`` stays light.
+``load_recorded``, ``load_trial``, ``HandFilter`` and ``FilterConfig`` are imported on
+first use, so ``import sandbox.data`` stays light (filterpy, and the scipy.stats it pulls
+in, only once a :class:`HandFilter` is made).
 """
 
 from sandbox.data.datasets import load_dataset, resample_uniform
