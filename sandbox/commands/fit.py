@@ -54,6 +54,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "motion' warning in the viewer and teleop): every demo streamed "
                              "causally and scored by a model fitted without it (a leave-one-out; "
                              "needs 3+ demos per task)")
+    parser.add_argument("--score", choices=("timing", "goal"), default=None,
+                        help="with --calibrate: what the familiarity ranks, as ood --score "
+                             "(default timing)")
+    parser.add_argument("--end-prob", type=_types.bounded("end_prob"), default=None,
+                        metavar="P", help="with --calibrate: calibrate only the updates before "
+                                          "each motion's estimated end, as ood --end-prob")
     _skipped.add_argument(parser)
 
 
@@ -69,6 +75,9 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if out.exists() and not args.force:
         raise ValueError(f"--out: {out} exists; pass --force to overwrite it")
+    if not args.calibrate and (args.score is not None or args.end_prob is not None):
+        raise ValueError("--score/--end-prob: expected --calibrate with them (they choose how "
+                         "the familiarity is calibrated), got them without it")
     if args.calibrate and args.preprocess != "smooth":
         raise ValueError("--calibrate: expected --preprocess smooth (the demos the streams are "
                          f"paired with), got {args.preprocess!r}")
@@ -113,7 +122,8 @@ def _calibrate(model, demos, args, spec, observe) -> None:
     kept = [d for d in demos if d.source in by_source]
     if len(kept) != len(demos):
         raise ValueError(f"--calibrate: {len(demos) - len(kept)} demos have no causal stream")
-    cal = model.calibrate(demos, [by_source[d.source] for d in demos])
+    cal = model.calibrate(demos, [by_source[d.source] for d in demos],
+                          score=args.score or "timing", end_prob=args.end_prob)
     print(f"familiarity calibrated on {len(demos)} held-out streams "
           f"(threshold {cal.threshold:.3g}, alpha {cal.alpha:g})")
 

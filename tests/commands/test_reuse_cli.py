@@ -279,3 +279,18 @@ def test_fit_calibrate_saves_a_familiarity_the_predictor_uses(tmp_path, capsys):
     assert predictor.familiar in (True, False)
     assert main(["fit", "--data", "synthetic:two_task", "--n-per-task", "4", "--calibrate",
                  "--preprocess", "causal", "--out", str(tmp_path / "m2.npz")]) == 2
+
+
+def test_fit_calibrate_takes_the_score_and_the_gate_and_refuses_them_alone(tmp_path, capsys):
+    from sandbox.core import IProMP
+
+    out = tmp_path / "gated.npz"
+    assert main(["fit", "--data", "synthetic:two_task", "--n-per-task", "4", "--n-basis", "9",
+                 "--calibrate", "--score", "goal", "--end-prob", "0.5", "--out", str(out)]) == 0
+    cal = IProMP.load(out).calibration
+    assert cal.end_prob == 0.5 and "goal" in cal.components
+    capsys.readouterr()
+    assert main(["fit", "--data", "synthetic:two_task", "--n-per-task", "4", "--end-prob", "0.5",
+                 "--out", str(tmp_path / "no.npz")]) == 2
+    assert "--score/--end-prob: expected --calibrate" in capsys.readouterr().err
+    assert not (tmp_path / "no.npz").exists()
