@@ -46,6 +46,7 @@ from sandbox.core.floorsearch import (
     _per_demo,
     _pooled_human_reg,
     candidates,
+    without_demo,
 )
 from sandbox.core.promp import WeightDistribution
 from sandbox.validation import FloatArray
@@ -141,11 +142,7 @@ def _held_out(arrays: dict, human_reg: FloatArray, counts: dict, residual: dict,
         if len(w) < MIN_TASK_DEMOS:
             continue
         for i in range(len(w)):
-            rest = WeightDistribution.from_weights(np.delete(w, i, axis=0), regularizer,
-                                                   basis.n_basis)
-            reg = rest.reg.copy()
-            reg[:P] = human_reg
-            rest = WeightDistribution(rest.mean, rest.factor, reg, basis.n_basis)
+            rest = without_demo(w, i, regularizer, basis.n_basis, P, human_reg)
             for rho in RATIOS:
                 M = int(max(3, round(rho * np.median(counts[task]) / SUBSAMPLE)))
                 psi = basis.evaluate(np.linspace(0.0, rho, M))

@@ -114,17 +114,23 @@ def held_out_set(weights: Mapping[str, FloatArray], dists: Mapping[str, WeightDi
             continue
         others = {k: d for k, d in dists.items() if k != task}
         for i in held_out_demos(len(w)):
-            rest = WeightDistribution.from_weights(np.delete(w, i, axis=0), regularizer,
-                                                   basis.n_basis)
-            reg = rest.reg.copy()
-            reg[:P] = human_reg
-            rest = WeightDistribution(rest.mean, rest.factor, reg, basis.n_basis)
+            rest = without_demo(w, i, regularizer, basis.n_basis, P, human_reg)
             for rho in ratios:
                 M = int(max(3, round(rho * np.median(counts[task]))))
                 psi = basis.evaluate(np.linspace(0.0, rho, M))
                 out.append(HeldOut(rest, others, task, w[i], P, psi, goal,
                                    residual_var[task][i], log_prior, cache))
     return out
+
+
+def without_demo(w: FloatArray, i: int, regularizer: float, n_basis: int, P: int,
+                 human_reg: FloatArray) -> WeightDistribution:
+    """The task's weight distribution refitted from its demos' weights ``w`` (n, D*N)
+    without demo ``i``, its human regularisers (P,) set to ``human_reg``."""
+    rest = WeightDistribution.from_weights(np.delete(w, i, axis=0), regularizer, n_basis)
+    reg = rest.reg.copy()
+    reg[:P] = human_reg
+    return WeightDistribution(rest.mean, rest.factor, reg, n_basis)
 
 
 def held_out_demos(n: int, most: int | None = None) -> FloatArray:
