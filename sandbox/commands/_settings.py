@@ -8,7 +8,7 @@ predictor options, the names of :class:`~sandbox.eval.loocv.EvalConfig`::
     regularizer: 0.001
     noise_floor: 0.02        # m, or auto: learned per position modality from the demos
     condition_floor: auto    # m, auto or null: the floor conditioning the robot (eq. 7-9)
-    jitter_floor: 15         # opt-in: position floors max(2 mm, 15 x the data's raw jitter)
+    jitter_floor: 15         # position floors max(noise_floor, 15 x raw jitter); null: off
     shrinkage: auto          # auto | none | robot: covariances shrunk toward the pooled one
     settle_tol: 0.05         # rad, or null: the whole recording is the motion
     likelihood: joint        # predictor options: joint | marginal

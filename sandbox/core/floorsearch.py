@@ -63,10 +63,6 @@ from sandbox.core.jitter import jitter_floors
 from sandbox.core.promp import WeightDistribution
 from sandbox.validation import FloatArray
 
-#: The lowest floor (m) ``jitter_floor`` may give a position modality and the grid's
-#: lowest: 2 mm, twice a motion-capture system's jitter, as no model follows a live track
-#: closer than that.
-MIN_JITTER_FLOOR = 0.002
 #: Candidate floors (m): roughly geometric from the documented minimum (2 mm, twice a
 #: motion-capture system's jitter) to 40 mm (twice the constant chosen for a Kinect).
 GRID_M = (0.002, 0.003, 0.005, 0.007, 0.01, 0.014, 0.02, 0.028, 0.04)
@@ -296,18 +292,19 @@ def model_floors(model, modalities: Sequence, fits: Sequence = (),
                  scale: FloatArray | None = None) -> FloatArray:
     """Noise floor of every human dim of ``model`` (an IProMP), normalised units, shape (P,).
 
-    Positions: ``noise_floor`` (m), or with ``jitter_floor`` k ``max(minimum, k x jitter)``,
-    or with ``noise_floor="auto"`` the floor :func:`auto_floors` learns from ``fits``
+    Positions: ``max(noise_floor, k x jitter)`` with ``jitter_floor`` k (``noise_floor``
+    (m) when k is None or no jitter is known), or with ``noise_floor="auto"`` the floor
+    :func:`auto_floors` learns from ``fits``
     (its scores kept as ``model.floor_scores``); signals: ``signal_floor``; and
     ``noise_floors[name]`` wins over all.
     """
     constant = START_FLOOR if model.noise_floor == AUTO else model.noise_floor
     out = np.array([constant if m.kind == "position" else model.signal_floor
                     for m in modalities for _ in range(m.size)])
-    if model.jitter_floor is not None and fits:
+    if model.jitter_floor is not None and fits and model.noise_floor != AUTO:
         jitters = np.array([np.full(out.size, np.nan) if f.jitter is None else f.jitter
                             for f in fits])
-        out = jitter_floors(jitters, modalities, model.jitter_floor, MIN_JITTER_FLOOR, out)
+        out = jitter_floors(jitters, modalities, model.jitter_floor, constant, out)
     given = [model.noise_floors.get(m.name) for m in modalities for _ in range(m.size)]
     out = np.array([f if g is None else g for f, g in zip(out, given)])
     if model.noise_floor == AUTO and fits:

@@ -145,8 +145,7 @@ def save_model(model: IProMP, path: str | os.PathLike) -> None:
 
 def _put_options(model: IProMP, meta: dict) -> None:
     """Write the options older files lack into ``meta``, only when set (older readers)."""
-    if getattr(model, "jitter_floor", None) is not None:
-        meta["hyperparameters"]["jitter_floor"] = model.jitter_floor
+    meta["hyperparameters"]["jitter_floor"] = getattr(model, "jitter_floor", None)  # null too
     if getattr(model, "noise_floor", None) == "auto":     # the floors it learned (m)
         meta["floors_used"] = np.asarray(model.floors_used, dtype=float).tolist()
     _put_condition(model, meta)
@@ -376,7 +375,7 @@ def model_from_file(cls, f: ModelFile):
     basis = meta["basis"]
     model = cls(n_basis=basis["n_basis"], basis_width=basis["width"],
                 basis_margin=basis["margin"], normalized_basis=basis["normalized"], **v1,
-                **meta["hyperparameters"])
+                **{"jitter_floor": None, **meta["hyperparameters"]})   # older files: none
     model.task_models = tuple(
         TaskModel(t["name"], w, t["nominal_duration"], t["alpha_mean"], t["alpha_std"],
                   t["n_demos"], None if f.robot is None else f.robot[i])

@@ -34,10 +34,9 @@ Choices this project makes (DESIGN.md section 3):
   positions, ``signal_floor`` (normalised) for signals, or ``noise_floors[name]``.
   The residuals measure how far a track departs from a smooth N-basis curve; the
   floor, what a live track departs from the model by, which smoothed demos cannot
-  show (defaults chosen by leave-one-out on the recorded handovers). With
-  ``jitter_floor=k`` a position floor is ``max(MIN_JITTER_FLOOR, k x jitter)``
-  (:mod:`sandbox.core.jitter`). ``condition_floor`` gives the robot's conditioning
-  its own noise :math:`\\Sigma_c` (:mod:`sandbox.core.condfloor`).
+  show. A position floor is ``max(noise_floor, k x jitter)``, k = ``jitter_floor``, of
+  the demos' raw jitter (:mod:`sandbox.core.jitter`). ``condition_floor`` gives the
+  robot's conditioning its own noise :math:`\\Sigma_c` (:mod:`sandbox.core.condfloor`).
 * The robot part is joint angles (rad) or, ``robot_space == "task"`` (taken from
   the demos), a position (m); the core treats both alike (tolerances in its units).
 * The regulariser :math:`\\Lambda` (see :mod:`sandbox.core.promp`) is relative:
@@ -81,13 +80,9 @@ from sandbox.core.fitting import (
     task_models,
     task_priors,
 )
-from sandbox.core.floorsearch import (  # noqa: F401 - MIN_JITTER_FLOOR re-exported
-    MIN_JITTER_FLOOR,
-    check_noise_floor,
-    model_floors,
-)
+from sandbox.core.floorsearch import check_noise_floor, model_floors
 from sandbox.core.io import model_from_file, read_model, save_model
-from sandbox.core.jitter import demo_jitter
+from sandbox.core.jitter import JITTER_FACTOR, demo_jitter
 from sandbox.core.limits import MAX_DURATION_S, MAX_RELATIVE, check_alpha_std
 from sandbox.core.modality import Modality
 from sandbox.core.shrinkage import check_shrinkage
@@ -125,7 +120,7 @@ class IProMP:
     noise_scale : float
         Multiplies the estimated observation noise :math:`\\Sigma_y`.
     noise_floor : float
-        Lower bound of :math:`\\sigma_p` of position modalities (m). Default 2 cm,
+        Lowest :math:`\\sigma_p` of position modalities (m). Default 2 cm,
         chosen by leave-one-out on the recorded handovers: a live, causally filtered
         track departs from what the model can explain by ~2 cm (tracker jumps and
         occlusions, motion the demos do not span); trusting observations more made
@@ -137,9 +132,9 @@ class IProMP:
         :attr:`condition_noise`), the likelihood keeping ``noise_floor``; ``"auto"``
         learns it from the demos (:mod:`sandbox.core.condfloor`); None: ``noise_floor``.
     jitter_floor : float or None
-        k: a position modality's floor becomes ``max(MIN_JITTER_FLOOR, k x its
-        jitter)`` (:mod:`sandbox.core.jitter`) instead of ``noise_floor``; None (the
-        default) keeps ``noise_floor``. ``noise_floors`` still wins.
+        k: a position modality's floor is ``max(noise_floor, k x its jitter)``
+        (:mod:`sandbox.core.jitter`; default :data:`~sandbox.core.jitter.JITTER_FACTOR`);
+        None: ``noise_floor``. Not used by ``noise_floor="auto"``; ``noise_floors`` wins.
     signal_floor : float
         Lower bound of :math:`\\sigma_p` of signal modalities, in normalised units
         (fractions of the training demos' standard deviation).
@@ -198,7 +193,7 @@ class IProMP:
         condition_floor: float | str | None = None,
         signal_floor: float = SIGNAL_FLOOR,
         noise_floors: Mapping[str, float] | None = None,
-        jitter_floor: float | None = None,
+        jitter_floor: float | None = JITTER_FACTOR,
         settle_tol: float | None = 0.05,
         arrive_tol: float | None = 0.02,
         robot_tol: float | None = 0.01,

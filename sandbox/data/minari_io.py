@@ -22,7 +22,9 @@ One demonstration of T samples is one episode of T - 1 steps:
 * ``rewards`` 0 (a demonstration has no reward), ``terminations`` true at the
   last step (the handover), ``truncations`` false;
 * ``infos`` (T rows): ``task`` (the task name), ``time`` ((T, 1), the recorded
-  sample times, s) and ``source`` (the trial file or generator).
+  sample times, s), ``source`` (the trial file or generator) and, for each position
+  modality whose raw tracker jitter was measured, ``jitter_<name>`` ((T, 1), m; it
+  sets the modality's noise floor, :mod:`sandbox.data.noisefloor`).
 
 The dataset's metadata holds under ``"sandbox"`` the modalities, the robot's
 joint names and the preprocessing the demonstrations had. Its environment spec
@@ -80,7 +82,14 @@ def demonstration_from_episode(episode, layout: dict[str, Any], dataset_id: str
         modalities=modalities, robot_names=tuple(layout["robot_names"]),
         source=str(infos["source"][0]),
         meta={"minari": {"dataset_id": dataset_id, "episode_id": int(episode.id)},
-              "preprocess": layout["preprocess"]})
+              "preprocess": layout["preprocess"], **_jitter_report(infos, modalities)})
+
+
+def _jitter_report(infos, modalities) -> dict[str, Any]:
+    """The raw jitter an episode's infos keep (``jitter_<name>``), as a loader's report."""
+    found = {m.name: {"jitter_m": float(np.asarray(infos[f"jitter_{m.name}"])[0, 0])}
+             for m in modalities if f"jitter_{m.name}" in infos}
+    return {"report": {"modalities": found}} if found else {}
 
 
 def load_demonstrations(dataset_id: str) -> tuple[list[Demonstration], dict[str, Any]]:

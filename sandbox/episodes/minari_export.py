@@ -88,7 +88,13 @@ def episode_buffer(demo: Demonstration, episode_id: int):
         truncations=np.zeros(n - 1, bool),
         # (T, 1), not (T,): Minari 0.5's arrow storage cannot read back a 1-D info array
         infos={"task": [demo.task] * n, "time": np.array(demo.times)[:, None],
-               "source": [demo.source] * n})
+               "source": [demo.source] * n, **_jitter_infos(demo, n)})
+
+
+def _jitter_infos(demo: Demonstration, n: int) -> dict[str, np.ndarray]:
+    """``jitter_<name>`` (n, 1) m: each position modality's raw jitter the loader measured
+    (``demo.jitter``), which sets its noise floor and no preprocessed sample keeps."""
+    return {f"jitter_{name}": np.full((n, 1), value) for name, value in demo.jitter.items()}
 
 
 def _with_flags(values: np.ndarray, name: str) -> tuple[np.ndarray, np.ndarray]:

@@ -30,6 +30,7 @@ from multiprocessing import get_context
 import numpy as np
 
 from sandbox.core import DynamicPredictor, IProMP, _kernels, familiarity, predict
+from sandbox.core.jitter import JITTER_FACTOR
 from sandbox.core.model import SIGNAL_FLOOR
 from sandbox.core.phase import Lattice
 from sandbox.core.statistics import StreamStatistics
@@ -80,7 +81,7 @@ class EvalConfig:
     condition_floor: float | str | None = None
     signal_floor: float = SIGNAL_FLOOR
     noise_floors: tuple[tuple[str, float], ...] = ()
-    jitter_floor: float | None = None
+    jitter_floor: float | None = JITTER_FACTOR
     shrinkage: str = "none"
     settle_tol: float | None = 0.05
     arrive_tol: float | None = 0.02

@@ -56,7 +56,8 @@ def test_fit_stores_the_task_space_and_learns_the_geometry(model, taskspace, cap
     summary = json.loads(capsys.readouterr().out)
     assert summary["robot_space"] == "task"
     floor = summary["noise_floor"]["hand"]          # issue 28 item 4: reported by fit
-    assert floor["floor_m"] == pytest.approx(0.02) and floor["source"] == "noise_floor"
+    assert floor["floor_m"] == pytest.approx(0.02)      # 15 x 1 mm is below the minimum
+    assert floor["source"] == "max(noise_floor 20 mm, 15 x jitter)"
     assert floor["jitter_m"] == pytest.approx(0.001, rel=0.2)    # the set's 1 mm jitter
 
 
@@ -171,7 +172,8 @@ def test_data_summary_reports_the_jitter_and_the_floor(taskspace, capsys):
     hand = result["noise_floor"]["hand"]
     assert hand["jitter_m"] == pytest.approx(0.001, rel=0.2) and hand["floor_m"] == 0.02
     assert main(["data", "summary", "--data", str(data), "--spec", str(spec)]) == 0
-    assert "hand noise floor 20.0 mm (noise_floor); raw jitter" in capsys.readouterr().out
+    assert ("hand noise floor 20.0 mm (max(noise_floor 20 mm, 15 x jitter)); raw jitter"
+            in capsys.readouterr().out)
 
 
 def test_the_mocap_layout_with_the_receiving_hand_as_a_task_space_robot(tmp_path, capsys):

@@ -7,8 +7,7 @@ import numpy as np
 import pytest
 
 from sandbox.core import IProMP
-from sandbox.core.jitter import jitter, residuals, track_jitter
-from sandbox.core.model import MIN_JITTER_FLOOR
+from sandbox.core.jitter import JITTER_FACTOR, jitter, residuals, track_jitter
 from sandbox.data.demonstration import Demonstration
 
 
@@ -69,12 +68,24 @@ def demos(sigma: float, n: int = 3, seed: int = 0) -> list[Demonstration]:
 
 
 @pytest.mark.parametrize("sigma", [0.001, 0.02])
-def test_the_floor_is_k_times_the_jitter_above_the_documented_minimum(sigma):
-    model = IProMP(n_basis=11, jitter_floor=3.0).fit(demos(sigma))
-    expected = max(MIN_JITTER_FLOOR, 3.0 * sigma)
-    assert np.allclose(model.floors_used, expected, rtol=0.15)
+def test_the_floor_is_k_times_the_jitter_above_the_noise_floor(sigma):
+    model = IProMP(n_basis=11, jitter_floor=3.0, noise_floor=0.002).fit(demos(sigma))
+    assert np.allclose(model.floors_used, max(0.002, 3.0 * sigma), rtol=0.15)
     assert np.all(np.sqrt(model.noise) >= model.floors_used - 1e-12)
-    assert np.allclose(IProMP(n_basis=11).fit(demos(sigma)).floors_used, 0.02)   # default
+    default = IProMP(n_basis=11).fit(demos(sigma)).floors_used       # max(2 cm, 15 x jitter)
+    assert np.allclose(default, max(0.02, JITTER_FACTOR * sigma), rtol=0.15)
+    assert np.allclose(IProMP(n_basis=11, jitter_floor=None).fit(demos(sigma)).floors_used, 0.02)
+
+
+def test_a_noisier_tracker_raises_the_default_floor_a_quieter_one_keeps_the_minimum():
+    quiet, noisy = (IProMP(n_basis=11).fit(demos(s)).floors_used[0] for s in (0.0005, 0.004))
+    assert quiet == 0.02 and noisy == pytest.approx(JITTER_FACTOR * 0.004, rel=0.15)
+
+
+def test_auto_searches_without_the_jitter():
+    fits = IProMP(n_basis=11, noise_floor="auto").fit(demos(0.004)).floors_used
+    off = IProMP(n_basis=11, noise_floor="auto", jitter_floor=None).fit(demos(0.004)).floors_used
+    assert np.array_equal(fits, off)
 
 
 def test_the_jitter_a_loader_measured_wins_over_the_smoothed_track():
@@ -82,7 +93,7 @@ def test_the_jitter_a_loader_measured_wins_over_the_smoothed_track():
     told = [d.replace(meta={"report": {"modalities": {"hand": {"jitter_m": 0.004}}}})
             for d in raw]
     assert told[0].jitter == {"hand": 0.004}
-    model = IProMP(n_basis=11, jitter_floor=2.0).fit(told)
+    model = IProMP(n_basis=11, jitter_floor=2.0, noise_floor=0.002).fit(told)
     assert np.allclose(model.floors_used, 0.008)
 
 
@@ -92,6 +103,8 @@ def test_an_explicit_floor_still_wins_and_the_option_survives_the_file(tmp_path)
     model.save(tmp_path / "m.npz")
     loaded = IProMP.load(tmp_path / "m.npz")
     assert loaded.jitter_floor == 3.0 and loaded.robot_space == "joint"
+    IProMP(n_basis=11, jitter_floor=None).fit(demos(0.001)).save(tmp_path / "off.npz")
+    assert IProMP.load(tmp_path / "off.npz").jitter_floor is None     # null, not the default
 
 
 @pytest.mark.parametrize("bad", [0, -1.0, "3", float("nan"), True])

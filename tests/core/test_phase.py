@@ -20,7 +20,8 @@ def model():
     rng = np.random.default_rng(0)
     # noise floor matched to the 2 mm noise of these demos (the default 2 cm is for live tracks);
     # whole demos as the motion, so a replay of the whole shape has a known duration
-    return IProMP(n_basis=21, noise_floor=1e-3, settle_tol=None, arrive_tol=None).fit(
+    return IProMP(n_basis=21, noise_floor=1e-3, jitter_floor=None, settle_tol=None,
+                  arrive_tol=None).fit(
         synth.demos(rng, n_per_task=12, duration_std=0.15))
 
 

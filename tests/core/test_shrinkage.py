@@ -174,7 +174,7 @@ def test_motion_the_tasks_share_leaves_the_posterior_near_the_prior():
             tops[mode].append(top)
     prior = 1.0 / len(fresh)
     assert max(tops["auto"]) <= prior + 0.2, tops
-    assert max(tops["none"]) > prior + 0.3, tops       # what the tasks' own covariances did
+    assert max(tops["none"]) > max(tops["auto"]) + 0.1, tops   # the tasks' own covariances
 
 
 def test_settings_files_take_every_shrinkage(tmp_path):

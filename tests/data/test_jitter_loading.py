@@ -36,12 +36,15 @@ def noisy_set(root: Path, sigma: float, n_per_task: int = 5) -> list:
 def test_a_known_tracker_jitter_is_what_the_loader_measures(tmp_path, sigma):
     demos = noisy_set(tmp_path, sigma)
     assert np.median([d.jitter["hand"] for d in demos]) == pytest.approx(sigma, rel=0.1)
-    report = floor_summary(demos, jitter_floor=3.0)["hand"]
+    report = floor_summary(demos, jitter_floor=3.0, noise_floor=0.002)["hand"]
     assert report["jitter_m"] == pytest.approx(sigma, rel=0.1)
     assert report["floor_m"] == pytest.approx(max(0.002, 3 * sigma), rel=0.1)
-    model = IProMP(n_basis=11, jitter_floor=3.0).fit(demos)      # smoothed demos, raw jitter
+    model = IProMP(n_basis=11, jitter_floor=3.0, noise_floor=0.002).fit(demos)  # raw jitter
     assert model.floors_used == pytest.approx([report["floor_m"]] * 3)
-    assert floor_summary(demos)["hand"]["floor_m"] == 0.02      # opt-in: the constant
+    default = floor_summary(demos)["hand"]["floor_m"]               # max(2 cm, 15 x jitter)
+    assert default == pytest.approx(max(0.02, 15 * report["jitter_m"]))
+    assert IProMP(n_basis=11).fit(demos).floors_used == pytest.approx([default] * 3)
+    assert floor_summary(demos, jitter_floor=None)["hand"]["floor_m"] == 0.02
 
 
 def test_zero_rows_re_sent_frames_and_a_jump_do_not_inflate_it(tmp_path):
