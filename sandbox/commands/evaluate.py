@@ -19,6 +19,12 @@ and ``per_trial``. B's tasks must be among those of ``--data``; ``--tasks`` and
 ``--session`` and ``--test-session`` are the recording sessions of a synthetic
 ``--data`` and ``--test`` (:mod:`sandbox.data.synthetic.session`; default none).
 
+``--tail KIND`` writes an emulated motion tail (:mod:`sandbox.eval.tails`: the hand holding,
+lingering, drifting back, stopping short, overshooting, a frozen tracker) onto every test
+stream of the leave-one-out, after the trial's meeting; with ``--tail-in-training`` the
+training demonstrations get it too (a session whose every trial has it). The report's
+``config`` then says ``tail`` and ``tail_in_training``. Only for the leave-one-out of one set.
+
 A ``--data`` folder of sessions, ``ROOT/<session>/<task>/<trial>.csv``, is
 evaluated leave-one-session-out: each session predicted by a model fitted on
 all the others. The report pools every trial, with ``config`` saying
@@ -43,6 +49,8 @@ HELP = ("leave-one-out (or cross-session) evaluation of the static and dynamic f
         "(paper sec. 5)")
 WINDOWS = "1,0.5,0.2,0.1"
 RATIOS = "0.1,0.2,0.3,0.4,0.5,0.6,0.7,0.8,0.9"
+#: ``--tail`` choices (:data:`sandbox.eval.tails.KINDS`, kept here so ``--help`` stays light).
+TAILS = ("none", "hold", "linger", "drift_back", "stop_short", "overshoot", "freeze")
 
 
 def add_arguments(parser) -> None:
@@ -75,6 +83,11 @@ def add_arguments(parser) -> None:
     parser.add_argument("--test-session", type=_types.SEED, default=None, metavar="S",
                         help="recording session of a synthetic --test set, an integer >= 0 "
                              "(default: none, today's data)")
+    parser.add_argument("--tail", default=None, choices=TAILS,
+                        help="write this emulated motion tail onto every test stream after "
+                             "its meeting (leave-one-out only; default: none)")
+    parser.add_argument("--tail-in-training", action="store_true",
+                        help="with --tail: onto the training demonstrations too")
     parser.add_argument("--n-per-task", type=_types.PER_TASK, default=None,
                         help="trials per task (synthetic: generated; folder: first N)")
     parser.add_argument("--out", type=_types.output_file, required=True,
@@ -129,6 +142,7 @@ def _sessions(args) -> list:
 
     from sandbox.data.sessions import SET_LAYOUT, find_sessions
 
+    _check_tail(args)
     if args.test is not None and args.model is not None:
         raise ValueError("--test: expected either --test (fit on --data, predict --test) or "
                          "--model (predict --data with a saved model), got both")
@@ -152,6 +166,25 @@ def _sessions(args) -> list:
 
         check_sessions(args.data, "--data")
     return sessions
+
+
+def _check_tail(args) -> None:
+    """``--tail`` runs with the leave-one-out of one set only; ``--tail-in-training`` with it."""
+    from pathlib import Path
+
+    from sandbox.data.sessions import find_sessions
+
+    tail = getattr(args, "tail", None)
+    if getattr(args, "tail_in_training", False) and tail is None:
+        raise ValueError("--tail-in-training: expected with --tail KIND, got it alone")
+    if tail is None:
+        return
+    if args.test is not None or args.model is not None:
+        raise ValueError(f"--tail: expected the leave-one-out of one set, got --tail {tail} "
+                         f"with {'--test' if args.test is not None else '--model'}")
+    if Path(args.data).is_dir() and find_sessions(args.data, "--data"):
+        raise ValueError(f"--tail: expected the leave-one-out of one set, got a folder of "
+                         f"sessions {args.data!r}")
 
 
 def run(args) -> int:
@@ -198,9 +231,16 @@ def _single(args, model, config, load: dict) -> tuple[list[dict], dict, float]:
     if model is None:
         from sandbox.eval.loocv import run_loocv
 
+        described = config.to_dict()
+        if getattr(args, "tail", None) is not None:
+            from sandbox.eval.tails import with_tail
+
+            train, test = with_tail(train, test, args.tail, in_training=args.tail_in_training,
+                                    settle_tol=config.settle_tol, arrive_tol=config.arrive_tol)
+            described.update(tail=args.tail, tail_in_training=bool(args.tail_in_training))
         trials, runtime = run_loocv(train, test, config, workers=args.workers,
                                     progress=load["progress"])
-        return trials, config.to_dict(), runtime
+        return trials, described, runtime
     from sandbox.eval import heldout
 
     heldout.check_compatible(model, test)
