@@ -74,17 +74,27 @@ def _compile():
     return kernel
 
 
-def _factor_block_py(buf: np.ndarray, n: int, w: int) -> bool:
+def block_size(size: int) -> int:
+    """Matrices interleaved in one block for augmented matrices of ``size`` rows: 64 up to
+    32 rows, :data:`BLOCK` above (a block of ``size`` x ``size`` x lanes stays within the
+    core's level-2 cache). Lanes are independent: the block changes no result."""
+    return 64 if size <= 32 else BLOCK
+
+
+def _factor_block_py(buf: np.ndarray, acc: np.ndarray, n: int, w: int) -> bool:
     """In-place Cholesky of ``buf[:n, :n, :w]`` (buf (>= n, >= n, >= w)): lower triangles,
-    the matrices along the last axis. The last pivot is clamped at sqrt(1e-300) as the numpy
-    path does (a Mahalanobis term lost to round-off); returns False when an earlier one is
-    not positive (or NaN)."""
+    the matrices along the last axis; ``acc`` (>= w) is scratch, so that each entry is
+    reduced in one small vector rather than in ``buf``. The last pivot is clamped at
+    sqrt(1e-300) as the numpy path does (a Mahalanobis term lost to round-off); returns
+    False when an earlier one is not positive (or NaN)."""
     for j in range(n):
+        for b in range(w):
+            acc[b] = buf[j, j, b]
         for k in range(j):
             for b in range(w):
-                buf[j, j, b] -= buf[j, k, b] * buf[j, k, b]
+                acc[b] -= buf[j, k, b] * buf[j, k, b]
         for b in range(w):
-            d = buf[j, j, b]
+            d = acc[b]
             if d > 0.0:
                 buf[j, j, b] = sqrt(d)
             elif j == n - 1 and d <= 0.0:
@@ -92,11 +102,13 @@ def _factor_block_py(buf: np.ndarray, n: int, w: int) -> bool:
             else:
                 return False
         for i in range(j + 1, n):
+            for b in range(w):
+                acc[b] = buf[i, j, b]
             for k in range(j):
                 for b in range(w):
-                    buf[i, j, b] -= buf[i, k, b] * buf[j, k, b]
+                    acc[b] -= buf[i, k, b] * buf[j, k, b]
             for b in range(w):
-                buf[i, j, b] /= buf[j, j, b]
+                buf[i, j, b] = acc[b] / buf[j, j, b]
     return True
 
 
@@ -122,13 +134,17 @@ def _active_rows_py(Kt, eps, m: int) -> int:
 def _scores_py(Kt, eps, gamma_term, offset, L, loglik, block: int) -> bool:
     """:func:`~sandbox.core.factor.factor_scores` into ``L`` (M, n, n) and ``loglik`` (M,),
     up to ``block`` matrices at a time; False (outputs unfinished) when a block cannot be
-    factored: the caller then takes the numpy path, which says why. A block holds
+    factored: the caller then takes the numpy path, which says why. An ``L`` with no
+    matrices (shape (0, n, n)) asks for the log-likelihoods only (the factors are not
+    written: the phase grid needs those of a few pairs only). A block holds
     consecutive pairs with the same active rows (:func:`_active_rows`: one task's pairs),
     and factors only those rows and the augmented row, in as many lanes as it has
     pairs; the lanes are independent, so none of this changes a result."""
     M, n, _ = Kt.shape
     R = n - 1
     buf = np.empty((n, n, min(block, M)))
+    acc = np.empty(min(block, M))
+    write = L.shape[0] == M
     active = np.empty(M, dtype=np.int64)
     for m in range(M):
         active[m] = _active_rows(Kt, eps, m)
@@ -149,10 +165,11 @@ def _scores_py(Kt, eps, gamma_term, offset, L, loglik, block: int) -> bool:
                 buf[r, j, b] = eps[s + b, j] - Kt[s + b, j, R]       # e
         for b in range(w):
             buf[r, r, b] = gamma_term[s + b] - 2.0 * eps[s + b, R] + Kt[s + b, R, R]
-        if not _factor_block(buf, r + 1, w):
+        if not _factor_block(buf, acc, r + 1, w):
             return False
         for b in range(w):
-            _write_factor(buf, b, r, L[s + b])
+            if write:
+                _write_factor(buf, b, r, L[s + b])
             ld = 0.0
             for j in range(r):
                 ld += log(buf[j, j, b])

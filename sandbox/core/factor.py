@@ -63,8 +63,8 @@ def b_parts(G: FloatArray, betas, yys, kappas) -> list:
 
 
 def factor_scores(Kt: FloatArray, eps: FloatArray, gamma_term: FloatArray,
-                  offset: FloatArray, *, work: FloatArray | None = None
-                  ) -> tuple[FloatArray, FloatArray]:
+                  offset: FloatArray, *, work: FloatArray | None = None,
+                  factors: bool = True) -> tuple[FloatArray, FloatArray | None]:
     """Log-likelihoods and augmented Cholesky factors from a pair's statistics.
 
     Parameters
@@ -83,19 +83,24 @@ def factor_scores(Kt: FloatArray, eps: FloatArray, gamma_term: FloatArray,
     work : ndarray, shape (M, R+1, R+1), optional
         A buffer the numpy path builds the augmented matrix in, leaving ``Kt`` unchanged
         (a kept buffer: allocating megabytes per update costs more than copying them).
+    factors : bool
+        False: the compiled kernel writes no factors and None is returned for them (the
+        numpy path returns them anyway); the phase grid needs a few pairs' factors only.
 
     Returns
     -------
     loglik : ndarray, shape (M,)
-    factors : ndarray, shape (M, R+1, R+1)
+    factors : ndarray, shape (M, R+1, R+1), or None
     """
     kernel = _kernels.factor_kernel(Kt.shape[1])
     if kernel is not None and Kt.shape[0]:
-        loglik, L = np.empty(Kt.shape[0]), np.empty_like(Kt)
+        M, n = Kt.shape[:2]
+        loglik, L = np.empty(M), np.empty((M if factors else 0, n, n))
         if kernel(np.ascontiguousarray(Kt, dtype=np.float64), np.ascontiguousarray(eps),
                   np.ascontiguousarray(gamma_term, dtype=np.float64),
-                  np.ascontiguousarray(offset, dtype=np.float64), L, loglik, _kernels.BLOCK):
-            return loglik, L
+                  np.ascontiguousarray(offset, dtype=np.float64), L, loglik,
+                  _kernels.block_size(n)):
+            return loglik, (L if factors else None)
     if work is not None:
         np.copyto(work, Kt)
         Kt = work

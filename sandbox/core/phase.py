@@ -144,14 +144,15 @@ def estimate_phase(scorer: Scorer, tasks, times: FloatArray, values: FloatArray,
     a_std = np.array([t.alpha_std for t in tasks])
     if stats is not None and mode == "joint":
         durations, spans = stats.durations, stats.spans
-        loglik, pair_factors = stats.packed_scores()      # every task's pairs, one batch
+        loglik, _ = stats.packed_scores(factors=False)    # every task's pairs, one batch
+        factors_of = stats.pair_factors                   # only the best pairs' factors
     else:
         lattice = Lattice.for_tasks(tasks, n_candidates, width)
         durations, spans = lattice.durations, lattice.spans()
         scores = (scorer.joint if mode == "joint" else scorer.marginal)(times, values,
                                                                          durations, spans)
         loglik = np.concatenate(scores.loglik)
-        pair_factors = None if scores.factors is None else np.concatenate(scores.factors)
+        factors_of = _picker(None if scores.factors is None else np.concatenate(scores.factors))
     lengths = spans[:, 1] - spans[:, 0]
     starts = np.concatenate([[0], np.cumsum(lengths)[:-1]])
     task_of = np.repeat(np.arange(len(tasks)), lengths)
@@ -163,7 +164,7 @@ def estimate_phase(scorer: Scorer, tasks, times: FloatArray, values: FloatArray,
     w /= np.repeat(np.add.reduceat(w, starts), lengths)
     grid = list(zip(np.split(T, starts[1:]), np.split(w, starts[1:])))
     best_T, best_ll, best_lp = T[best], loglik[best], lp[best]
-    factors = None if pair_factors is None else pair_factors[best]
+    factors = factors_of(best)
     brackets = [None if i in (a, a + n - 1) else
                 (T[i - 1], T[i], T[i + 1], f[i - 1], f[i], f[i + 1])
                 for i, a, n in zip(best.tolist(), starts.tolist(), lengths.tolist())]
@@ -172,6 +173,11 @@ def estimate_phase(scorer: Scorer, tasks, times: FloatArray, values: FloatArray,
         brackets = _refine(pairs, times, values, tasks, brackets, nominal, a_mean, a_std,
                            best_T, best_ll, best_lp, factors)
     return PhaseEstimate(best_T, best_T / nominal, best_ll, best_lp, factors, lengths, grid)
+
+
+def _picker(factors: FloatArray | None):
+    """``index -> factors[index]`` (None without factors)."""
+    return lambda index: None if factors is None else factors[index]
 
 
 def _argmax_per_task(f: FloatArray, starts: np.ndarray, lengths: np.ndarray) -> np.ndarray:

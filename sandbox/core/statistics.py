@@ -93,6 +93,7 @@ class StreamStatistics:
         self.eps = np.zeros((M, sc.R + 1))
         self._work = np.empty_like(self.Kt)     # factor_scores' numpy path builds in it
         self.count = 0
+        self._terms: tuple[int, np.ndarray, np.ndarray] | None = None
         self._x: list[np.ndarray] = []
         self._coef: list[np.ndarray] = []
 
@@ -141,12 +142,32 @@ class StreamStatistics:
         self._x.clear()
         self._coef.clear()
 
-    def packed_scores(self) -> tuple[np.ndarray, np.ndarray]:
+    def packed_scores(self, factors: bool = True) -> tuple[np.ndarray, np.ndarray | None]:
         """Joint log-likelihoods (M,) and augmented factors (M, R+1, R+1) of every pair.
 
         Pairs are packed task after task (:attr:`pairs`); :meth:`scores` splits them.
+        ``factors=False`` lets the compiled kernel skip writing the factors (None is then
+        returned for them, :func:`~sandbox.core.factor.factor_scores`): the phase grid
+        takes the few it needs from :meth:`pair_factors`.
         """
         self._flush()
+        gamma_term, const = self._pair_terms()
+        return factor_scores(self.Kt, self.eps, gamma_term, const, work=self._work,
+                             factors=factors)
+
+    def pair_factors(self, index: np.ndarray) -> np.ndarray:
+        """Augmented factors (n, R+1, R+1) of the packed pairs ``index`` (n,): the same
+        matrices as :meth:`packed_scores` returns for them (each is factored alone)."""
+        self._flush()
+        gamma_term, const = self._pair_terms()
+        return factor_scores(self.Kt[index], self.eps[index], gamma_term[index],
+                             const[index])[1]
+
+    def _pair_terms(self) -> tuple[np.ndarray, np.ndarray]:
+        """:math:`y^T B^{-1} y` and :math:`sP\\log 2\\pi + \\log|B|` of every packed pair
+        (kept until the next observation)."""
+        if self._terms is not None and self._terms[0] == self.count:
+            return self._terms[1], self._terms[2]
         sc = self.scorer
         C = self.durations.size
         const = np.zeros((sc.K, C))
@@ -157,8 +178,8 @@ class StreamStatistics:
             const += (member @ per_dim)[:, None] + member.sum(axis=1)[:, None] * st.logdet_a
             gamma_term += member @ (st.gamma / sc.sigma2[g.dims]).T
         pk, pc = self.pairs
-        return factor_scores(self.Kt, self.eps, gamma_term[pk, pc], const[pk, pc],
-                             work=self._work)
+        self._terms = (self.count, gamma_term[pk, pc], const[pk, pc])
+        return self._terms[1], self._terms[2]
 
     def scores(self, spans: np.ndarray | None = None) -> Scores:
         """Joint log-likelihoods for every task's candidates (as :meth:`Scorer.joint`).
