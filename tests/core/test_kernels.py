@@ -35,7 +35,7 @@ def _both(monkeypatch, *args):
     return ref, factor_scores(*[a.copy() for a in args])
 
 
-@pytest.mark.parametrize(("M", "R"), [(1, 1), (37, 9), (70, 30), (5, 55)])
+@pytest.mark.parametrize(("M", "R"), [(1, 1), (37, 9), (70, 30), (5, 55), (3, 93)])
 def test_kernel_matches_the_numpy_path(monkeypatch, M, R):
     pytest.importorskip("numba")
     (ll0, L0), (ll1, L1) = _both(monkeypatch, *_pairs(np.random.default_rng(R), M, R))
@@ -152,3 +152,24 @@ def test_the_kernel_skips_a_padding_of_zero_rows_bit_for_bit(monkeypatch):
     ll_np, L_np = factor_scores(big, e, gamma, offset)
     np.testing.assert_allclose(ll_pad, ll_np, rtol=1e-12, atol=0)
     np.testing.assert_allclose(L_pad, L_np, rtol=1e-12, atol=1e-12 * np.abs(L_np).max())
+
+
+@pytest.mark.parametrize("choice", ["numpy", "numba"])
+def test_a_few_pairs_factored_alone_are_those_of_the_whole_grid(monkeypatch, choice):
+    """The phase grid asks for log-likelihoods only, then factors its best pairs alone
+    (StreamStatistics.pair_factors): the same numbers bit for bit as the whole batch."""
+    if choice == "numba":
+        pytest.importorskip("numba")
+    monkeypatch.setenv(_kernels.ENV, choice)
+    rng = np.random.default_rng(6)
+    model = IProMP(n_basis=9).fit(synth.demos(rng, n_per_task=6, n_tasks=3, noise=0.003))
+    test = synth.replay(1, 2.0, noise=0.003, rng=rng)
+    stats = StreamStatistics(Scorer(model), Lattice.for_tasks(model.task_models, 70))
+    for ti, yi in zip(test.times[:120:5], test.human[:120:5]):
+        stats.add(ti, yi)
+    ll, L = stats.packed_scores()
+    ll_only, none = stats.packed_scores(factors=False)
+    np.testing.assert_array_equal(ll_only, ll)
+    assert (none is None) == (choice == "numba")
+    pick = np.array([3, ll.size - 1, 40, 3])
+    np.testing.assert_array_equal(stats.pair_factors(pick), L[pick])
