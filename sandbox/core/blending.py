@@ -75,6 +75,15 @@ def blend_unchecked(means, covs, act):
     return mean, cov
 
 
+def blend_pair(m1, S1, a1, m2, S2, a2):
+    """:func:`blend_unchecked` of two distributions given apart (no stacking, no copies):
+    means (T, Q), covariances (T, Q, Q), activations (T,) each; the same numbers."""
+    mean, cov, a_acc = _pair(m1, S1, a1, m2, S2, a2)                       # eq. 16
+    if np.any(a_acc != 1.0):
+        cov = cov / a_acc[:, None, None]
+    return mean, cov
+
+
 def _pair(m1, S1, a1, m2, S2, a2):
     """Product of (m1, S1)^a1 and (m2, S2)^a2 per step; result has activation 1 (or a1/a2)."""
     both = (a1 > 0) & (a2 > 0)

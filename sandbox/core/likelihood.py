@@ -199,7 +199,7 @@ class Scorer:
                 shared.setdefault(rows.tobytes(), []).append(i)
         for members in shared.values():
             rows = present[self.groups[members[0]].modality]
-            ps = psi[:, rows]
+            ps = psi if rows.all() else psi[:, rows]
             ps_t = ps.transpose(0, 2, 1)
             ys = [values[rows][:, self.groups[i].dims] for i in members]
             parts = b_parts(ps_t @ ps, [ps_t @ y for y in ys],
