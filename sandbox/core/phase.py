@@ -24,6 +24,7 @@ recognition fall in the last third of the motion (README, "late motion").
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -162,7 +163,8 @@ def estimate_phase(scorer: Scorer, tasks, times: FloatArray, values: FloatArray,
     best = _argmax_per_task(f, starts, lengths)   # eq. 13
     w = np.exp(f - np.repeat(f[best], lengths))
     w /= np.repeat(np.add.reduceat(w, starts), lengths)
-    grid = list(zip(np.split(T, starts[1:]), np.split(w, starts[1:])))
+    cuts = list(zip(starts.tolist(), (starts + lengths).tolist()))
+    grid = [(T[a:b], w[a:b]) for a, b in cuts]
     best_T, best_ll, best_lp = T[best], loglik[best], lp[best]
     factors = factors_of(best)
     brackets = [None if i in (a, a + n - 1) else
@@ -202,7 +204,7 @@ def _vertex(br) -> float | None:
     x0, x1, x2, f0, f1, f2 = br
     num = (x1 - x0) ** 2 * (f1 - f2) - (x1 - x2) ** 2 * (f1 - f0)
     den = (x1 - x0) * (f1 - f2) - (x1 - x2) * (f1 - f0)
-    if den == 0 or not np.isfinite(num / den):
+    if den == 0 or not math.isfinite(num / den):
         return None
     x = x1 - 0.5 * num / den
     return float(x) if x0 < x < x2 and x != x1 else None

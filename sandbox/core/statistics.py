@@ -151,6 +151,7 @@ class StreamStatistics:
         takes the few it needs from :meth:`pair_factors`.
         """
         self._flush()
+        self._terms = None                  # computed afresh: an update's cost, every update
         gamma_term, const = self._pair_terms()
         return factor_scores(self.Kt, self.eps, gamma_term, const, work=self._work,
                              factors=factors)
@@ -165,7 +166,7 @@ class StreamStatistics:
 
     def _pair_terms(self) -> tuple[np.ndarray, np.ndarray]:
         """:math:`y^T B^{-1} y` and :math:`sP\\log 2\\pi + \\log|B|` of every packed pair
-        (kept until the next observation)."""
+        (kept for :meth:`pair_factors` until the next observation or :meth:`packed_scores`)."""
         if self._terms is not None and self._terms[0] == self.count:
             return self._terms[1], self._terms[2]
         sc = self.scorer
