@@ -5,17 +5,20 @@ small augmented matrix (step 3 of :mod:`sandbox.core.likelihood`). numpy factors
 batch of them one matrix at a time through LAPACK, whose call overhead and
 scalar-bound inner loops leave most of a core unused at these sizes (tens of rows).
 When numba is installed (``pip install -e ".[numba]"``) this module compiles a
-*batch-interleaved* kernel: blocks of :data:`BLOCK` matrices are laid side by side
-so that every step of the factorisation is a vector operation across the block.
-It builds the augmented matrix, factors it and sums the log-likelihood in one pass.
+*batch-interleaved* kernel: blocks of :func:`block_size` matrices are laid side by side
+so that every step of the factorisation is a vector operation across the block (each
+entry reduced in a small vector of the block's lanes). It builds the augmented matrix,
+factors it and sums the log-likelihood in one pass; it writes the factors only when
+asked (the phase grid needs those of each task's best pair only).
 
 The kernel computes the same quantities as the numpy path in another order of
 floating-point operations: the results agree within 1e-12 (relative), not bit for
 bit (``tests/core/test_kernels.py``). It is used automatically when numba imports;
 ``SANDBOX_KERNEL=numpy`` forces the numpy path, ``SANDBOX_KERNEL=numba`` asks
 for the kernel (an ``ImportError`` without numba). It is used only for matrices up
-to :data:`MAX_SIZE` rows (above, one block no longer fits the core's cache; at 94 rows,
-the rank N x P of the bench's many-demos case, it still factors 1.3x as fast as LAPACK). The core does not import numba at load time, only at the first
+to :data:`MAX_SIZE` rows (above, a block no longer fits the core's cache; at 94 rows,
+the rank N x P + 1 of the bench's many-demos case, it factors 1.3x as fast as LAPACK,
+measured under load). The core does not import numba at load time, only at the first
 factorisation; the compiled code is cached on disk (``cache=True``), so only the
 first use after an install pays the compilation (see the speed page of the docs).
 """
@@ -29,7 +32,7 @@ import numpy as np
 
 #: Environment variable choosing the kernel: "numpy", "numba" or unset (numba if installed).
 ENV = "SANDBOX_KERNEL"
-#: Matrices interleaved in one block.
+#: Matrices interleaved in one block above 32 rows (:func:`block_size`).
 BLOCK = 32
 #: Largest augmented matrix (rows) the kernel factors; larger ones go to LAPACK.
 MAX_SIZE = 96

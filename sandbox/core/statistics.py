@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sandbox.core.factor import factor_scores
+from sandbox.core.factor import factor_loglik, factor_scores
 from sandbox.core.interaction import LOG_2PI
 from sandbox.core.likelihood import Scorer, Scores
 from sandbox.core.phase import Lattice
@@ -142,19 +142,23 @@ class StreamStatistics:
         self._x.clear()
         self._coef.clear()
 
-    def packed_scores(self, factors: bool = True) -> tuple[np.ndarray, np.ndarray | None]:
+    def packed_scores(self) -> tuple[np.ndarray, np.ndarray]:
         """Joint log-likelihoods (M,) and augmented factors (M, R+1, R+1) of every pair.
 
         Pairs are packed task after task (:attr:`pairs`); :meth:`scores` splits them.
-        ``factors=False`` lets the compiled kernel skip writing the factors (None is then
-        returned for them, :func:`~sandbox.core.factor.factor_scores`): the phase grid
-        takes the few it needs from :meth:`pair_factors`.
         """
         self._flush()
         self._terms = None                  # computed afresh: an update's cost, every update
         gamma_term, const = self._pair_terms()
-        return factor_scores(self.Kt, self.eps, gamma_term, const, work=self._work,
-                             factors=factors)
+        return factor_scores(self.Kt, self.eps, gamma_term, const, work=self._work)
+
+    def packed_loglik(self) -> np.ndarray:
+        """The log-likelihoods (M,) of :meth:`packed_scores` alone (the compiled kernel
+        writes no factors): the phase grid takes the few it needs from :meth:`pair_factors`."""
+        self._flush()
+        self._terms = None
+        gamma_term, const = self._pair_terms()
+        return factor_loglik(self.Kt, self.eps, gamma_term, const, work=self._work)
 
     def pair_factors(self, index: np.ndarray) -> np.ndarray:
         """Augmented factors (n, R+1, R+1) of the packed pairs ``index`` (n,): the same
