@@ -1,4 +1,5 @@
-"""Optional compiled kernel of the phase stage: :func:`~sandbox.core.factor.factor_scores`.
+"""Optional compiled kernels of the phase stage: :func:`~sandbox.core.factor.factor_scores`
+and the statistics of the refinement's pairs (:mod:`sandbox.core.pairstats`).
 
 The likelihood of every (candidate, task) pair ends in one Cholesky factorisation of a
 small augmented matrix (step 3 of :mod:`sandbox.core.likelihood`). numpy factors a
@@ -266,7 +267,8 @@ def _pair_stats_py(psi, values, present, tasks, dims, starts, modality, kappa, c
     ``gamma_term`` and ``offset`` (M,). ``psi`` (M, s, N); group g's columns are
     ``starts[g]:starts[g+1]`` of ``dims`` (human dims), ``member`` (K, cols) and
     ``blocks`` (K, cols, N, R+1); ``present`` (modalities, s); ``columns`` (3, cols):
-    each column's :math:`\\sigma_p`, :math:`\\sigma_p^2` and :math:`\\log 2\\pi + \\log\\sigma_p^2`."""
+    each column's :math:`\\sigma_p`, :math:`\\sigma_p^2` and
+    :math:`\\log 2\\pi + \\log\\sigma_p^2`."""
     M, s, N = psi.shape
     G, Li, W = np.empty((N, N)), np.empty((N, N)), np.empty((N, N))
     for g in range(kappa.size):

@@ -171,3 +171,32 @@ def test_a_few_pairs_factored_alone_are_those_of_the_whole_grid(monkeypatch, cho
     np.testing.assert_array_equal(stats.packed_loglik(), ll)
     pick = np.array([3, ll.size - 1, 40, 3])
     np.testing.assert_array_equal(stats.pair_factors(pick), L[pick])
+
+
+def test_the_pair_kernel_matches_the_numpy_path_with_masked_modalities(monkeypatch):
+    """Scorer.joint_pairs (the refinement's pairs) by the compiled kernel of pairstats.py:
+    the statistics within round-off of the numpy path's; the log-likelihood, a difference
+    of terms ~1e3 x its size, within 1e-15 of those terms."""
+    pytest.importorskip("numba")
+    from sandbox.core.pairstats import pair_statistics
+
+    demos = synth.multimodal(np.random.default_rng(5), n_per_task=6)
+    model = IProMP(n_basis=9).fit(demos[1:])
+    t, y = demos[0].times[:160:4], demos[0].human[:160:4] / model.scale
+    y[5:9, 3:9] = np.nan                              # arm and EMG missing in some rows
+    y[::3, 9:] = np.nan
+    sc = Scorer(model)
+    durations = np.array([1.2, 2.0, 2.6, 0.9, 3.1])
+    tasks = np.array([0, 1, 0, 1, 1])
+    psi = sc.phases(t, durations)
+    monkeypatch.setenv(_kernels.ENV, "numpy")
+    assert pair_statistics(sc._packed, sc.R, psi, y, sc.present(y), tasks) is None
+    ref = sc._stats(sc._group_parts(psi, y), tasks, slice(None), tasks.size)
+    ll0, L0 = sc.joint_pairs(t, y, durations, tasks)
+    monkeypatch.setenv(_kernels.ENV, "numba")
+    got = pair_statistics(sc._packed, sc.R, psi, y, sc.present(y), tasks)
+    for a, b in zip(ref, got):
+        np.testing.assert_allclose(b, a, rtol=0, atol=1e-13 * np.abs(a).max())
+    ll1, L1 = sc.joint_pairs(t, y, durations, tasks)
+    np.testing.assert_allclose(ll1, ll0, rtol=0, atol=1e-15 * np.abs(ref[2]).max())
+    np.testing.assert_allclose(L1, L0, rtol=0, atol=1e-12 * np.abs(L0).max())
