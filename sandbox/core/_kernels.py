@@ -74,14 +74,23 @@ def _compile():
     globals()["_write_factor"] = jit(_write_factor_py)
     globals()["_group_part"] = jit(_group_part_py)
     globals()["_pair_stats"] = jit(_pair_stats_py)
+    globals()["_product"] = jit(_product_py)
     kernel = jit(_scores_py)
     one = np.ones((1, 1, 1))          # load (or compile) the machine code now, not in an update
     kernel(one, np.zeros((1, 1)), np.ones(1), np.zeros(1), np.empty((1, 1, 1)), np.empty(1), 1)
     ints, yes = np.zeros(1, dtype=np.int64), np.ones((1, 1), dtype=np.bool_)
     _pair_stats(np.ones((1, 1, 1)), np.ones((1, 1)), yes, ints, ints, np.array([0, 1]), ints,
                 np.ones(1), np.ones((3, 1)), yes, np.ones((1, 1, 1, 2)), np.zeros((1, 2, 2)),
-                np.zeros((1, 2)), np.zeros(1), np.zeros(1))   # both kernels loaded now
+                np.zeros((1, 2)), np.zeros(1), np.zeros(1))   # every kernel loaded now
+    _product(np.ones((1, 1)), np.ones((1, 1, 1)), np.ones(1), np.ones((1, 1)),
+             np.ones((1, 1, 1)), np.ones(1))
     return kernel
+
+
+def product_kernel():
+    """The compiled :func:`_product_py` (the blend's product of two distributions,
+    :mod:`sandbox.core.blending`) when :func:`factor_kernel` has a kernel; else None."""
+    return None if factor_kernel(1) is None else _product
 
 
 def pair_kernel(size: int):
@@ -295,6 +304,32 @@ def _pair_stats_py(psi, values, present, tasks, dims, starts, modality, kappa, c
                     offset[m] += count * columns[2, a + p] + ld
 
 
+def _product_py(m1, S1, a1, m2, S2, a2):
+    """``blending._product`` knot by knot: means (T, Q), covariances (T, Q, Q), activations
+    (T,) > 0; the same formulas (an LU solve of M = a2 S1 + a1 S2 per knot). A singular M
+    raises ``LinAlgError`` (the numpy path then takes its pseudo-inverse)."""
+    T, Q = m1.shape
+    mean, cov = np.empty((T, Q)), np.empty((T, Q, Q))
+    M, rhs = np.empty((Q, Q)), np.empty((Q, Q + 2))
+    for t in range(T):
+        for i in range(Q):
+            for j in range(Q):
+                M[i, j] = a2[t] * S1[t, i, j] + a1[t] * S2[t, i, j]
+                rhs[i, j] = S1[t, i, j]
+            rhs[i, Q] = m1[t, i]
+            rhs[i, Q + 1] = m2[t, i]
+        sol = np.linalg.solve(M, rhs)
+        new = S2[t] @ np.ascontiguousarray(sol[:, :Q])
+        u = S2[t] @ np.ascontiguousarray(sol[:, Q])
+        v = S1[t] @ np.ascontiguousarray(sol[:, Q + 1])
+        for i in range(Q):
+            mean[t, i] = a1[t] * u[i] + a2[t] * v[i]
+            for j in range(Q):
+                cov[t, i, j] = 0.5 * (new[i, j] + new[j, i])
+    return mean, cov
+
+
+_product = _product_py
 _group_part = _group_part_py
 _pair_stats = _pair_stats_py
 _factor_block = _factor_block_py     # replaced by their compiled versions in _compile

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from sandbox.core import _kernels
 from sandbox.validation import FloatArray, check_array
 
 
@@ -103,7 +104,15 @@ def _pair(m1, S1, a1, m2, S2, a2):
 
 
 def _product(m1, S1, a1, m2, S2, a2):
-    """Symmetric form of the product for activations > 0 (module docstring)."""
+    """Symmetric form of the product for activations > 0 (module docstring); knot by knot
+    in numba's compiled kernel when it is installed (``sandbox/core/_kernels.py``)."""
+    kernel = _kernels.product_kernel()
+    if kernel is not None and m1.shape[0]:
+        try:
+            return kernel(*[np.ascontiguousarray(x, dtype=np.float64)
+                            for x in (m1, S1, a1, m2, S2, a2)])
+        except np.linalg.LinAlgError:
+            pass                                 # singular M: the pseudo-inverse below
     b1, b2 = a1[:, None, None], a2[:, None, None]
     M = b2 * S1 + b1 * S2
     rhs = np.concatenate([S1, m1[..., None], m2[..., None]], axis=2)

@@ -200,3 +200,30 @@ def test_the_pair_kernel_matches_the_numpy_path_with_masked_modalities(monkeypat
     ll1, L1 = sc.joint_pairs(t, y, durations, tasks)
     np.testing.assert_allclose(ll1, ll0, rtol=0, atol=1e-15 * np.abs(ref[2]).max())
     np.testing.assert_allclose(L1, L0, rtol=0, atol=1e-12 * np.abs(L0).max())
+
+
+def test_the_blend_kernel_matches_the_numpy_path_and_leaves_singular_knots_to_it(monkeypatch):
+    pytest.importorskip("numba")
+    from sandbox.core.blending import blend_pair
+
+    rng = np.random.default_rng(7)
+    T, Q = 40, 7
+    m1, m2 = rng.normal(size=(2, T, Q))
+    A = rng.normal(size=(2, T, Q, Q))
+    S1, S2 = A @ A.transpose(0, 1, 3, 2) + 0.05 * np.eye(Q)
+    a2 = 1.0 / (1.0 + np.exp(-np.linspace(-12, 12, T)))
+    a2[:3] = 0.0                                   # the old plan alone at the first knots
+    args = (m1, S1, 1.0 - a2, m2, S2, a2)
+    monkeypatch.setenv(_kernels.ENV, "numpy")
+    ref = blend_pair(*args)
+    monkeypatch.setenv(_kernels.ENV, "numba")
+    got = blend_pair(*args)
+    for a, b in zip(ref, got):
+        np.testing.assert_allclose(b, a, rtol=0, atol=1e-12 * np.abs(a).max())
+    S1[5] = S2[5] = 0.0                            # M singular at one knot: the pseudo-inverse
+    monkeypatch.setenv(_kernels.ENV, "numpy")
+    ref = blend_pair(*args)
+    monkeypatch.setenv(_kernels.ENV, "numba")
+    got = blend_pair(*args)
+    for a, b in zip(ref, got):
+        np.testing.assert_array_equal(b, a)
