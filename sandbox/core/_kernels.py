@@ -83,7 +83,7 @@ def _compile():
                 np.ones(1), np.ones((3, 1)), yes, np.ones((1, 1, 1, 2)), np.zeros((1, 2, 2)),
                 np.zeros((1, 2)), np.zeros(1), np.zeros(1))   # every kernel loaded now
     _product(np.ones((1, 1)), np.ones((1, 1, 1)), np.ones(1), np.ones((1, 1)),
-             np.ones((1, 1, 1)), np.ones(1))
+             np.ones((1, 1, 1)), np.ones(1), np.empty((1, 1)), np.empty((1, 1, 1)))
     return kernel
 
 
@@ -304,29 +304,60 @@ def _pair_stats_py(psi, values, present, tasks, dims, starts, modality, kappa, c
                     offset[m] += count * columns[2, a + p] + ld
 
 
-def _product_py(m1, S1, a1, m2, S2, a2):
-    """``blending._product`` knot by knot: means (T, Q), covariances (T, Q, Q), activations
-    (T,) > 0; the same formulas (an LU solve of M = a2 S1 + a1 S2 per knot). A singular M
-    raises ``LinAlgError`` (the numpy path then takes its pseudo-inverse)."""
+def _product_py(m1, S1, a1, m2, S2, a2, mean, cov) -> bool:
+    """``blending._product`` knot by knot into ``mean`` (T, Q) and ``cov`` (T, Q, Q): means
+    (T, Q), covariances (T, Q, Q), activations (T,) > 0; the same formulas, M = a2 S1 + a1 S2
+    solved by LU with partial pivoting. False at an exactly singular M (the numpy path then
+    takes its pseudo-inverse)."""
     T, Q = m1.shape
-    mean, cov = np.empty((T, Q)), np.empty((T, Q, Q))
-    M, rhs = np.empty((Q, Q)), np.empty((Q, Q + 2))
+    M, X = np.empty((Q, Q)), np.empty((Q, Q + 2))
     for t in range(T):
         for i in range(Q):
             for j in range(Q):
                 M[i, j] = a2[t] * S1[t, i, j] + a1[t] * S2[t, i, j]
-                rhs[i, j] = S1[t, i, j]
-            rhs[i, Q] = m1[t, i]
-            rhs[i, Q + 1] = m2[t, i]
-        sol = np.linalg.solve(M, rhs)
-        new = S2[t] @ np.ascontiguousarray(sol[:, :Q])
-        u = S2[t] @ np.ascontiguousarray(sol[:, Q])
-        v = S1[t] @ np.ascontiguousarray(sol[:, Q + 1])
-        for i in range(Q):
-            mean[t, i] = a1[t] * u[i] + a2[t] * v[i]
+                X[i, j] = S1[t, i, j]
+            X[i, Q] = m1[t, i]
+            X[i, Q + 1] = m2[t, i]
+        for c in range(Q):                                 # M X = [S1, m1, m2]
+            p = c
+            for i in range(c + 1, Q):
+                if abs(M[i, c]) > abs(M[p, c]):
+                    p = i
+            if M[p, c] == 0.0:
+                return False
             for j in range(Q):
-                cov[t, i, j] = 0.5 * (new[i, j] + new[j, i])
-    return mean, cov
+                M[c, j], M[p, j] = M[p, j], M[c, j]
+            for j in range(Q + 2):
+                X[c, j], X[p, j] = X[p, j], X[c, j]
+            for i in range(c + 1, Q):
+                f = M[i, c] / M[c, c]
+                for j in range(c + 1, Q):
+                    M[i, j] -= f * M[c, j]
+                for j in range(Q + 2):
+                    X[i, j] -= f * X[c, j]
+        for c in range(Q - 1, -1, -1):
+            for j in range(Q + 2):
+                acc = X[c, j]
+                for k in range(c + 1, Q):
+                    acc -= M[c, k] * X[k, j]
+                X[c, j] = acc / M[c, c]
+        for i in range(Q):
+            u, v = 0.0, 0.0
+            for k in range(Q):
+                u += S2[t, i, k] * X[k, Q]
+                v += S1[t, i, k] * X[k, Q + 1]
+            mean[t, i] = a1[t] * u + a2[t] * v
+            for j in range(Q):
+                acc = 0.0
+                for k in range(Q):
+                    acc += S2[t, i, k] * X[k, j]
+                cov[t, i, j] = acc
+        for i in range(Q):
+            for j in range(i + 1):
+                x = 0.5 * (cov[t, i, j] + cov[t, j, i])
+                cov[t, i, j] = x
+                cov[t, j, i] = x
+    return True
 
 
 _product = _product_py

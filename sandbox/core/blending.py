@@ -108,11 +108,10 @@ def _product(m1, S1, a1, m2, S2, a2):
     in numba's compiled kernel when it is installed (``sandbox/core/_kernels.py``)."""
     kernel = _kernels.product_kernel()
     if kernel is not None and m1.shape[0]:
-        try:
-            return kernel(*[np.ascontiguousarray(x, dtype=np.float64)
-                            for x in (m1, S1, a1, m2, S2, a2)])
-        except np.linalg.LinAlgError:
-            pass                                 # singular M: the pseudo-inverse below
+        mean, cov = np.empty(m1.shape), np.empty(S1.shape)
+        if kernel(*[np.ascontiguousarray(x, dtype=np.float64) for x in (m1, S1, a1, m2, S2, a2)],
+                  mean, cov):
+            return mean, cov                     # else a singular M: the pseudo-inverse below
     b1, b2 = a1[:, None, None], a2[:, None, None]
     M = b2 * S1 + b1 * S2
     rhs = np.concatenate([S1, m1[..., None], m2[..., None]], axis=2)
