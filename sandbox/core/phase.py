@@ -145,8 +145,7 @@ def estimate_phase(scorer: Scorer, tasks, times: FloatArray, values: FloatArray,
     a_std = np.array([t.alpha_std for t in tasks])
     if stats is not None and mode == "joint":
         durations, spans = stats.durations, stats.spans
-        loglik = stats.packed_loglik()                    # every task's pairs, one batch
-        factors_of = stats.pair_factors                   # only the best pairs' factors
+        loglik, factors_of = stats.grid()                 # every task's pairs, one batch
     else:
         lattice = Lattice.for_tasks(tasks, n_candidates, width)
         durations, spans = lattice.durations, lattice.spans()

@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from sandbox.core import _kernels
 from sandbox.core.factor import factor_loglik, factor_scores
 from sandbox.core.interaction import LOG_2PI
 from sandbox.core.likelihood import Scorer, Scores
@@ -159,6 +160,20 @@ class StreamStatistics:
         self._terms = None
         gamma_term, const = self._pair_terms()
         return factor_loglik(self.Kt, self.eps, gamma_term, const, work=self._work)
+
+    def grid(self):
+        """Log-likelihoods (M,) of every pair and ``index -> factors`` (n, R+1, R+1) of a few.
+
+        With the compiled kernel only the log-likelihoods are made, and the few factors
+        asked for afterwards (:meth:`pair_factors`): writing every pair's factor would take
+        a fresh array of M (R+1)^2 floats per update (15 MB for 160 demos per task, whose
+        page faults cost more than the factorisations' writes). The numpy path makes the
+        factors anyway and returns them. The same numbers either way.
+        """
+        if _kernels.factor_kernel(self.Kt.shape[1]) is not None:
+            return self.packed_loglik(), self.pair_factors
+        ll, L = self.packed_scores()
+        return ll, lambda index: L[index]
 
     def pair_factors(self, index: np.ndarray) -> np.ndarray:
         """Augmented factors (n, R+1, R+1) of the packed pairs ``index`` (n,): the same
