@@ -1,21 +1,25 @@
-"""Optional compiled kernel of the phase stage: :func:`~sandbox.core.factor.factor_scores`.
+"""Optional compiled kernels of the phase stage: :func:`~sandbox.core.factor.factor_scores`
+and the statistics of the refinement's pairs (:mod:`sandbox.core.pairstats`).
 
 The likelihood of every (candidate, task) pair ends in one Cholesky factorisation of a
 small augmented matrix (step 3 of :mod:`sandbox.core.likelihood`). numpy factors a
 batch of them one matrix at a time through LAPACK, whose call overhead and
 scalar-bound inner loops leave most of a core unused at these sizes (tens of rows).
 When numba is installed (``pip install -e ".[numba]"``) this module compiles a
-*batch-interleaved* kernel: blocks of :data:`BLOCK` matrices are laid side by side
-so that every step of the factorisation is a vector operation across the block.
-It builds the augmented matrix, factors it and sums the log-likelihood in one pass.
+*batch-interleaved* kernel: blocks of :func:`block_size` matrices are laid side by side
+so that every step of the factorisation is a vector operation across the block (each
+entry reduced in a small vector of the block's lanes). It builds the augmented matrix,
+factors it and sums the log-likelihood in one pass; it writes the factors only when
+asked (the phase grid needs those of each task's best pair only).
 
 The kernel computes the same quantities as the numpy path in another order of
 floating-point operations: the results agree within 1e-12 (relative), not bit for
 bit (``tests/core/test_kernels.py``). It is used automatically when numba imports;
 ``SANDBOX_KERNEL=numpy`` forces the numpy path, ``SANDBOX_KERNEL=numba`` asks
 for the kernel (an ``ImportError`` without numba). It is used only for matrices up
-to :data:`MAX_SIZE` rows (above, one block no longer fits the core's cache and
-LAPACK is faster). The core does not import numba at load time, only at the first
+to :data:`MAX_SIZE` rows (above, a block no longer fits the core's cache; at 94 rows,
+the rank N x P + 1 of the bench's many-demos case, it factors 1.3x as fast as LAPACK,
+measured under load). The core does not import numba at load time, only at the first
 factorisation; the compiled code is cached on disk (``cache=True``), so only the
 first use after an install pays the compilation (see the speed page of the docs).
 """
@@ -29,10 +33,10 @@ import numpy as np
 
 #: Environment variable choosing the kernel: "numpy", "numba" or unset (numba if installed).
 ENV = "SANDBOX_KERNEL"
-#: Matrices interleaved in one block.
+#: Matrices interleaved in one block above 32 rows (:func:`block_size`).
 BLOCK = 32
 #: Largest augmented matrix (rows) the kernel factors; larger ones go to LAPACK.
-MAX_SIZE = 56
+MAX_SIZE = 96
 
 _COMPILED: list = []      # [kernel or None] once numba has been looked for
 
@@ -68,23 +72,55 @@ def _compile():
     globals()["_factor_block"] = jit(_factor_block_py)
     globals()["_active_rows"] = jit(_active_rows_py)
     globals()["_write_factor"] = jit(_write_factor_py)
+    globals()["_group_part"] = jit(_group_part_py)
+    globals()["_pair_stats"] = jit(_pair_stats_py)
+    globals()["_product"] = jit(_product_py)
     kernel = jit(_scores_py)
     one = np.ones((1, 1, 1))          # load (or compile) the machine code now, not in an update
     kernel(one, np.zeros((1, 1)), np.ones(1), np.zeros(1), np.empty((1, 1, 1)), np.empty(1), 1)
+    ints, yes = np.zeros(1, dtype=np.int64), np.ones((1, 1), dtype=np.bool_)
+    _pair_stats(np.ones((1, 1, 1)), np.ones((1, 1)), yes, ints, ints, np.array([0, 1]), ints,
+                np.ones(1), np.ones((3, 1)), yes, np.ones((1, 1, 1, 2)), np.zeros((1, 2, 2)),
+                np.zeros((1, 2)), np.zeros(1), np.zeros(1))   # every kernel loaded now
+    _product(np.ones((1, 1)), np.ones((1, 1, 1)), np.ones(1), np.ones((1, 1)),
+             np.ones((1, 1, 1)), np.ones(1), np.empty((1, 1)), np.empty((1, 1, 1)))
     return kernel
 
 
-def _factor_block_py(buf: np.ndarray, n: int, w: int) -> bool:
+def product_kernel():
+    """The compiled :func:`_product_py` (the blend's product of two distributions,
+    :mod:`sandbox.core.blending`) when :func:`factor_kernel` has a kernel; else None."""
+    return None if factor_kernel(1) is None else _product
+
+
+def pair_kernel(size: int):
+    """The compiled :func:`_pair_stats_py` (the statistics of a few (duration, task) pairs
+    from their phases, :meth:`~sandbox.core.likelihood.Scorer.joint_pairs`) when
+    :func:`factor_kernel` gives a kernel for augmented matrices of ``size`` rows; else None."""
+    return None if factor_kernel(size) is None else _pair_stats
+
+
+def block_size(size: int) -> int:
+    """Matrices interleaved in one block for augmented matrices of ``size`` rows: 64 up to
+    32 rows, :data:`BLOCK` above (a block of ``size`` x ``size`` x lanes stays within the
+    core's level-2 cache). Lanes are independent: the block changes no result."""
+    return 64 if size <= 32 else BLOCK
+
+
+def _factor_block_py(buf: np.ndarray, acc: np.ndarray, n: int, w: int) -> bool:
     """In-place Cholesky of ``buf[:n, :n, :w]`` (buf (>= n, >= n, >= w)): lower triangles,
-    the matrices along the last axis. The last pivot is clamped at sqrt(1e-300) as the numpy
-    path does (a Mahalanobis term lost to round-off); returns False when an earlier one is
-    not positive (or NaN)."""
+    the matrices along the last axis; ``acc`` (>= w) is scratch, so that each entry is
+    reduced in one small vector rather than in ``buf``. The last pivot is clamped at
+    sqrt(1e-300) as the numpy path does (a Mahalanobis term lost to round-off); returns
+    False when an earlier one is not positive (or NaN)."""
     for j in range(n):
+        for b in range(w):
+            acc[b] = buf[j, j, b]
         for k in range(j):
             for b in range(w):
-                buf[j, j, b] -= buf[j, k, b] * buf[j, k, b]
+                acc[b] -= buf[j, k, b] * buf[j, k, b]
         for b in range(w):
-            d = buf[j, j, b]
+            d = acc[b]
             if d > 0.0:
                 buf[j, j, b] = sqrt(d)
             elif j == n - 1 and d <= 0.0:
@@ -92,11 +128,13 @@ def _factor_block_py(buf: np.ndarray, n: int, w: int) -> bool:
             else:
                 return False
         for i in range(j + 1, n):
+            for b in range(w):
+                acc[b] = buf[i, j, b]
             for k in range(j):
                 for b in range(w):
-                    buf[i, j, b] -= buf[i, k, b] * buf[j, k, b]
+                    acc[b] -= buf[i, k, b] * buf[j, k, b]
             for b in range(w):
-                buf[i, j, b] /= buf[j, j, b]
+                buf[i, j, b] = acc[b] / buf[j, j, b]
     return True
 
 
@@ -122,13 +160,17 @@ def _active_rows_py(Kt, eps, m: int) -> int:
 def _scores_py(Kt, eps, gamma_term, offset, L, loglik, block: int) -> bool:
     """:func:`~sandbox.core.factor.factor_scores` into ``L`` (M, n, n) and ``loglik`` (M,),
     up to ``block`` matrices at a time; False (outputs unfinished) when a block cannot be
-    factored: the caller then takes the numpy path, which says why. A block holds
+    factored: the caller then takes the numpy path, which says why. An ``L`` with no
+    matrices (shape (0, n, n)) asks for the log-likelihoods only (the factors are not
+    written: the phase grid needs those of a few pairs only). A block holds
     consecutive pairs with the same active rows (:func:`_active_rows`: one task's pairs),
     and factors only those rows and the augmented row, in as many lanes as it has
     pairs; the lanes are independent, so none of this changes a result."""
     M, n, _ = Kt.shape
     R = n - 1
     buf = np.empty((n, n, min(block, M)))
+    acc = np.empty(min(block, M))
+    write = L.shape[0] == M
     active = np.empty(M, dtype=np.int64)
     for m in range(M):
         active[m] = _active_rows(Kt, eps, m)
@@ -149,10 +191,11 @@ def _scores_py(Kt, eps, gamma_term, offset, L, loglik, block: int) -> bool:
                 buf[r, j, b] = eps[s + b, j] - Kt[s + b, j, R]       # e
         for b in range(w):
             buf[r, r, b] = gamma_term[s + b] - 2.0 * eps[s + b, R] + Kt[s + b, R, R]
-        if not _factor_block(buf, r + 1, w):
+        if not _factor_block(buf, acc, r + 1, w):
             return False
         for b in range(w):
-            _write_factor(buf, b, r, L[s + b])
+            if write:
+                _write_factor(buf, b, r, L[s + b])
             ld = 0.0
             for j in range(r):
                 ld += log(buf[j, j, b])
@@ -181,6 +224,145 @@ def _write_factor_py(buf, b: int, r: int, out) -> None:
     out[R, R] = buf[r, r, b]
 
 
+def _group_part_py(psi, values, rows, dims, kappa: float, G, beta, yy, Li, W, ab, gamma):
+    """One group's part of one candidate (:func:`~sandbox.core.factor.b_part`) from the
+    phases ``psi`` (s, N) of the rows observing it: fills G, W (N, N), ab (N, Pg), gamma
+    (Pg,) and returns log|A|, A = I + kappa G. ``beta``, ``yy``, ``Li`` are scratch."""
+    s, N = psi.shape
+    Pg = dims.size
+    G[:, :] = 0.0
+    beta[:, :] = 0.0
+    yy[:] = 0.0
+    for j in range(s):
+        if rows[j]:
+            for a in range(N):
+                for b in range(N):
+                    G[a, b] += psi[j, a] * psi[j, b]
+                for p in range(Pg):
+                    beta[a, p] += psi[j, a] * values[j, dims[p]]
+            for p in range(Pg):
+                yy[p] += values[j, dims[p]] ** 2
+    A = kappa * G
+    for a in range(N):
+        A[a, a] += 1.0
+    L = np.linalg.cholesky(A)
+    ld = 0.0
+    for a in range(N):
+        ld += 2.0 * log(L[a, a])
+    Li[:, :] = 0.0
+    for c in range(N):                     # L^-1 column by column (forward substitution)
+        Li[c, c] = 1.0 / L[c, c]
+        for a in range(c + 1, N):
+            acc = 0.0
+            for b in range(c, a):
+                acc -= L[a, b] * Li[b, c]
+            Li[a, c] = acc / L[a, a]
+    Q = Li @ G
+    W[:, :] = G - kappa * (Q.T @ Q)
+    Lb = Li @ beta
+    ab[:, :] = Li.T @ Lb
+    for p in range(Pg):
+        acc = 0.0
+        for a in range(N):
+            acc += Lb[a, p] ** 2
+        gamma[p] = yy[p] - kappa * acc
+    return ld
+
+
+def _pair_stats_py(psi, values, present, tasks, dims, starts, modality, kappa, columns,
+                   member, blocks, Kt, eps, gamma_term, offset) -> None:
+    """The statistics of :meth:`~sandbox.core.likelihood.Scorer._stats` for pairs of one
+    duration and one task each, added into ``Kt`` (M, R+1, R+1), ``eps`` (M, R+1),
+    ``gamma_term`` and ``offset`` (M,). ``psi`` (M, s, N); group g's columns are
+    ``starts[g]:starts[g+1]`` of ``dims`` (human dims), ``member`` (K, cols) and
+    ``blocks`` (K, cols, N, R+1); ``present`` (modalities, s); ``columns`` (3, cols):
+    each column's :math:`\\sigma_p`, :math:`\\sigma_p^2` and
+    :math:`\\log 2\\pi + \\log\\sigma_p^2`."""
+    M, s, N = psi.shape
+    G, Li, W = np.empty((N, N)), np.empty((N, N)), np.empty((N, N))
+    for g in range(kappa.size):
+        a, b = starts[g], starts[g + 1]
+        rows = present[modality[g]]
+        count = 0
+        for j in range(s):
+            count += rows[j]
+        if count == 0:
+            continue
+        beta, ab = np.empty((N, b - a)), np.empty((N, b - a))
+        yy, gamma = np.empty(b - a), np.empty(b - a)
+        for m in range(M):
+            ld = _group_part(psi[m], values, rows, dims[a:b], kappa[g], G, beta, yy, Li, W,
+                             ab, gamma)
+            k = tasks[m]
+            for p in range(b - a):
+                V = blocks[k, a + p]                                 # (N, R+1)
+                Kt[m] += V.T @ (W @ V)
+                for c in range(N):
+                    eps[m] += (ab[c, p] / columns[0, a + p]) * V[c]
+                if member[k, a + p]:
+                    gamma_term[m] += gamma[p] / columns[1, a + p]
+                    offset[m] += count * columns[2, a + p] + ld
+
+
+def _product_py(m1, S1, a1, m2, S2, a2, mean, cov) -> bool:
+    """``blending._product`` knot by knot into ``mean`` (T, Q) and ``cov`` (T, Q, Q): means
+    (T, Q), covariances (T, Q, Q), activations (T,) > 0; the same formulas, M = a2 S1 + a1 S2
+    solved by LU with partial pivoting. False at an exactly singular M (the numpy path then
+    takes its pseudo-inverse)."""
+    T, Q = m1.shape
+    M, X = np.empty((Q, Q)), np.empty((Q, Q + 2))
+    for t in range(T):
+        for i in range(Q):
+            for j in range(Q):
+                M[i, j] = a2[t] * S1[t, i, j] + a1[t] * S2[t, i, j]
+                X[i, j] = S1[t, i, j]
+            X[i, Q] = m1[t, i]
+            X[i, Q + 1] = m2[t, i]
+        for c in range(Q):                                 # M X = [S1, m1, m2]
+            p = c
+            for i in range(c + 1, Q):
+                if abs(M[i, c]) > abs(M[p, c]):
+                    p = i
+            if M[p, c] == 0.0:
+                return False
+            for j in range(Q):
+                M[c, j], M[p, j] = M[p, j], M[c, j]
+            for j in range(Q + 2):
+                X[c, j], X[p, j] = X[p, j], X[c, j]
+            for i in range(c + 1, Q):
+                f = M[i, c] / M[c, c]
+                for j in range(c + 1, Q):
+                    M[i, j] -= f * M[c, j]
+                for j in range(Q + 2):
+                    X[i, j] -= f * X[c, j]
+        for c in range(Q - 1, -1, -1):
+            for j in range(Q + 2):
+                acc = X[c, j]
+                for k in range(c + 1, Q):
+                    acc -= M[c, k] * X[k, j]
+                X[c, j] = acc / M[c, c]
+        for i in range(Q):
+            u, v = 0.0, 0.0
+            for k in range(Q):
+                u += S2[t, i, k] * X[k, Q]
+                v += S1[t, i, k] * X[k, Q + 1]
+            mean[t, i] = a1[t] * u + a2[t] * v
+            for j in range(Q):
+                acc = 0.0
+                for k in range(Q):
+                    acc += S2[t, i, k] * X[k, j]
+                cov[t, i, j] = acc
+        for i in range(Q):
+            for j in range(i + 1):
+                x = 0.5 * (cov[t, i, j] + cov[t, j, i])
+                cov[t, i, j] = x
+                cov[t, j, i] = x
+    return True
+
+
+_product = _product_py
+_group_part = _group_part_py
+_pair_stats = _pair_stats_py
 _factor_block = _factor_block_py     # replaced by their compiled versions in _compile
 _active_rows = _active_rows_py
 _write_factor = _write_factor_py

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from sandbox.core import _kernels
 from sandbox.validation import FloatArray, check_array
 
 
@@ -75,6 +76,15 @@ def blend_unchecked(means, covs, act):
     return mean, cov
 
 
+def blend_pair(m1, S1, a1, m2, S2, a2):
+    """:func:`blend_unchecked` of two distributions given apart (no stacking, no copies):
+    means (T, Q), covariances (T, Q, Q), activations (T,) each; the same numbers."""
+    mean, cov, a_acc = _pair(m1, S1, a1, m2, S2, a2)                       # eq. 16
+    if np.any(a_acc != 1.0):
+        cov = cov / a_acc[:, None, None]
+    return mean, cov
+
+
 def _pair(m1, S1, a1, m2, S2, a2):
     """Product of (m1, S1)^a1 and (m2, S2)^a2 per step; result has activation 1 (or a1/a2)."""
     both = (a1 > 0) & (a2 > 0)
@@ -94,7 +104,14 @@ def _pair(m1, S1, a1, m2, S2, a2):
 
 
 def _product(m1, S1, a1, m2, S2, a2):
-    """Symmetric form of the product for activations > 0 (module docstring)."""
+    """Symmetric form of the product for activations > 0 (module docstring); knot by knot
+    in numba's compiled kernel when it is installed (``sandbox/core/_kernels.py``)."""
+    kernel = _kernels.product_kernel()
+    if kernel is not None and m1.shape[0]:
+        mean, cov = np.empty(m1.shape), np.empty(S1.shape)
+        if kernel(*[np.ascontiguousarray(x, dtype=np.float64) for x in (m1, S1, a1, m2, S2, a2)],
+                  mean, cov):
+            return mean, cov                     # else a singular M: the pseudo-inverse below
     b1, b2 = a1[:, None, None], a2[:, None, None]
     M = b2 * S1 + b1 * S2
     rhs = np.concatenate([S1, m1[..., None], m2[..., None]], axis=2)

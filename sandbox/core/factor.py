@@ -89,13 +89,36 @@ def factor_scores(Kt: FloatArray, eps: FloatArray, gamma_term: FloatArray,
     loglik : ndarray, shape (M,)
     factors : ndarray, shape (M, R+1, R+1)
     """
+    done = _compiled(Kt, eps, gamma_term, offset, True)
+    return done if done is not None else _numpy_scores(Kt, eps, gamma_term, offset, work)
+
+
+def factor_loglik(Kt: FloatArray, eps: FloatArray, gamma_term: FloatArray,
+                  offset: FloatArray, *, work: FloatArray | None = None) -> FloatArray:
+    """The log-likelihoods (M,) of :func:`factor_scores` alone, the same numbers: the
+    compiled kernel writes no factors (the phase grid needs those of a few pairs only)."""
+    done = _compiled(Kt, eps, gamma_term, offset, False)
+    return (done if done is not None else _numpy_scores(Kt, eps, gamma_term, offset, work))[0]
+
+
+def _compiled(Kt, eps, gamma_term, offset, factors: bool):
+    """(loglik, factors) from the compiled kernel (``factors``: written, else an empty
+    array); None when there is no kernel for this size or a block failed (numpy's turn)."""
     kernel = _kernels.factor_kernel(Kt.shape[1])
-    if kernel is not None and Kt.shape[0]:
-        loglik, L = np.empty(Kt.shape[0]), np.empty_like(Kt)
-        if kernel(np.ascontiguousarray(Kt, dtype=np.float64), np.ascontiguousarray(eps),
-                  np.ascontiguousarray(gamma_term, dtype=np.float64),
-                  np.ascontiguousarray(offset, dtype=np.float64), L, loglik, _kernels.BLOCK):
-            return loglik, L
+    if kernel is None or not Kt.shape[0]:
+        return None
+    M, n = Kt.shape[:2]
+    loglik, L = np.empty(M), np.empty((M if factors else 0, n, n))
+    if kernel(np.ascontiguousarray(Kt, dtype=np.float64), np.ascontiguousarray(eps),
+              np.ascontiguousarray(gamma_term, dtype=np.float64),
+              np.ascontiguousarray(offset, dtype=np.float64), L, loglik,
+              _kernels.block_size(n)):
+        return loglik, L
+    return None
+
+
+def _numpy_scores(Kt, eps, gamma_term, offset, work):
+    """:func:`factor_scores` on the numpy path."""
     if work is not None:
         np.copyto(work, Kt)
         Kt = work

@@ -48,6 +48,7 @@ import numpy as np
 from sandbox.core import _kernels
 from sandbox.core.factor import b_parts, factor_scores
 from sandbox.core.interaction import LOG_2PI
+from sandbox.core.pairstats import pack_groups, pair_statistics
 from sandbox.core.promp import WeightDistribution
 from sandbox.core.rest import start_distribution
 from sandbox.validation import FloatArray
@@ -167,6 +168,7 @@ class Scorer:
         self._raw = raw
         kappa = self.reg_h / self.sigma2                          # (K, P)
         self.groups = _make_groups(kappa, self.modality_dims, pad)
+        self._packed = pack_groups(self.groups, self.sigma2, self.log_sigma2)   # pairstats.py
         self.conditioner = self if noise is not None else _conditioner(self, model)
         _kernels.factor_kernel(self.R + 1)    # numba's kernel loaded now, not in an update
 
@@ -199,7 +201,7 @@ class Scorer:
                 shared.setdefault(rows.tobytes(), []).append(i)
         for members in shared.values():
             rows = present[self.groups[members[0]].modality]
-            ps = psi[:, rows]
+            ps = psi if rows.all() else psi[:, rows]
             ps_t = ps.transpose(0, 2, 1)
             ys = [values[rows][:, self.groups[i].dims] for i in members]
             parts = b_parts(ps_t @ ps, [ps_t @ y for y in ys],
@@ -257,10 +259,12 @@ class Scorer:
         factors : ndarray, shape (M, R+1, R+1)
             Augmented Cholesky factors (same layout as :meth:`joint`).
         """
-        parts = self._group_parts(self.phases(times, durations), values)
-        Kt, eps, gamma_term, offset = self._stats(parts, np.asarray(tasks), slice(None),
-                                                     len(tasks))
-        return factor_scores(Kt, eps, gamma_term, offset)
+        psi = self.phases(times, durations)
+        stats = pair_statistics(self._packed, self.R, psi, values, self.present(values), tasks)
+        if stats is None:                                  # the numpy path
+            stats = self._stats(self._group_parts(psi, values), np.asarray(tasks),
+                                slice(None), len(tasks))
+        return factor_scores(*stats)
 
     def _stats(self, parts, tasks, cand: slice, M: int):
         """Padded statistics of pairs: candidates ``cand`` of the parts with task ``tasks``.

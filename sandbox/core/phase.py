@@ -24,6 +24,7 @@ recognition fall in the last third of the motion (README, "late motion").
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -144,14 +145,14 @@ def estimate_phase(scorer: Scorer, tasks, times: FloatArray, values: FloatArray,
     a_std = np.array([t.alpha_std for t in tasks])
     if stats is not None and mode == "joint":
         durations, spans = stats.durations, stats.spans
-        loglik, pair_factors = stats.packed_scores()      # every task's pairs, one batch
+        loglik, factors_of = stats.grid()                 # every task's pairs, one batch
     else:
         lattice = Lattice.for_tasks(tasks, n_candidates, width)
         durations, spans = lattice.durations, lattice.spans()
         scores = (scorer.joint if mode == "joint" else scorer.marginal)(times, values,
                                                                          durations, spans)
         loglik = np.concatenate(scores.loglik)
-        pair_factors = None if scores.factors is None else np.concatenate(scores.factors)
+        factors_of = _picker(None if scores.factors is None else np.concatenate(scores.factors))
     lengths = spans[:, 1] - spans[:, 0]
     starts = np.concatenate([[0], np.cumsum(lengths)[:-1]])
     task_of = np.repeat(np.arange(len(tasks)), lengths)
@@ -161,9 +162,10 @@ def estimate_phase(scorer: Scorer, tasks, times: FloatArray, values: FloatArray,
     best = _argmax_per_task(f, starts, lengths)   # eq. 13
     w = np.exp(f - np.repeat(f[best], lengths))
     w /= np.repeat(np.add.reduceat(w, starts), lengths)
-    grid = list(zip(np.split(T, starts[1:]), np.split(w, starts[1:])))
+    cuts = list(zip(starts.tolist(), (starts + lengths).tolist()))
+    grid = [(T[a:b], w[a:b]) for a, b in cuts]
     best_T, best_ll, best_lp = T[best], loglik[best], lp[best]
-    factors = None if pair_factors is None else pair_factors[best]
+    factors = factors_of(best)
     brackets = [None if i in (a, a + n - 1) else
                 (T[i - 1], T[i], T[i + 1], f[i - 1], f[i], f[i + 1])
                 for i, a, n in zip(best.tolist(), starts.tolist(), lengths.tolist())]
@@ -172,6 +174,11 @@ def estimate_phase(scorer: Scorer, tasks, times: FloatArray, values: FloatArray,
         brackets = _refine(pairs, times, values, tasks, brackets, nominal, a_mean, a_std,
                            best_T, best_ll, best_lp, factors)
     return PhaseEstimate(best_T, best_T / nominal, best_ll, best_lp, factors, lengths, grid)
+
+
+def _picker(factors: FloatArray | None):
+    """``index -> factors[index]`` (None without factors)."""
+    return lambda index: None if factors is None else factors[index]
 
 
 def _argmax_per_task(f: FloatArray, starts: np.ndarray, lengths: np.ndarray) -> np.ndarray:
@@ -196,7 +203,7 @@ def _vertex(br) -> float | None:
     x0, x1, x2, f0, f1, f2 = br
     num = (x1 - x0) ** 2 * (f1 - f2) - (x1 - x2) ** 2 * (f1 - f0)
     den = (x1 - x0) * (f1 - f2) - (x1 - x2) * (f1 - f0)
-    if den == 0 or not np.isfinite(num / den):
+    if den == 0 or not math.isfinite(num / den):
         return None
     x = x1 - 0.5 * num / den
     return float(x) if x0 < x < x2 and x != x1 else None

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from sandbox.core.blending import blend_unchecked, sigmoid_activations
+from sandbox.core.blending import blend_pair, sigmoid_activations
 from sandbox.core.limits import MAX_PLAN_STEPS
 from sandbox.core.promp import trajectory_distribution
 from sandbox.validation import FloatArray
@@ -183,8 +183,6 @@ def _blend(old: tuple[FloatArray, FloatArray], new: tuple[FloatArray, FloatArray
     """Product of the old (falling) and new (rising) distributions at the knots (eq. 16-18);
     ``old`` is needed at the first ``n`` knots only (:func:`_activations`)."""
     mean, cov = new
-    head = blend_unchecked(np.stack([old[0][:n], mean[:n]]),             # eq. 16-17
-                           np.stack([old[1][:n], cov[:n]]),
-                           np.stack([fall[:n], rise[:n]]))
+    head = blend_pair(old[0][:n], old[1][:n], fall[:n], mean[:n], cov[:n], rise[:n])  # eq. 16-17
     return (np.concatenate([head[0], mean[n:]]),
             np.concatenate([head[1], cov[n:] / rise[n:, None, None]]))

@@ -40,7 +40,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from sandbox.core.factor import factor_scores
+from sandbox.core import _kernels
+from sandbox.core.factor import factor_loglik, factor_scores
 from sandbox.core.interaction import LOG_2PI
 from sandbox.core.likelihood import Scorer, Scores
 from sandbox.core.phase import Lattice
@@ -93,6 +94,7 @@ class StreamStatistics:
         self.eps = np.zeros((M, sc.R + 1))
         self._work = np.empty_like(self.Kt)     # factor_scores' numpy path builds in it
         self.count = 0
+        self._terms: tuple[int, np.ndarray, np.ndarray] | None = None
         self._x: list[np.ndarray] = []
         self._coef: list[np.ndarray] = []
 
@@ -147,6 +149,45 @@ class StreamStatistics:
         Pairs are packed task after task (:attr:`pairs`); :meth:`scores` splits them.
         """
         self._flush()
+        self._terms = None                  # computed afresh: an update's cost, every update
+        gamma_term, const = self._pair_terms()
+        return factor_scores(self.Kt, self.eps, gamma_term, const, work=self._work)
+
+    def packed_loglik(self) -> np.ndarray:
+        """The log-likelihoods (M,) of :meth:`packed_scores` alone (the compiled kernel
+        writes no factors): the phase grid takes the few it needs from :meth:`pair_factors`."""
+        self._flush()
+        self._terms = None
+        gamma_term, const = self._pair_terms()
+        return factor_loglik(self.Kt, self.eps, gamma_term, const, work=self._work)
+
+    def grid(self):
+        """Log-likelihoods (M,) of every pair and ``index -> factors`` (n, R+1, R+1) of a few.
+
+        With the compiled kernel only the log-likelihoods are made, and the few factors
+        asked for afterwards (:meth:`pair_factors`): writing every pair's factor would take
+        a fresh array of M (R+1)^2 floats per update (15 MB for 160 demos per task, whose
+        page faults cost more than the factorisations' writes). The numpy path makes the
+        factors anyway and returns them. The same numbers either way.
+        """
+        if _kernels.factor_kernel(self.Kt.shape[1]) is not None:
+            return self.packed_loglik(), self.pair_factors
+        ll, L = self.packed_scores()
+        return ll, lambda index: L[index]
+
+    def pair_factors(self, index: np.ndarray) -> np.ndarray:
+        """Augmented factors (n, R+1, R+1) of the packed pairs ``index`` (n,): the same
+        matrices as :meth:`packed_scores` returns for them (each is factored alone)."""
+        self._flush()
+        gamma_term, const = self._pair_terms()
+        return factor_scores(self.Kt[index], self.eps[index], gamma_term[index],
+                             const[index])[1]
+
+    def _pair_terms(self) -> tuple[np.ndarray, np.ndarray]:
+        """:math:`y^T B^{-1} y` and :math:`sP\\log 2\\pi + \\log|B|` of every packed pair
+        (kept for :meth:`pair_factors` until the next observation or :meth:`packed_scores`)."""
+        if self._terms is not None and self._terms[0] == self.count:
+            return self._terms[1], self._terms[2]
         sc = self.scorer
         C = self.durations.size
         const = np.zeros((sc.K, C))
@@ -157,8 +198,8 @@ class StreamStatistics:
             const += (member @ per_dim)[:, None] + member.sum(axis=1)[:, None] * st.logdet_a
             gamma_term += member @ (st.gamma / sc.sigma2[g.dims]).T
         pk, pc = self.pairs
-        return factor_scores(self.Kt, self.eps, gamma_term[pk, pc], const[pk, pc],
-                             work=self._work)
+        self._terms = (self.count, gamma_term[pk, pc], const[pk, pc])
+        return self._terms[1], self._terms[2]
 
     def scores(self, spans: np.ndarray | None = None) -> Scores:
         """Joint log-likelihoods for every task's candidates (as :meth:`Scorer.joint`).

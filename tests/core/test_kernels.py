@@ -35,7 +35,7 @@ def _both(monkeypatch, *args):
     return ref, factor_scores(*[a.copy() for a in args])
 
 
-@pytest.mark.parametrize(("M", "R"), [(1, 1), (37, 9), (70, 30), (5, 55)])
+@pytest.mark.parametrize(("M", "R"), [(1, 1), (37, 9), (70, 30), (5, 55), (3, 93)])
 def test_kernel_matches_the_numpy_path(monkeypatch, M, R):
     pytest.importorskip("numba")
     (ll0, L0), (ll1, L1) = _both(monkeypatch, *_pairs(np.random.default_rng(R), M, R))
@@ -152,3 +152,78 @@ def test_the_kernel_skips_a_padding_of_zero_rows_bit_for_bit(monkeypatch):
     ll_np, L_np = factor_scores(big, e, gamma, offset)
     np.testing.assert_allclose(ll_pad, ll_np, rtol=1e-12, atol=0)
     np.testing.assert_allclose(L_pad, L_np, rtol=1e-12, atol=1e-12 * np.abs(L_np).max())
+
+
+@pytest.mark.parametrize("choice", ["numpy", "numba"])
+def test_a_few_pairs_factored_alone_are_those_of_the_whole_grid(monkeypatch, choice):
+    """The phase grid asks for log-likelihoods only, then factors its best pairs alone
+    (StreamStatistics.pair_factors): the same numbers bit for bit as the whole batch."""
+    if choice == "numba":
+        pytest.importorskip("numba")
+    monkeypatch.setenv(_kernels.ENV, choice)
+    rng = np.random.default_rng(6)
+    model = IProMP(n_basis=9).fit(synth.demos(rng, n_per_task=6, n_tasks=3, noise=0.003))
+    test = synth.replay(1, 2.0, noise=0.003, rng=rng)
+    stats = StreamStatistics(Scorer(model), Lattice.for_tasks(model.task_models, 70))
+    for ti, yi in zip(test.times[:120:5], test.human[:120:5]):
+        stats.add(ti, yi)
+    ll, L = stats.packed_scores()
+    np.testing.assert_array_equal(stats.packed_loglik(), ll)
+    pick = np.array([3, ll.size - 1, 40, 3])
+    np.testing.assert_array_equal(stats.pair_factors(pick), L[pick])
+
+
+def test_the_pair_kernel_matches_the_numpy_path_with_masked_modalities(monkeypatch):
+    """Scorer.joint_pairs (the refinement's pairs) by the compiled kernel of pairstats.py:
+    the statistics within round-off of the numpy path's; the log-likelihood, a difference
+    of terms ~1e3 x its size, within 1e-15 of those terms."""
+    pytest.importorskip("numba")
+    from sandbox.core.pairstats import pair_statistics
+
+    demos = synth.multimodal(np.random.default_rng(5), n_per_task=6)
+    model = IProMP(n_basis=9).fit(demos[1:])
+    t, y = demos[0].times[:160:4], demos[0].human[:160:4] / model.scale
+    y[5:9, 3:9] = np.nan                              # arm and EMG missing in some rows
+    y[::3, 9:] = np.nan
+    sc = Scorer(model)
+    durations = np.array([1.2, 2.0, 2.6, 0.9, 3.1])
+    tasks = np.array([0, 1, 0, 1, 1])
+    psi = sc.phases(t, durations)
+    monkeypatch.setenv(_kernels.ENV, "numpy")
+    assert pair_statistics(sc._packed, sc.R, psi, y, sc.present(y), tasks) is None
+    ref = sc._stats(sc._group_parts(psi, y), tasks, slice(None), tasks.size)
+    ll0, L0 = sc.joint_pairs(t, y, durations, tasks)
+    monkeypatch.setenv(_kernels.ENV, "numba")
+    got = pair_statistics(sc._packed, sc.R, psi, y, sc.present(y), tasks)
+    for a, b in zip(ref, got):
+        np.testing.assert_allclose(b, a, rtol=0, atol=1e-13 * np.abs(a).max())
+    ll1, L1 = sc.joint_pairs(t, y, durations, tasks)
+    np.testing.assert_allclose(ll1, ll0, rtol=0, atol=1e-15 * np.abs(ref[2]).max())
+    np.testing.assert_allclose(L1, L0, rtol=0, atol=1e-12 * np.abs(L0).max())
+
+
+def test_the_blend_kernel_matches_the_numpy_path_and_leaves_singular_knots_to_it(monkeypatch):
+    pytest.importorskip("numba")
+    from sandbox.core.blending import blend_pair
+
+    rng = np.random.default_rng(7)
+    T, Q = 40, 7
+    m1, m2 = rng.normal(size=(2, T, Q))
+    A = rng.normal(size=(2, T, Q, Q))
+    S1, S2 = A @ A.transpose(0, 1, 3, 2) + 0.05 * np.eye(Q)
+    a2 = 1.0 / (1.0 + np.exp(-np.linspace(-12, 12, T)))
+    a2[:3] = 0.0                                   # the old plan alone at the first knots
+    args = (m1, S1, 1.0 - a2, m2, S2, a2)
+    monkeypatch.setenv(_kernels.ENV, "numpy")
+    ref = blend_pair(*args)
+    monkeypatch.setenv(_kernels.ENV, "numba")
+    got = blend_pair(*args)
+    for a, b in zip(ref, got):
+        np.testing.assert_allclose(b, a, rtol=0, atol=1e-12 * np.abs(a).max())
+    S1[5] = S2[5] = 0.0                            # M singular at one knot: the pseudo-inverse
+    monkeypatch.setenv(_kernels.ENV, "numpy")
+    ref = blend_pair(*args)
+    monkeypatch.setenv(_kernels.ENV, "numba")
+    got = blend_pair(*args)
+    for a, b in zip(ref, got):
+        np.testing.assert_array_equal(b, a)
