@@ -145,7 +145,8 @@ def rank(records: list[dict], edges=None, score: str = "timing",
         mean = float(np.mean([r["mean_duration"] for r in pool]))
         full, held = leave_one_out(
             [(r["times"], stats(r), [tasks.index(k) for k in r["chosen"]]) for r in pool],
-            len(tasks), edges=fractions * mean, components=names)
+            len(tasks), edges=fractions * mean,
+            components=names if np.ndim(pool[0]["stats"]) == 2 else ("mahalanobis",))
         lowest = np.array([h.min(initial=np.inf) for h in held])
         for i, r in enumerate(pool):
             fam = np.full(len(r["times"]), np.nan)
