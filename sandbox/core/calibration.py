@@ -35,9 +35,9 @@ independent uniform p-values, conservative for positively dependent ones),
 Where they see nothing (:math:`f_{where}` near 1) it is :math:`2 f_{fit}` to first
 order, so motions rank as without them. Measured (``python -m sandbox ood``, hand,
 detection before the handover at 5 % false alarms; docs, Results): the synthetic
-endpoint family 0.30 without the goal, 0.62 with all five in one combination,
-0.66 this way; the recorded set's leave-task-out 0.14, 0.11 and 0.13.
-
+endpoint family 0.30 without the goal, 0.62 with all five in one combination, 0.66 this
+way, 0.79 with the position too (0.72 with the three apart); the recorded set's
+leave-task-out (hand) 0.14, 0.11 and 0.13, (hand, arm, EMG) 0.33 timing, 0.38 all.
 **Threshold (split-conformal, per motion).** Each calibration motion's lowest
 familiarity :math:`\\ell_i` over its updates is computed as a new motion's
 would be: the motion streamed by a model fitted without it
