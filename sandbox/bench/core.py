@@ -14,12 +14,13 @@ Timed, from one run, as medians over ``repeats`` repetitions:
   arrived (:mod:`sandbox.core.statistics`); ``observe_ms`` is what that growth
   costs per kept observation.
 * ``familiarity_ms``: what the familiarity adds to that update
-  (:mod:`sandbox.core.familiarity`): the five statistics of the update's
+  (:mod:`sandbox.core.familiarity`): the six statistics of the update's
   prediction (:func:`~sandbox.core.familiarity.statistics`) and their ranking and
-  Fisher combination against a calibration of the reference case's size (4
+  combination against a calibration of the reference case's size (4
   tasks, the default time bins; its quantiles are drawn at random, as the cost
   does not depend on them). ``update_ms`` includes it only for a calibrated model,
-  which the reference model is not.
+  which the reference model is not. ``position_ms`` is the position statistic's
+  share of it (:func:`~sandbox.core.evidence.position`, score ``"position"``/``"all"``).
 * ``update_cold_ms``: the same update computing everything from the 40
   observations at update time (``incremental=False``).
 * ``naive_update_ms``: the same update done the straightforward way, written
@@ -222,9 +223,11 @@ def run_core_benchmarks(repeats: int = 200, seed: int = 0) -> dict:
     upd = pred.update(t_update)
     spans = lattice.spans()
     familiarity_ms = _median_ms(_familiarity_run(model, pred, t_update), repeats)
+    position_ms = _median_ms(_position_run(model, pred, t_update), repeats)
     out = {
         "update_ms": round(fast, 4),
         "familiarity_ms": round(familiarity_ms, 4),
+        "position_ms": round(position_ms, 4),
         "update_cold_ms": round(cold, 4),
         "naive_update_ms": round(naive, 4),
         "speedup_vs_naive": round(naive / fast, 1),
@@ -307,6 +310,18 @@ def _familiarity_run(model, pred: DynamicPredictor, t: float) -> Callable[[], ob
         return cal.familiarity(t, value, chosen(prediction))
 
     return run
+
+
+def _position_run(model, pred: DynamicPredictor, t: float) -> Callable[[], object]:
+    """One update's position statistic (:func:`~sandbox.core.evidence.position`)."""
+    from sandbox.core.evidence import position
+    from sandbox.core.familiarity import chosen
+
+    prediction = pred.last_prediction
+    times, values = pred.observations()
+    times, values = times[times <= t], values[times <= t]
+    k = chosen(prediction)
+    return lambda: position(model, prediction, k, times, values)
 
 
 def _observe_ms(model, times, values, n_candidates: int) -> float:

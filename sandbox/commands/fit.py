@@ -54,7 +54,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "motion' warning in the viewer and teleop): every demo streamed "
                              "causally and scored by a model fitted without it (a leave-one-out; "
                              "needs 3+ demos per task)")
-    parser.add_argument("--score", choices=("timing", "goal"), default=None,
+    parser.add_argument("--score", choices=("timing", "goal", "position", "all"), default=None,
                         help="with --calibrate: what the familiarity ranks, as ood --score "
                              "(default timing)")
     parser.add_argument("--end-prob", type=_types.bounded("end_prob"), default=None,

@@ -91,10 +91,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--alpha", type=_types.FRACTION, default=0.05,
                         help="calibration level of the 'calibrated' columns (0.05; with "
                              "--model: its calibration's threshold)")
-    parser.add_argument("--score", choices=("timing", "goal"), default="timing",
+    parser.add_argument("--score", choices=("timing", "goal", "position", "all"),
+                        default="timing",
                         help="what the familiarity ranks: the Mahalanobis term and the four "
-                             "timing statistics (default), or those and the goal (where the "
-                             "hand is heading; calibrate(score='goal')); with --model: its "
+                             "timing statistics (default), those and the goal (where the hand "
+                             "is heading), the position (where it is against the task at its "
+                             "phase) or both (calibrate(score=...)); with --model: its "
                              "calibration's")
     parser.add_argument("--end-prob", type=_types.bounded("end_prob"), default=None, metavar="P",
                         help="calibrate and rank only the updates before each motion's "

@@ -20,20 +20,24 @@ larger value (a p-value under the calibration motions' distribution). The
 
 the familiarity in (0, 1] (exact for independent uniform :math:`p_j`; the
 statistics are not independent, so :math:`f` is a score, not a p-value, and the
-threshold below makes the decision honest). The goal's p-value bound
-:math:`p_G = e^{-s_G}` (:mod:`sandbox.core.evidence`) is a second, separate
-question, where the hand is heading rather than how the observations so far fit:
-the familiarity is the lower of the two, in the scale of a p-value,
-:math:`f = 1 - (1 - \\min(f_{J-1}, p_G))^2`, :math:`f_{J-1}` the combination
-above of the other :math:`J - 1` (Šidák's correction for two). Where the goal
-sees nothing (:math:`p_G` near 1, as for most motions: it is conservative) the
-familiarity is :math:`2 f_{J-1}` to first order, so motions rank as without it;
-a single goal far off is not diluted by four statistics that see nothing yet, as
-it is in one Fisher combination of all :math:`J`. Measured (``python -m sandbox
-ood``, hand, detection before the handover at 5 % false alarms): the synthetic
-endpoint family 0.30 without the goal, 0.62 with all five in one combination,
-0.66 this way; the recorded set's leave-task-out 0.14, 0.11 and 0.13.
+threshold below makes the decision honest). The goal and the position
+(:data:`~sandbox.core.evidence.SEPARATE`) ask another question (where the hand is
+heading, where it is now) than how the fit so far went, and see something only in a
+few updates (the last tenths of a second before an odd end): in one Fisher
+combination of all :math:`J` a tiny :math:`p` of theirs would be diluted among ranks
+that see nothing. So they are combined with each other (Fisher,
+:math:`f_{where}`), the others apart (:math:`f_{fit}`), and the familiarity is the
+lower of the two questions' p-values in the scale of one (Šidák's correction, exact for
+independent uniform p-values, conservative for positively dependent ones),
 
+.. math::  f = 1 - (1 - \\min(f_{fit}, f_{where}))^2.
+
+Where they see nothing (:math:`f_{where}` near 1) it is :math:`2 f_{fit}` to first
+order, so motions rank as without them. Measured (``python -m sandbox ood``, hand,
+detection before the handover at 5 % false alarms; docs, Results): the synthetic
+endpoint family 0.30 without the goal, 0.62 with all five in one combination, 0.66 this
+way, 0.79 with the position too (0.72 with the three apart); the recorded set's
+leave-task-out (hand) 0.14, 0.11 and 0.13, (hand, arm, EMG) 0.33 timing, 0.38 all.
 **Threshold (split-conformal, per motion).** Each calibration motion's lowest
 familiarity :math:`\\ell_i` over its updates is computed as a new motion's
 would be: the motion streamed by a model fitted without it
@@ -68,7 +72,7 @@ from sandbox.core.conformal import (
     ongoing,
     rank,
 )
-from sandbox.core.evidence import ANALYTIC, COMPONENTS, TIMING
+from sandbox.core.evidence import ANALYTIC, COMPONENTS, SEPARATE, TIMING
 from sandbox.core.limits import MAX_SUBSAMPLE, MAX_TIME_S
 from sandbox.validation import (
     FloatArray,
@@ -86,11 +90,10 @@ LIKELIHOODS = ("joint",)
 #: Smallest tail scale of the statistics after the Mahalanobis term: a statistic whose
 #: calibration values hardly vary (e.g. all 0) must grow by 10 % per e-fold of its rank.
 EXTRA_MIN_TAIL = 0.1
-#: The statistic combined apart from the others (module docstring).
-GOAL = "goal"
 #: The statistics a calibration can rank: the Mahalanobis term alone (files before
-#: issue 30), the four of timing (files before the goal) or all :data:`COMPONENTS`.
-NAMES = (("mahalanobis",), TIMING, COMPONENTS)
+#: issue 30), the four of timing, those with the goal, with the position, or all
+#: :data:`COMPONENTS`.
+NAMES = (("mahalanobis",), TIMING, TIMING + ("goal",), TIMING + ("position",), COMPONENTS)
 #: Fewest updates of a (task, time bin) cell for its own quantiles (else the bin's).
 MIN_CELL = 20
 
@@ -122,9 +125,8 @@ class Calibration:
     n_motions : int
         Calibration motions.
     components : tuple of str
-        The statistics ranked (:data:`NAMES`): ``("mahalanobis",)`` (files before the
-        timing evidence), :data:`~sandbox.core.evidence.TIMING` (files before the
-        goal) or :data:`~sandbox.core.evidence.COMPONENTS`.
+        The statistics ranked, one of :data:`NAMES` (``("mahalanobis",)``: files before
+        the timing evidence).
     extra : ndarray or None, shape (J - 1, K, B, L)
         Quantiles of the statistics after the first, like ``quantiles``; None for one.
     end_prob : float or None
@@ -170,21 +172,23 @@ class Calibration:
         estimated end and not ranked (NaN).
 
         ``value`` is one float per statistic of :attr:`components` (a float for
-        one), or all :data:`~sandbox.core.evidence.COMPONENTS` (those of
-        :attr:`components` are taken: an older calibration ranks what it was made
-        of). Each ranks as the share of the cell's calibration updates with a
-        larger value (:func:`rank`; the tail of a statistic after the first
-        falls at most one e-fold per :data:`EXTRA_MIN_TAIL` of its log), except
-        the :data:`~sandbox.core.evidence.ANALYTIC` ones, already p-value bounds:
-        they rank as :math:`e^{-s}` (:mod:`sandbox.core.evidence`; their stored
-        quantiles only describe them). Several ranks combine by Fisher's method
+        one), or all :data:`~sandbox.core.evidence.COMPONENTS` (or the first five, as
+        records before the position have them; those of :attr:`components` are taken:
+        an older calibration ranks what it was made of). Each ranks as the share of
+        the cell's calibration updates with a larger value (:func:`rank`; the tail of
+        a statistic after the first falls at most one e-fold per
+        :data:`EXTRA_MIN_TAIL` of its log), except the
+        :data:`~sandbox.core.evidence.ANALYTIC` ones, p-value bounds: they rank as
+        :math:`e^{-s}` (their stored quantiles only describe them). The ranks combine
+        by Fisher's method, the :data:`~sandbox.core.evidence.SEPARATE` ones apart
         (module docstring). NaN when the first statistic is NaN; a later NaN
         statistic counts as no evidence (rank 1).
         """
         v = np.atleast_1d(np.asarray(value, dtype=np.float64))
         names = tuple(self.components)
-        if v.size == len(COMPONENTS) and len(names) > 1 and names != COMPONENTS:
-            v = v[[COMPONENTS.index(n) for n in names]]
+        where = [COMPONENTS.index(n) for n in names]
+        if v.size != len(names) and v.size >= len(COMPONENTS) - 1 and max(where) < v.size:
+            v = v[where]                                  # all statistics (older records: 5)
         if v.shape != (len(names),):
             raise ValueError(f"value: expected {len(names)} statistics {names}, got shape "
                              f"{v.shape}")
@@ -200,10 +204,11 @@ class Calibration:
         for j, name in enumerate(names):
             if name in ANALYTIC:
                 ranks[j] = float(np.exp(-v[j])) if np.isfinite(v[j]) else 1.0
-        if GOAL not in names:
+        apart = [j for j, name in enumerate(names) if name in SEPARATE]
+        if not apart:
             return fisher(np.array(ranks))
-        g = names.index(GOAL)
-        least = min(fisher(np.array(ranks[:g] + ranks[g + 1:])), ranks[g])
+        fit = fisher(np.array([r for j, r in enumerate(ranks) if j not in apart]))
+        least = min(fit, fisher(np.array([ranks[j] for j in apart])))
         return float(least * (2.0 - least))          # 1 - (1 - least)^2: the lower of two
 
     @classmethod
@@ -266,11 +271,10 @@ def leave_one_out(records, n_tasks: int, *, edges=None,
     edges = _populated(np.sort(edges), times)
     bins = np.searchsorted(edges, times, side="right") - 1
     q, counts = _cells(values, tasks, bins, (n_tasks, edges.size))
-    names = [n for n in NAMES if len(n) == q.shape[0]]
-    if not names:
-        raise ValueError(f"records: expected {' or '.join(str(len(n)) for n in NAMES)} "
+    names = [n for n in NAMES if len(n) == q.shape[0]]   # the first of a length, unless named
+    if not names or len(settings.setdefault("components", names[0])) != q.shape[0]:
+        raise ValueError(f"records: expected {' or '.join(sorted({str(len(n)) for n in NAMES}))} "
                          f"statistics per update ({NAMES}), got {q.shape[0]}")
-    settings.setdefault("components", names[0])
     full = Calibration(edges, q[0], counts, 0.0, 1.0, n_motions=len(records),
                        extra=q[1:] if q.shape[0] > 1 else None, **settings)
     held_out = [_against_others(full, times, values, tasks, bins, owner == i)

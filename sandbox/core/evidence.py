@@ -73,12 +73,41 @@ update time :math:`t` (s), from what the update already computed:
   (:math:`GU`): an end off in a direction no demo varied in moves
   :math:`\\delta` little, and is left to the Mahalanobis term.
 
+* **position** (where the hand is, against where the task has it at this phase).
+  Every statistic above reads the observations through the fit at the MAP speed, and
+  the Mahalanobis term :math:`m` averages over all :math:`n` values so far: an end off
+  every task shows in the last few tenths of a second before the handover (the
+  diverging tasks branch late), where it adds a few units to :math:`m n` and so a few
+  hundredths to :math:`m`. The prior predictive of one observation of task :math:`k`
+  at phase :math:`z` is (eq. 12 for one row)
+
+  .. math::  y \\sim \\mathcal{N}(\\mu(z), C(z)), \\quad
+             \\mu(z) = \\Psi(z)\\mu_h, \\quad
+             C(z) = \\Psi(z)(U_hU_h^T + \\Lambda_h)\\Psi(z)^T + \\Sigma_y,
+
+  :math:`\\Psi(z) = I_P \\otimes \\psi(z)^T`. Each kept observation :math:`y_i` of the
+  last :data:`POSITION_WINDOW` seconds, at its phase :math:`z_i = \\min(t_i / T^*, 1)`
+  under the MAP duration, gives
+  :math:`D_i = (y_i - \\mu(z_i))^T C(z_i)^{-1} (y_i - \\mu(z_i))` over its :math:`d_i`
+  observed dims, :math:`\\chi^2_{d_i}` under the model, and
+
+  .. math::  s_X = \\mathrm{median}_i \\left(-\\log P(\\chi^2_{d_i} \\ge D_i)\\right).
+
+  One observation is the whole test (nothing is averaged away), the median over the
+  window makes an isolated tracker jump (a single row off by centimetres, which the
+  recordings and the synthetic tracker have) count for nothing, while a hand that keeps
+  off the task's tube counts from half a window on. Its null distribution is not
+  :math:`\\chi^2` (the MAP speed is fitted to these observations, the rows are
+  correlated), so it is ranked against held-out updates like :math:`m`.
+
 ``not_arrived`` and ``goal`` are p-value bounds by construction and rank as
 :math:`e^{-s}`; the others are ranked against held-out training updates of the
 same task and time bin (:mod:`sandbox.core.calibration`), and the ranks are
 combined there. All are causal (the update's observations and estimate) and
 cost a few microseconds beside the update (one :math:`r \\times r` triangular
-solve and a :math:`d \\times d` Cholesky for the goal; ``bench``'s ``familiarity_ms``).
+solve and a :math:`d \\times d` Cholesky for the goal, a batch of :math:`P \\times P`
+solves over the window's rows for the position; ``bench``'s ``familiarity_ms`` and
+``position_ms``).
 """
 
 from __future__ import annotations
@@ -98,13 +127,20 @@ if TYPE_CHECKING:
     from sandbox.core.model import IProMP
 
 #: Names of the familiarity's statistics, in the order of :func:`components`.
-COMPONENTS = ("mahalanobis", "not_arrived", "speed_change", "phase_spread", "goal")
+COMPONENTS = ("mahalanobis", "not_arrived", "speed_change", "phase_spread", "goal",
+              "position")
 #: The statistics of calibrations made before the goal (model files still rank them).
 TIMING = COMPONENTS[:4]
 #: Statistics that are p-value bounds by construction, ranked as :math:`e^{-s}`.
 ANALYTIC = ("not_arrived", "goal")
+#: Statistics that ask a question of their own (where the hand heads, where it is): a
+#: calibration combines each apart from the Fisher combination of the others
+#: (:mod:`sandbox.core.calibration`).
+SEPARATE = ("goal", "position")
 #: Span (s) of observations the speed change compares.
 SPEED_WINDOW = 0.3
+#: Span (s) of the last observations whose median the position statistic takes.
+POSITION_WINDOW = 0.2
 
 
 def not_arrived(model: IProMP, prediction: Prediction, t: float, k: int) -> float:
@@ -193,6 +229,49 @@ def goal(model: IProMP, prediction: Prediction, k: int, values: FloatArray) -> f
     return chi2_log_survival(float(w @ w), int(seen.sum()))
 
 
+#: Per task's weights: the human block's mean, factor and diagonal (:func:`position_frame`).
+_POSITION_FRAMES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def position_frame(model: IProMP, k: int) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Task ``k``'s human block: mean :math:`\\mu_h` (P, N), factor :math:`U_h` (P, N, r)
+    and diagonal :math:`\\lambda` (P,) (normalised units); cached per weights object."""
+    weights = model.task_models[k].weights
+    cached = _POSITION_FRAMES.get(weights)
+    if cached is not None:
+        return cached
+    P, N = model.n_human, model.basis.n_basis
+    frame = (weights.mean[:P * N].reshape(P, N),
+             np.ascontiguousarray(weights.factor[:P * N].reshape(P, N, -1)),
+             np.asarray(weights.reg[:P], dtype=np.float64))
+    _POSITION_FRAMES[weights] = frame
+    return frame
+
+
+def position(model: IProMP, prediction: Prediction, k: int, times: FloatArray,
+             values: FloatArray, window: float = POSITION_WINDOW) -> float:
+    """:math:`s_X \\ge 0` of task ``k`` (module docstring) from kept ``times`` (s,) in s and
+    ``values`` (s, P) (normalised units, NaN where unobserved): the median over the rows of
+    the last ``window`` seconds; 0 without an observed value there."""
+    if times.size == 0:
+        return 0.0
+    rows = times >= times[-1] - window - 1e-9
+    mean, factor, reg = position_frame(model, k)
+    psi = model.basis.evaluate(np.clip(times[rows] / prediction.durations[k], 0.0, 1.0))
+    loads = np.einsum("wn,pnr->wpr", psi, factor)                     # (w, P, r)
+    diag = reg[None] * np.einsum("wn,wn->w", psi, psi)[:, None] + model.noise[None]
+    residual = values[rows] - psi @ mean.T                             # (w, P)
+    seen = np.isfinite(residual)
+    both = seen[:, :, None] & seen[:, None, :]
+    eye = np.eye(model.n_human)
+    cov = np.where(both, loads @ loads.transpose(0, 2, 1) + diag[:, :, None] * eye, eye)
+    residual = np.where(seen, residual, 0.0)
+    quad = np.einsum("wp,wp->w", residual, np.linalg.solve(cov, residual[:, :, None])[..., 0])
+    dims = seen.sum(axis=1)
+    scores = [chi2_log_survival(float(q), int(d)) for q, d in zip(quad, dims) if d]
+    return float(np.median(scores)) if scores else 0.0
+
+
 def chi2_log_survival(x: float, d: int) -> float:
     """:math:`-\\log P(\\chi^2_d \\ge x) \\ge 0`; past the doubles' range, the leading
     term of the upper incomplete gamma function,
@@ -206,11 +285,14 @@ def chi2_log_survival(x: float, d: int) -> float:
 
 def components(model: IProMP, prediction: Prediction, t: float, times: FloatArray,
                values: FloatArray, k: int, mahalanobis: float, *,
-               with_goal: bool = True) -> FloatArray:
-    """The :data:`COMPONENTS` of one update, shape (5,): ``mahalanobis`` (given), then
-    :func:`not_arrived`, :func:`speed_change`, :func:`phase_spread`, :func:`goal` of task ``k``;
-    without the goal (``with_goal=False``) the four of :data:`TIMING`, shape (4,)."""
-    timing = [mahalanobis, not_arrived(model, prediction, t, k),
-              speed_change(model, prediction, k, times, values),
-              phase_spread(model, prediction, k)]
-    return np.array(timing + [goal(model, prediction, k, values)] if with_goal else timing)
+               names: tuple = COMPONENTS) -> FloatArray:
+    """The statistics ``names`` (default all :data:`COMPONENTS`) of one update of task ``k``,
+    shape (len(names),): ``mahalanobis`` (given), :func:`not_arrived`, :func:`speed_change`,
+    :func:`phase_spread`, :func:`goal`, :func:`position`; only those asked for are computed."""
+    make = {"mahalanobis": lambda: mahalanobis,
+            "not_arrived": lambda: not_arrived(model, prediction, t, k),
+            "speed_change": lambda: speed_change(model, prediction, k, times, values),
+            "phase_spread": lambda: phase_spread(model, prediction, k),
+            "goal": lambda: goal(model, prediction, k, values),
+            "position": lambda: position(model, prediction, k, times, values)}
+    return np.array([make[name]() for name in names], dtype=np.float64)

@@ -20,10 +20,12 @@ correlated). A slow or hesitant person is absorbed by the speed factor in
 :math:`m`, so three statistics of timing join it (:mod:`sandbox.core.evidence`,
 with their equations): the elapsed time against the best task's speed prior
 while the motion has not ended, the observed speed against the predicted one
-over the last 0.3 s, and the spread of the speed posterior; and one of the
+over the last 0.3 s, and the spread of the speed posterior; one of the
 goal: how far the conditioned end of the hand's motion lies from the task's
-prior ends (a hand heading elsewhere);
-:func:`statistics` gives all five, :math:`s = (m, s_T, s_v, s_\\phi, s_G)`.
+prior ends (a hand heading elsewhere); and one of the position: the last 0.2 s of
+observations, each against the task's prior predictive at its phase (a hand off the
+task's tube now, which :math:`m`, averaged over all values so far, sees late);
+:func:`statistics` gives all six, :math:`s = (m, s_T, s_v, s_\\phi, s_G, s_X)`.
 
 They are *calibrated* (:func:`calibrate`): each training motion,
 streamed as a predictor sees it, is scored by a model fitted without it
@@ -33,23 +35,23 @@ then ranks as a p-value-like :math:`p_j` in (0, 1]: the share of held-out
 training updates that chose the same task at about the same elapsed time and
 scored worse (:math:`s_T` and :math:`s_G`, p-value bounds by construction, rank as
 :math:`e^{-s}`); the familiarity is Fisher's combination of the four,
-:math:`f = P(\\chi^2_8 \\ge -2 \\sum_j \\log p_j)`, and with the goal the lower of
-that and :math:`e^{-s_G}` as a p-value (:meth:`Calibration.familiarity`).
+:math:`f = P(\\chi^2_8 \\ge -2 \\sum_j \\log p_j)`, and with the goal or the position
+the least of that and theirs as a p-value (Šidák; :meth:`Calibration.familiarity`).
 The threshold below which :attr:`~sandbox.core.updating.PredictorBase.familiar`
 is False is the split-conformal quantile of each calibration motion's *lowest*
 familiarity over its updates (:func:`~sandbox.core.calibration.conformal_threshold`),
 so a new motion like the training ones is called unfamiliar at some update
 with probability at most ``alpha`` (and above ``alpha - 1/(n+1)``).
-By default (``score="timing"``) a calibration ranks the first four;
-``score="goal"`` adds :math:`s_G`. The goal doubles the detection of a hand
-heading for an end outside every task (synthetic), but costs elsewhere: on the
-synthetic sessions whose motions have a tail after the handover (drifting back)
-a slowed motion was flagged in 0.03 of trials instead of 0.77, and on the recorded
-set's leave-task-out (where left-out objects are handed over where the trained
-ones are) detection at 5 % false alarms fell from 0.14 to 0.13; so it is asked
-for, not the default (docs, Results). ``score="mahalanobis"`` calibrates
-:math:`m` alone (what models before the timing evidence carry; they still load
-and rank that way).
+By default (``score="timing"``) a calibration ranks the first four; ``score="goal"``
+adds :math:`s_G`, ``score="position"`` :math:`s_X`, ``score="all"`` both
+(:data:`SCORE_NAMES`; what the position gains and costs: docs, Results). The goal
+doubles the detection of a hand heading for an end outside every task (synthetic), but
+costs elsewhere: on the synthetic sessions whose motions have a tail after the handover
+(drifting back) a slowed motion was flagged in 0.03 of trials instead of 0.77, and on
+the recorded set's leave-task-out (where left-out objects are handed over where the
+trained ones are) detection at 5 % false alarms fell from 0.14 to 0.13; so it is asked
+for, not the default (docs, Results). ``score="mahalanobis"`` calibrates :math:`m` alone
+(what models before the timing evidence carry; they still load and rank that way).
 
 The statistic grows with the white noise of the stream (1 cm of tracker noise
 adds (1 cm / 2 cm floor)^2 = 0.25), so the calibration streams must be
@@ -81,13 +83,16 @@ from sandbox.validation import FloatArray, check_array, check_choice
 if TYPE_CHECKING:
     from sandbox.core.model import IProMP
 
-__all__ = ["COMPONENTS", "EDGES", "LEVELS", "SCORES", "Calibration", "calibrate", "check",
-           "chosen", "leave_one_out", "loo_records", "statistic", "statistics", "stream_record",
-           "update_times"]
+__all__ = ["COMPONENTS", "EDGES", "LEVELS", "SCORES", "SCORE_NAMES", "Calibration", "calibrate",
+           "check", "chosen", "leave_one_out", "loo_records", "statistic", "statistics",
+           "stream_record", "update_times"]
 
-#: What a calibration ranks: the four of timing (default), those and the goal (all
-#: :data:`COMPONENTS`), or the Mahalanobis term alone.
-SCORES = ("timing", "goal", "mahalanobis")
+#: What a calibration ranks, by the name ``calibrate(score=...)`` takes: the four of
+#: timing (default), those and the goal, those and the position, all six
+#: :data:`COMPONENTS`, or the Mahalanobis term alone.
+SCORE_NAMES = {"timing": TIMING, "goal": TIMING + ("goal",), "position": TIMING + ("position",),
+               "all": COMPONENTS, "mahalanobis": ("mahalanobis",)}
+SCORES = tuple(SCORE_NAMES)
 
 
 def statistic(prediction: Prediction) -> float:
@@ -111,9 +116,9 @@ def statistic(prediction: Prediction) -> float:
 
 
 def statistics(model: IProMP, prediction: Prediction, t: float, times: FloatArray,
-               values: FloatArray, *, with_goal: bool = True) -> FloatArray:
-    """All five statistics of an update, shape (5,): :data:`COMPONENTS` (module docstring);
-    with ``with_goal=False`` the first four (:data:`~sandbox.core.evidence.TIMING`), shape (4,).
+               values: FloatArray, *, names: tuple = COMPONENTS) -> FloatArray:
+    """The statistics ``names`` of an update, shape (len(names),): by default all six of
+    :data:`COMPONENTS` (module docstring); a calibration's ``components`` for what it ranks.
 
     Parameters
     ----------
@@ -129,9 +134,8 @@ def statistics(model: IProMP, prediction: Prediction, t: float, times: FloatArra
     """
     m = statistic(prediction)
     if not np.isfinite(m):
-        return np.full(len(COMPONENTS) if with_goal else len(COMPONENTS) - 1, np.nan)
-    return components(model, prediction, t, times, values, chosen(prediction), m,
-                      with_goal=with_goal)
+        return np.full(len(names), np.nan)
+    return components(model, prediction, t, times, values, chosen(prediction), m, names=names)
 
 
 def chosen(prediction: Prediction) -> int:
@@ -161,8 +165,8 @@ def stream_record(model: IProMP, times, human, *, dow_t: float = 0.2, subsample:
                   score: str = "timing", ended: bool = False) -> tuple:
     """Update times (u,), statistics and chosen task (u,) of a stream, as a predictor sees it.
 
-    The statistics are :func:`statistics` (u, 5) with ``score="timing"``
-    (default) or ``"goal"`` (all are recorded; a calibration keeps its own),
+    The statistics are :func:`statistics` (u, 6) for every score but
+    ``"mahalanobis"`` (all are recorded; a calibration keeps its own),
     :func:`statistic` (u,) with ``score="mahalanobis"``.
 
     Parameters
@@ -176,7 +180,7 @@ def stream_record(model: IProMP, times, human, *, dow_t: float = 0.2, subsample:
     dow_t, subsample, n_candidates, width, refine_steps
         As for :class:`~sandbox.core.predictor.DynamicPredictor` (joint likelihood,
         all observations so far).
-    score : {"timing", "goal", "mahalanobis"}
+    score : {"timing", "goal", "position", "all", "mahalanobis"}
         What to record (:data:`SCORES`).
     ended : bool
         Also return, fourth, each update's posterior probability that the chosen
@@ -246,9 +250,10 @@ def calibrate(model: IProMP, demos, streams=None, *, alpha: float = 0.05, dow_t:
         Share of held-out motions allowed to be unfamiliar at some update.
     dow_t, subsample : float, int
         The predictor's window (s) and subsampling the familiarity is calibrated for.
-    score : {"timing", "goal", "mahalanobis"}
+    score : {"timing", "goal", "position", "all", "mahalanobis"}
         The four statistics of timing with the Mahalanobis term (default), those and
-        the goal, or the Mahalanobis term alone (:data:`SCORES`; module docstring).
+        the goal, the position or both, or the Mahalanobis term alone
+        (:data:`SCORE_NAMES`; module docstring).
     refit : bool
         True: ``demos`` are the training demos, each streamed by a model fitted
         without it. False: ``demos`` are motions the model was not fitted on (a fresh
@@ -270,11 +275,14 @@ def calibrate(model: IProMP, demos, streams=None, *, alpha: float = 0.05, dow_t:
             records.append(stream_record(model, t - t[0], s.human, dow_t=dow_t,
                                          subsample=subsample, score=score, ended=True,
                                          **options))
-    if score == "timing":
-        records = [(t, np.asarray(v)[:, :len(TIMING)], k, *rest) for t, v, k, *rest in records]
+    names = SCORE_NAMES[score]
+    if score != "mahalanobis":
+        where = [COMPONENTS.index(n) for n in names]
+        records = [(t, np.asarray(v)[:, where], k, *rest) for t, v, k, *rest in records]
     mean = float(np.dot(model.priors, [t.mean_duration for t in model.task_models]))
     cal = Calibration.from_records(records, len(model.task_models), alpha=alpha,
                                    edges=np.array(EDGES) * mean,
-                                   subsample=subsample, dow_t=dow_t, end_prob=end_prob)
+                                   subsample=subsample, dow_t=dow_t, end_prob=end_prob,
+                                   components=names)
     model.calibration = cal
     return cal

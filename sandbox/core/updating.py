@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from sandbox.core.familiarity import COMPONENTS, chosen, statistic, statistics
+from sandbox.core.familiarity import chosen, statistic, statistics
 from sandbox.core.inference import Prediction, predict
 from sandbox.core.likelihood import Scorer
 from sandbox.core.limits import MAX_CANDIDATES, MAX_LATTICE_FLOATS, MAX_TIME_S, check_time
@@ -375,7 +375,7 @@ class PredictorBase:
             return None
         value: float | FloatArray = (statistic(prediction) if len(cal.components) == 1 else
                                      statistics(self.model, prediction, t, *self._window(t),
-                                                with_goal=COMPONENTS[-1] in cal.components))
+                                                names=tuple(cal.components)))
         return cal.familiarity(t, value, k)
 
     @property

@@ -113,20 +113,26 @@ def rank(records: list[dict], edges=None, score: str = "timing",
     a left-out record is ranked against all of them, its reference is all their
     lowest familiarities. ``edges`` are the time bins as fractions of the mean
     duration (default :data:`~sandbox.core.familiarity.EDGES`). ``score`` is what the
-    calibration ranks (:data:`~sandbox.core.familiarity.SCORES`): ``"timing"`` keeps the
-    first four of five recorded statistics, ``"goal"`` all five. ``gate``: only the
+    calibration ranks (:data:`~sandbox.core.familiarity.SCORE_NAMES`, but not the
+    Mahalanobis term alone): ``"timing"`` keeps the first four recorded statistics,
+    ``"goal"`` those and the fifth, ``"position"`` those and the sixth, ``"all"`` six
+    (records before the position have five). ``gate``: only the
     updates before the motion's estimated end are calibrated and ranked
     (:func:`~sandbox.core.conformal.ongoing` at that level of the records'
     ``ended``; the others' familiarity is NaN), None: all.
     """
     from sandbox.core.calibration import ongoing
-    from sandbox.core.familiarity import EDGES, SCORES, TIMING
+    from sandbox.core.familiarity import COMPONENTS, EDGES, SCORE_NAMES, SCORES
 
-    keep = len(TIMING) if check_choice(score, "score", SCORES[:2]) == "timing" else None
+    names = SCORE_NAMES[check_choice(score, "score", SCORES[:-1])]
+    keep = [COMPONENTS.index(n) for n in names]
 
     def stats(r):   # the statistics the calibration ranks (records keep all they have)
         v = np.array(r["stats"], dtype=float)
-        v = v[:, :keep] if v.ndim == 2 else v
+        if v.ndim == 2 and v.shape[1] <= max(keep):
+            raise ValueError(f"records: expected the statistics {names}, got {v.shape[1]} "
+                             f"per update (records made before the position have five)")
+        v = v[:, keep] if v.ndim == 2 else v
         if gate is not None:
             v[~ongoing(r["ended"], gate)] = np.nan
         return v
@@ -135,11 +141,12 @@ def rank(records: list[dict], edges=None, score: str = "timing",
     out = []
     for left in sorted({r["left_out"] for r in records}):
         pool = [r for r in records if r["left_out"] == left and r["held_in"]]
-        names = pool[0]["tasks"]
+        tasks = pool[0]["tasks"]
         mean = float(np.mean([r["mean_duration"] for r in pool]))
         full, held = leave_one_out(
-            [(r["times"], stats(r), [names.index(k) for k in r["chosen"]]) for r in pool],
-            len(names), edges=fractions * mean)
+            [(r["times"], stats(r), [tasks.index(k) for k in r["chosen"]]) for r in pool],
+            len(tasks), edges=fractions * mean,
+            components=names if np.ndim(pool[0]["stats"]) == 2 else ("mahalanobis",))
         lowest = np.array([h.min(initial=np.inf) for h in held])
         for i, r in enumerate(pool):
             fam = np.full(len(r["times"]), np.nan)
@@ -149,7 +156,7 @@ def rank(records: list[dict], edges=None, score: str = "timing",
                         "reference": np.delete(lowest, i).tolist()})
         for r in records:
             if r["left_out"] == left and not r["held_in"]:
-                fam = [full.familiarity(t, v, names.index(k))
+                fam = [full.familiarity(t, v, tasks.index(k))
                        for t, v, k in zip(r["times"], stats(r), r["chosen"])]
                 out.append({**r, "familiarity": fam, "reference": lowest.tolist()})
     return out

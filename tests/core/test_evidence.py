@@ -17,6 +17,8 @@ from sandbox.core.evidence import (
     goal_frame,
     not_arrived,
     phase_spread,
+    position,
+    position_frame,
     speed_change,
 )
 from sandbox.core.inference import predict
@@ -92,8 +94,11 @@ def test_components_are_in_order_and_inputs_are_not_mutated(model):
     pred, t, y = prediction_of(model, demo, 1.2)
     before = (t.copy(), y.copy())
     out = components(model, pred, 1.2, t, y, 1, 0.7)
-    assert out.shape == (len(COMPONENTS),) == (5,) and out[0] == 0.7 and np.all(out >= 0)
+    assert out.shape == (len(COMPONENTS),) == (6,) and out[0] == 0.7 and np.all(out >= 0)
     assert out[COMPONENTS.index("goal")] == goal(model, pred, 1, y)
+    assert out[COMPONENTS.index("position")] == position(model, pred, 1, t, y)
+    some = components(model, pred, 1.2, t, y, 1, 0.7, names=("position", "mahalanobis"))
+    np.testing.assert_array_equal(some, out[[5, 0]])
     np.testing.assert_array_equal(t, before[0])
     np.testing.assert_array_equal(y, before[1])
 
@@ -156,3 +161,53 @@ def test_chi2_log_survival_is_scipys_and_finite_far_out():
     assert chi2_log_survival(1390.0, 3) == pytest.approx(-stats.chi2.logsf(1390.0, 3), rel=1e-5)
     far = [chi2_log_survival(x, 3) for x in (1500.0, 5000.0, 1e6)]
     assert np.all(np.isfinite(far)) and np.all(np.diff(far) > 0)
+
+
+def prior_row(model, k: int, z: float):
+    """Task k's prior predictive of one row at phase z, built densely: mean (P,), cov (P, P)."""
+    w, P, N = model.task_models[k].weights, model.n_human, model.basis.n_basis
+    phi = np.kron(np.eye(P), model.basis.evaluate(np.array([z])))          # (P, P N)
+    full = w.factor[:P * N] @ w.factor[:P * N].T + np.diag(np.repeat(w.reg[:P], N))
+    return phi @ w.mean[:P * N], phi @ full @ phi.T + np.diag(model.noise)
+
+
+def test_the_position_is_each_rows_prior_mahalanobis_at_its_phase(model):
+    """Rows on the prior mean score 0; one row, offset, scores -log P(chi2_3 >= D) with D
+    from the dense predictive (known answer); a window of rows takes their median."""
+    pred, t, y = prediction_of(model, synth.replay(0, 2.0), 1.0)
+    T = pred.durations[0]
+    on = np.array([prior_row(model, 0, min(ti / T, 1.0))[0] for ti in t])
+    assert position(model, pred, 0, t, on) == pytest.approx(0.0, abs=1e-9)
+    mean, cov = prior_row(model, 0, min(t[-1] / T, 1.0))
+    off = on.copy()
+    off[-1] += [0.05, -0.02, 0.01]
+    r = off[-1] - mean
+    D = float(r @ np.linalg.solve(cov, r))
+    assert position(model, pred, 0, t[-1:], off[-1:]) == pytest.approx(
+        -stats.chi2.logsf(D, 3), rel=1e-8)
+    window = t >= t[-1] - 0.2 - 1e-9
+    assert window.sum() >= 3
+    assert position(model, pred, 0, t, off) == pytest.approx(0.0, abs=1e-9)   # one of 3+ rows
+    shift = np.array([0.05, -0.02, 0.01])
+    shifted = on + np.where(window[:, None], shift, 0.0)
+    each = [-stats.chi2.logsf(shift @ np.linalg.solve(prior_row(model, 0, min(ti / T, 1.0))[1],
+                                                      shift), 3) for ti in t[window]]
+    assert position(model, pred, 0, t, shifted) == pytest.approx(np.median(each), rel=1e-8)
+    assert np.median(each) > position(model, pred, 0, t, off)
+    frame = position_frame(model, 0)
+    assert position_frame(model, 0)[0] is frame[0]                     # cached per weights
+
+
+def test_the_position_tests_the_observed_dims_and_needs_a_row(model):
+    pred, t, y = prediction_of(model, synth.replay(0, 2.0), 1.0)
+    before = y.copy()
+    assert position(model, pred, 0, t[:0], y[:0]) == 0.0
+    assert position(model, pred, 0, t, np.full_like(y, np.nan)) == 0.0
+    T = pred.durations[0]
+    mean, cov = prior_row(model, 0, min(t[-1] / T, 1.0))
+    row = mean + [0.05, 0.0, 0.0]
+    row[2] = np.nan
+    D = float(np.array([0.05, 0.0]) @ np.linalg.solve(cov[:2, :2], [0.05, 0.0]))
+    assert position(model, pred, 0, t[-1:], row[None]) == pytest.approx(
+        -stats.chi2.logsf(D, 2), rel=1e-8)
+    np.testing.assert_array_equal(y, before)

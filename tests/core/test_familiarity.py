@@ -10,7 +10,7 @@ import pytest
 
 from sandbox.core import DynamicPredictor, IProMP
 from sandbox.core.evidence import COMPONENTS, TIMING
-from sandbox.core.familiarity import LEVELS, Calibration, statistic, stream_record
+from sandbox.core.familiarity import LEVELS, SCORE_NAMES, Calibration, statistic, stream_record
 
 from . import synth
 
@@ -296,14 +296,18 @@ def test_files_before_the_goal_rank_their_four_statistics(model, tmp_path):
     np.testing.assert_allclose(fam, [u.familiarity for u in stream(old, demo).updates])
 
 
-def test_a_goal_calibration_ranks_five_statistics_and_round_trips(tmp_path):
+@pytest.mark.parametrize("score", ["goal", "all"])
+def test_a_goal_or_position_calibration_ranks_its_statistics_and_round_trips(score, tmp_path):
+    """Five statistics with the goal, six with the goal and the position: the predictors
+    compute only those and rank them as the calibration does, before and after a file."""
     train = synth.demos(np.random.default_rng(0), n_per_task=4, n_tasks=2)
     bare = IProMP(n_basis=9).fit(train)
-    cal = bare.calibrate(train, score="goal", **OPTIONS)
-    assert cal.components == COMPONENTS and cal.extra.shape[0] == len(COMPONENTS) - 1
+    cal = bare.calibrate(train, score=score, **OPTIONS)
+    names = SCORE_NAMES[score]
+    assert cal.components == names and cal.extra.shape[0] == len(names) - 1
     bare.save(tmp_path / "m.npz")
     loaded = IProMP.load(tmp_path / "m.npz")
-    assert loaded.calibration.components == COMPONENTS
+    assert loaded.calibration.components == names
     demo = unseen(1, seed=11)
     times, stats, tasks = stream_record(loaded, demo.times, demo.human, **OPTIONS)
     assert stats.shape == (times.size, len(COMPONENTS))
