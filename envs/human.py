@@ -9,7 +9,7 @@ may also carry what the tracker measured of the rest of the body
 envelope), NaN where it measured nothing.
 
 :class:`HumanHand` is the kinematic hand/forearm body (``urdf/human_hand.urdf``,
-no mass): the environment teleports it along the true path at every physics
+no mass): the environment teleports it along the true path at every control
 step, its forearm pointing from the hand toward the human's shoulder.
 """
 
@@ -178,7 +178,7 @@ def forearm_orientation(hand: FloatArray) -> tuple[float, float, float, float]:
     """Quaternion (x, y, z, w) turning the body's +x toward :data:`SHOULDER`, z kept up-ish.
 
     The body's y axis is horizontal (z_world x x), its z axis completes the frame.
-    Written out in floats: it runs at every physics step.
+    Written out in floats: it runs at every control step.
     """
     dx, dy, dz = (SHOULDER - hand).tolist()
     n = max(math.sqrt(dx * dx + dy * dy + dz * dz), 1e-9)
@@ -191,7 +191,7 @@ def forearm_orientation(hand: FloatArray) -> tuple[float, float, float, float]:
 
 def _quaternion(R) -> tuple[float, float, float, float]:
     """Quaternion (x, y, z, w) of a rotation matrix (3, 3) (an array or rows of floats),
-    stable for any rotation. In Python floats: it runs at every physics step."""
+    stable for any rotation. In Python floats: it runs at every control step."""
     R = [[float(v) for v in row] for row in R]
     trace = R[0][0] + R[1][1] + R[2][2]
     if trace > 0:
