@@ -291,8 +291,8 @@ class BaxterHandoverEnv(gym.Env):
         target = np.minimum(np.maximum(action[:dof], self.robot.lower), self.robot.upper)
         self.robot.act(target, close=bool(action[dof] > 0.0))
         physics_dt = self.dt / self.substeps
-        self.task.advance([self.motion.position(self._t + k * physics_dt)
-                           for k in range(1, self.substeps + 1)])
+        self.task.advance(self.motion.positions([self._t + k * physics_dt
+                                                 for k in range(1, self.substeps + 1)]))
         self._steps += 1
         self._t = self._steps * self.dt
         q, dq, opening = self.robot.state()     # read once: the handover, reward and observation

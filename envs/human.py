@@ -103,12 +103,19 @@ class HumanMotion:
 
         In Python floats (the same arithmetic as on arrays): it runs at every physics step.
         """
-        times, true = self._lists
-        i = min(max(bisect.bisect_right(times, t), 1), len(times) - 1)
-        t0, t1 = times[i - 1], times[i]
-        w = min(max((t - t0) / (t1 - t0), 0.0), 1.0)
-        a, b, v = true[i - 1], true[i], 1.0 - w
-        return np.array([v * a[0] + w * b[0], v * a[1] + w * b[1], v * a[2] + w * b[2]])
+        return np.array(self.positions([t])[0])
+
+    def positions(self, times: list[float]) -> list[list[float]]:
+        """:meth:`position` at each of ``times`` (s), as lists of three floats (m): a control
+        step's substeps in one call."""
+        out, (ts, true), last, right = [], self._lists, len(self._lists[0]) - 1, bisect.bisect_right
+        for t in times:
+            i = min(max(right(ts, t), 1), last)
+            t0, t1 = ts[i - 1], ts[i]
+            w = min(max((t - t0) / (t1 - t0), 0.0), 1.0)
+            a, b, v = true[i - 1], true[i], 1.0 - w
+            out.append([v * a[0] + w * b[0], v * a[1] + w * b[1], v * a[2] + w * b[2]])
+        return out
 
     def measurement(self, t: float) -> FloatArray:
         """Latest valid tracker sample (3,) m at or before ``t`` (s)."""

@@ -69,7 +69,7 @@ class RobotArm:
         self._finger_commands = {close: (self._closed if close else self._open).tolist()
                                  for close in (False, True)}
         self._finger_limits = (self._finger_force.tolist(), self._finger_speed.tolist())
-        self._state_joints = [*self.baxter.arm, *self.baxter.fingers]
+        self._state_joints, self._dof = [*self.baxter.arm, *self.baxter.fingers], self.spec.dof
         #: The gripper command the motors hold (None: unknown, sent at the next act()).
         self._gripper_sent: bool | None = None
 
@@ -126,7 +126,7 @@ class RobotArm:
         """:meth:`joint_state` and :meth:`gripper_opening` read at once (one PyBullet call):
         positions (dof,) rad, velocities (dof,) rad/s, opening in [0, 1]."""
         q, dq = self.sim.joint_states(self.name, self._state_joints)
-        dof = self.dof
+        dof = self._dof
         return q[:dof].copy(), dq[:dof].copy(), self._opening(q[dof:])
 
     def gripper_opening(self) -> float:

@@ -216,4 +216,6 @@ class HandoverTask:
 
 def _floats3(x) -> list[float]:
     """A position (3,) as three Python floats (an array's own values)."""
+    if type(x) is list and type(x[0]) is type(x[1]) is type(x[2]) is float:
+        return x
     return x.tolist() if isinstance(x, np.ndarray) else [float(v) for v in x]
