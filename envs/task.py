@@ -174,8 +174,8 @@ class HandoverTask:
     def try_handover(self, opening: float | None = None, distance: float | None = None) -> bool:
         """Transfer the object if the closed gripper is within reach; True if it happened now.
 
-        ``opening`` (:meth:`RobotArm.gripper_opening`) and ``distance`` (:meth:`distance`, m)
-        are read now if not given.
+        ``opening`` (:meth:`~sandbox.envs.robot.RobotArm.gripper_opening`) and ``distance``
+        (:meth:`distance`, m) are read now if not given.
         """
         if opening is None:
             opening = self.robot.gripper_opening()
