@@ -123,9 +123,9 @@ class BaxterHandoverEnv(gym.Env):
 
     Episode end
     -----------
-    Terminated at the handover (``info["is_success"]``); truncated by the time
-    limit (``max_episode_steps=300``, 6 s at 50 Hz, when made with
-    ``gym.make``). After its last sample the hand holds still.
+    Terminated at the handover (``info["is_success"]``); truncated by the time limit
+    (``max_episode_steps=300``, 6 s at 50 Hz, when made with ``gym.make``). After its last
+    sample the hand holds still.
 
     Arguments
     ---------
@@ -141,8 +141,8 @@ class BaxterHandoverEnv(gym.Env):
     * ``control_hz`` (50, in [1, 1000], :data:`sandbox.limits.BOUNDS`): steps per second;
       ``substeps`` (5, an integer from 1 to :data:`~sandbox.envs.arguments.MAX_SUBSTEPS`): physics
       steps per control step (physics at 250 Hz);
-    * ``grasp_radius`` (0.05 m); ``reward_weights`` (a :class:`RewardWeights`,
-      or a dict of its fields, e.g. ``{"success": 5.0}``);
+    * ``grasp_radius`` (0.05 m); ``reward_weights`` (a :class:`RewardWeights`, or a dict of
+      its fields, e.g. ``{"success": 5.0}``);
     * ``default_object`` ("box"): object of tasks without one (diverging tasks);
     * ``viewer_options`` (dict): arguments of :class:`sandbox.viz.Viewer` in
       "human" mode (default ``{"realtime": True}``; e.g. ``open_browser=True``,
@@ -159,8 +159,8 @@ class BaxterHandoverEnv(gym.Env):
     ``source``      ("synthetic" or a folder ``<root>/<task>/<trial>.csv``);
     ``trial``       (recorded: index or file name); ``speed`` (human speed factor,
     0.25-4); ``switch_to``, ``switch_phase`` (synthetic intent switch); ``session`` (its seed);
-    ``source="teleop"``: the hand follows velocity commands given to
-    ``env.unwrapped.motion`` (a :class:`~sandbox.envs.teleop.TeleopMotion`);
+    ``source="teleop"``: the hand follows velocity commands given to ``env.unwrapped.motion``
+    (a :class:`~sandbox.envs.teleop.TeleopMotion`);
     ``motion``: a scripted :class:`~sandbox.envs.human.HumanMotion` (e.g. from
     :func:`~sandbox.envs.sources.waypoint_motion`); ``grasp_offset``: where the
     object's grasp point rides from the tracked hand (3,) m, or one per task
@@ -172,12 +172,12 @@ class BaxterHandoverEnv(gym.Env):
     Rendering
     ---------
     ``"rgb_array"``: :meth:`render` returns a PyBullet camera image.
-    ``"human"``: the first ``reset`` starts a meshcat server on localhost (no
-    display needed) and prints its URL; every ``reset`` and ``step`` then shows
-    the scene in the browser, paced to real time, and records it
-    (``env.unwrapped.viewer.save_html(path)`` writes the episode's replay; a
-    policy's predictions can be drawn with ``viewer.add_overlay``). The server
-    stops with :meth:`close`, and at the latest when this process ends.
+    ``"human"``: the first ``reset`` starts a meshcat server on localhost (no display
+    needed) and prints its URL; every ``reset`` and ``step`` then shows the scene in the
+    browser, paced to real time, and records it (``env.unwrapped.viewer.save_html(path)``
+    writes the episode's replay; a policy's predictions can be drawn with
+    ``viewer.add_overlay``). The server stops with :meth:`close`, and at the latest when
+    this process ends.
 
     Version history
     ---------------
@@ -237,17 +237,14 @@ class BaxterHandoverEnv(gym.Env):
         self.task = HandoverTask(self.sim, self.robot, self.human, grasp_radius=grasp_radius,
                                  weights=weights)
         self._settle_and_save()
-        self.action_space = self._action_space()
+        self.action_space = spaces.Box(np.append(self.robot.lower, -1.0),
+                                       np.append(self.robot.upper, 1.0), dtype=np.float64)
         self.observation_space = observation_space(self.robot, observe_body)
         self._observer = Observer(self.observation_space, observe_body)
         self.motion: HumanMotion | None = None
         self.episode: EpisodeOptions | None = None
 
-    # ------------------------------------------------------------------ spaces
-    def _action_space(self) -> spaces.Box:
-        return spaces.Box(np.append(self.robot.lower, -1.0), np.append(self.robot.upper, 1.0),
-                          dtype=np.float64)
-
+    # ------------------------------------------------------------------ setup
     def _settle_and_save(self) -> None:
         self.robot.reset()
         for _ in range(SETTLE_STEPS):
@@ -288,19 +285,21 @@ class BaxterHandoverEnv(gym.Env):
         if self.motion is None:
             raise RuntimeError("step: call reset() before step()")
         dof = self.robot.dof
-        action = check_array(action, "action", 1, shape=(dof + 1,))
-        target = np.clip(action[:dof], self.robot.lower, self.robot.upper)
+        if not (type(action) is np.ndarray and action.dtype == np.float64
+                and action.shape == (dof + 1,) and np.isfinite(action).all()):
+            action = check_array(action, "action", 1, shape=(dof + 1,))  # else read, not kept
+        target = np.minimum(np.maximum(action[:dof], self.robot.lower), self.robot.upper)
         self.robot.act(target, close=bool(action[dof] > 0.0))
         physics_dt = self.dt / self.substeps
-        for k in range(1, self.substeps + 1):
-            self.task.move_hand(self.motion.position(self._t + k * physics_dt))
-            self.sim.step_physics()
+        self.task.advance(self.motion.positions([self._t + k * physics_dt
+                                                 for k in range(1, self.substeps + 1)]))
         self._steps += 1
         self._t = self._steps * self.dt
-        handed = self.task.try_handover()
-        if handed:
-            self._handover_time = self._t
-        distance = self.task.distance()
+        q, dq, opening = self.robot.state()     # read once: the handover, reward and observation
+        grasp = self.task.grasp_point()
+        distance = self.task.distance(grasp)
+        handed = self.task.try_handover(opening, distance)   # fixes the object where it is
+        self._handover_time = self._t if handed else self._handover_time
         terms = self.task.reward_terms(distance, handed, (target - self._prev_target) / self.dt)
         self._prev_target = target
         reward = float(sum(terms.values()))
@@ -309,7 +308,7 @@ class BaxterHandoverEnv(gym.Env):
                 "task": self.motion.task, "object": self.task.object}
         if self.render_mode == "human":
             self._show()
-        return self._observation(), reward, handed, False, info
+        return self._observation((q, dq, opening, grasp)), reward, handed, False, info
 
     def render(self) -> NDArray[np.uint8] | None:
         """RGB image (360, 480, 3) of the scene in ``"rgb_array"`` mode; None otherwise.
@@ -355,10 +354,10 @@ class BaxterHandoverEnv(gym.Env):
         self.viewer.update(self._t, force=new_episode)
 
     # ------------------------------------------------------------- internals
-    def _observation(self) -> dict[str, FloatArray]:
-        q, dq = self.robot.joint_state()
-        state = {"object": self.task.grasp_point(), "q": q, "dq": dq,
-                 "gripper": np.array([self.robot.gripper_opening()])}
+    def _observation(self, read: tuple | None = None) -> dict[str, FloatArray]:
+        """The observation now; ``read``: ``(q, dq, opening, grasp point)`` if read already."""
+        q, dq, opening, grasp = read or (*self.robot.state(), self.task.grasp_point())
+        state = {"object": grasp, "q": q, "dq": dq, "gripper": np.array([opening])}
         return self._observer(self.motion, self._t, state)
 
     def human_intent(self, t: float | None = None) -> str | None:

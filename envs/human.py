@@ -9,7 +9,7 @@ may also carry what the tracker measured of the rest of the body
 envelope), NaN where it measured nothing.
 
 :class:`HumanHand` is the kinematic hand/forearm body (``urdf/human_hand.urdf``,
-no mass): the environment teleports it along the true path at every physics
+no mass): the environment teleports it along the true path at every control
 step, its forearm pointing from the hand toward the human's shoulder.
 """
 
@@ -103,12 +103,19 @@ class HumanMotion:
 
         In Python floats (the same arithmetic as on arrays): it runs at every physics step.
         """
-        times, true = self._lists
-        i = min(max(bisect.bisect_right(times, t), 1), len(times) - 1)
-        t0, t1 = times[i - 1], times[i]
-        w = min(max((t - t0) / (t1 - t0), 0.0), 1.0)
-        a, b, v = true[i - 1], true[i], 1.0 - w
-        return np.array([v * a[0] + w * b[0], v * a[1] + w * b[1], v * a[2] + w * b[2]])
+        return np.array(self.positions([t])[0])
+
+    def positions(self, times: list[float]) -> list[list[float]]:
+        """:meth:`position` at each of ``times`` (s), as lists of three floats (m): a control
+        step's substeps in one call."""
+        out, (ts, true), last, right = [], self._lists, len(self._lists[0]) - 1, bisect.bisect_right
+        for t in times:
+            i = min(max(right(ts, t), 1), last)
+            t0, t1 = ts[i - 1], ts[i]
+            w = min(max((t - t0) / (t1 - t0), 0.0), 1.0)
+            a, b, v = true[i - 1], true[i], 1.0 - w
+            out.append([v * a[0] + w * b[0], v * a[1] + w * b[1], v * a[2] + w * b[2]])
+        return out
 
     def measurement(self, t: float) -> FloatArray:
         """Latest valid tracker sample (3,) m at or before ``t`` (s)."""
@@ -178,7 +185,7 @@ def forearm_orientation(hand: FloatArray) -> tuple[float, float, float, float]:
     """Quaternion (x, y, z, w) turning the body's +x toward :data:`SHOULDER`, z kept up-ish.
 
     The body's y axis is horizontal (z_world x x), its z axis completes the frame.
-    Written out in floats: it runs at every physics step.
+    Written out in floats: it runs at every control step.
     """
     dx, dy, dz = (SHOULDER - hand).tolist()
     n = max(math.sqrt(dx * dx + dy * dy + dz * dz), 1e-9)
@@ -191,7 +198,7 @@ def forearm_orientation(hand: FloatArray) -> tuple[float, float, float, float]:
 
 def _quaternion(R) -> tuple[float, float, float, float]:
     """Quaternion (x, y, z, w) of a rotation matrix (3, 3) (an array or rows of floats),
-    stable for any rotation. In Python floats: it runs at every physics step."""
+    stable for any rotation. In Python floats: it runs at every control step."""
     R = [[float(v) for v in row] for row in R]
     trace = R[0][0] + R[1][1] + R[2][2]
     if trace > 0:

@@ -69,6 +69,9 @@ class Observer:
         #: Each Box entry's bounds, looked up once (the observation is built at every step).
         self._bounds = {k: (v.low, v.high) for k, v in space.items()
                         if isinstance(v, spaces.Box)}
+        self._scalars = {k: (float(low[0]), float(high[0])) for k, (low, high)
+                         in self._bounds.items() if low.shape == (1,)}
+        self._body_keys = [(name, f"{name}_valid") for name in BODY_DIMS]
         self.reset()
 
     def reset(self) -> None:
@@ -79,16 +82,17 @@ class Observer:
         """The observation at episode time ``t`` (s) of ``motion`` and the robot ``state``
         (``object``, ``q``, ``dq``, ``gripper``)."""
         obs = {"hand": motion.measurement(t), **state, "time": np.array([t])}
-        obs = {k: self._clip(k, v) for k, v in obs.items()}
+        bounds, lower, upper = self._bounds, np.maximum, np.minimum
+        # np.clip's result without its wrapper's cost (NaN stays NaN): built at every step;
+        # an entry of one value in Python floats (max(x, low) keeps a NaN x, as np.maximum)
+        obs = {k: (upper(lower(v, bounds[k][0]), bounds[k][1]) if k not in self._scalars
+                   else np.array([min(max(float(v[0]), self._scalars[k][0]), self._scalars[k][1])]))
+               for k, v in obs.items()}
         if not self.observe_body:
             return obs
-        return {**obs, **self._hand_frame(motion, t), **self._body(motion, t)}
-
-    def _clip(self, key: str, value: np.ndarray) -> np.ndarray:
-        """``value`` clipped to entry ``key``'s bounds (``np.clip``'s result, without its
-        wrapper's cost; NaN stays NaN)."""
-        low, high = self._bounds[key]
-        return np.minimum(np.maximum(value, low), high)
+        obs.update(self._hand_frame(motion, t))
+        self._body(motion, t, obs)
+        return obs
 
     def _hand_frame(self, motion: Any, t: float) -> dict[str, np.ndarray]:
         """``hand_valid`` (1 for a frame not given before) and ``hand_time`` (the frame's
@@ -99,12 +103,15 @@ class Observer:
         return {"hand_valid": np.array([new], dtype=np.int8),
                 "hand_time": np.array([min(max(min(frame, float(t)), 0.0), TIME_MAX)])}
 
-    def _body(self, motion: Any, t: float) -> dict[str, np.ndarray]:
-        """``arm``/``emg`` (0 where unmeasured) and their ``*_valid`` flags (int8 (1,))."""
-        out: dict[str, np.ndarray] = {}
-        for name in BODY_DIMS:
+    def _body(self, motion: Any, t: float, out: dict[str, np.ndarray]) -> None:
+        """Add ``arm``/``emg`` (0 where unmeasured) and their ``*_valid`` flags (int8 (1,))
+        to ``out``."""
+        for name, flag in self._body_keys:
             value = motion.body_measurement(name, t)
             valid = bool(np.isfinite(value).all())
-            out[name] = self._clip(name, value) if valid else np.zeros_like(value)
-            out[f"{name}_valid"] = np.array([valid], dtype=np.int8)
-        return out
+            if valid:
+                low, high = self._bounds[name]
+                out[name] = np.minimum(np.maximum(value, low), high)
+            else:
+                out[name] = np.zeros(value.shape, value.dtype)
+            out[flag] = np.array([valid], dtype=np.int8)

@@ -64,6 +64,14 @@ class RobotArm:
         self._closed = np.array(self.spec.finger_closed, dtype=float)
         self.tip_link = self.baxter.links[self.spec.tip_link]
         self._held = self._held_joints()
+        # what every step sends and reads, as PyBullet takes it (Python floats, one list)
+        self._arm_limits = (self.max_force.tolist(), self.max_velocity.tolist())
+        self._finger_commands = {close: (self._closed if close else self._open).tolist()
+                                 for close in (False, True)}
+        self._finger_limits = (self._finger_force.tolist(), self._finger_speed.tolist())
+        self._state_joints, self._dof = [*self.baxter.arm, *self.baxter.fingers], self.spec.dof
+        #: The gripper command the motors hold (None: unknown, sent at the next act()).
+        self._gripper_sent: bool | None = None
 
     @property
     def dof(self) -> int:
@@ -91,24 +99,43 @@ class RobotArm:
                                     np.full(len(joints), 1.0))
         self.sim.reset_joints(self.name, self.baxter.arm, q)
         self.sim.reset_joints(self.name, self.baxter.fingers, self._open)
+        self._gripper_sent = None
         self.act(q, close=False)
 
     def act(self, q_target: ArrayLike, close: bool) -> None:
-        """Command joint targets ``q_target`` (dof,) rad (clipped to limits) and the gripper."""
-        q_target = np.clip(np.asarray(q_target, dtype=float), self.lower, self.upper)
-        self.sim.control_joints(self.name, self.baxter.arm, q_target, self.max_force,
-                                self.max_velocity)
-        fingers = self._closed if close else self._open
-        self.sim.control_joints(self.name, self.baxter.fingers, fingers,
-                                self._finger_force, self._finger_speed)
+        """Command joint targets ``q_target`` (dof,) rad (clipped to limits) and the gripper.
+
+        The motors keep a command until the next one: the gripper's is sent only when it
+        changes (and at every :meth:`reset`).
+        """
+        q_target = np.minimum(np.maximum(np.asarray(q_target, dtype=float), self.lower),
+                              self.upper)                  # np.clip, without its wrapper
+        self.sim.control_joints(self.name, self.baxter.arm, q_target.tolist(),
+                                *self._arm_limits)
+        close = bool(close)
+        if close is not self._gripper_sent:
+            self.sim.control_joints(self.name, self.baxter.fingers,
+                                    self._finger_commands[close], *self._finger_limits)
+            self._gripper_sent = close
 
     def joint_state(self) -> tuple[FloatArray, FloatArray]:
         """Arm joint positions (dof,) rad and velocities (dof,) rad/s."""
         return self.sim.joint_states(self.name, self.baxter.arm)
 
+    def state(self) -> tuple[FloatArray, FloatArray, float]:
+        """:meth:`joint_state` and :meth:`gripper_opening` read at once (one PyBullet call):
+        positions (dof,) rad, velocities (dof,) rad/s, opening in [0, 1]."""
+        q, dq = self.sim.joint_states(self.name, self._state_joints)
+        dof = self._dof
+        return q[:dof].copy(), dq[:dof].copy(), self._opening(q[dof:])
+
     def gripper_opening(self) -> float:
         """Finger opening in [0, 1]: 0 closed, 1 fully open (mean of both fingers)."""
         q, _ = self.sim.joint_states(self.name, self.baxter.fingers)
+        return self._opening(q)
+
+    def _opening(self, q: FloatArray) -> float:
+        """The opening in [0, 1] of finger positions ``q`` (2,) (rad or m)."""
         if self.name == "baxter":
             opening = 0.5 * (q[0] - q[1]) / self._finger_travel
         else:

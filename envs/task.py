@@ -1,7 +1,8 @@
 """The handover task: the object in the human's hand, its transfer to the gripper, the reward.
 
-While the human holds it, the object moves with the kinematic hand (both are
-teleported at every physics step, the object at rest), its grasp point at
+While the human holds it, the object moves with the kinematic hand (teleported at
+rest at every physics step; the hand body, which collides with nothing, at every
+control step), its grasp point at
 an offset from the tracked hand point: where the demonstrated gripper tip met
 the hand, learned per task from the training demonstrations (the ``grasp_offset``
 reset option, which the episode runners fill from the model's meeting geometry,
@@ -22,6 +23,7 @@ and sum to the reward)::
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,7 +32,7 @@ from numpy.typing import NDArray
 from sandbox import urdf
 from sandbox.envs.human import HumanHand
 from sandbox.envs.pybullet import Simulation
-from sandbox.envs.robot import RobotArm
+from sandbox.envs.robot import CLOSED_BELOW, RobotArm
 from sandbox.robot import FLOOR_Z, GRASP_OFFSET
 from sandbox.validation import check_positive
 
@@ -144,19 +146,42 @@ class HandoverTask:
         if not self.handed_over:
             self.sim.set_pose(self._require_object(), hand + self.hold_offset, at_rest=True)
 
+    def advance(self, hands: list[FloatArray]) -> None:
+        """One physics step per hand position (3,) m of ``hands``, the hand and the object
+        moved before each: what :meth:`move_hand` then a physics step does, for each.
+
+        The hand body is kinematic and collides with nothing, so only its last pose shows:
+        it is moved there once (the object, dynamic, at every step).
+        """
+        self.human.move_to(hands[-1])
+        if self.handed_over:
+            self.sim.advance(len(hands))
+            return
+        a, b, c = self.hold_offset.tolist()
+        self.sim.advance(len(hands), self._require_object(),
+                         [[x + a, y + b, z + c] for x, y, z in map(_floats3, hands)])
+
     def grasp_point(self) -> FloatArray:
         """World position (3,) m of the object's grasp point."""
         return self.sim.pose(self._require_object())[0]
 
-    def distance(self) -> float:
-        """Fingertip-to-grasp-point distance (m)."""
-        return float(np.linalg.norm(self.robot.tip_position() - self.grasp_point()))
+    def distance(self, grasp: FloatArray | None = None) -> float:
+        """Fingertip-to-grasp-point distance (m); ``grasp`` (3,) m the grasp point if read
+        already (:meth:`grasp_point`)."""
+        d = self.robot.tip_position() - (self.grasp_point() if grasp is None else grasp)
+        return math.sqrt(d.dot(d))              # np.linalg.norm's own arithmetic, without it
 
-    def try_handover(self) -> bool:
-        """Transfer the object if the closed gripper is within reach; True if it happened now."""
-        if self.handed_over or not self.robot.gripper_closed():
+    def try_handover(self, opening: float | None = None, distance: float | None = None) -> bool:
+        """Transfer the object if the closed gripper is within reach; True if it happened now.
+
+        ``opening`` (:meth:`~sandbox.envs.robot.RobotArm.gripper_opening`) and ``distance``
+        (:meth:`distance`, m) are read now if not given.
+        """
+        if opening is None:
+            opening = self.robot.gripper_opening()
+        if self.handed_over or not opening < CLOSED_BELOW:
             return False
-        if self.distance() > self.grasp_radius:
+        if (self.distance() if distance is None else distance) > self.grasp_radius:
             return False
         self.release()
         self._constraint = self.sim.attach(self.robot.name, self.robot.tip_link,
@@ -187,3 +212,10 @@ class HandoverTask:
         if self.object is None:
             raise RuntimeError("no object yet: reset the task first")
         return self.object
+
+
+def _floats3(x) -> list[float]:
+    """A position (3,) as three Python floats (an array's own values)."""
+    if type(x) is list and type(x[0]) is type(x[1]) is type(x[2]) is float:
+        return x
+    return x.tolist() if isinstance(x, np.ndarray) else [float(v) for v in x]

@@ -107,6 +107,10 @@ class TeleopMotion:
         p = self._anchor_p + self._velocity * max(t - self._anchor_t, 0.0)
         return np.clip(p, WORKSPACE[:, 0], WORKSPACE[:, 1])
 
+    def positions(self, times: list[float]) -> list[FloatArray]:
+        """:meth:`position` at each of ``times`` (s), in order."""
+        return [self.position(t) for t in times]
+
     def edges(self, t: float) -> list[tuple[int, int, float]]:
         """``(axis, side, value m)`` of every workspace edge the hand rests on at ``t`` (s)
         while commanded beyond it (side -1: the lower bound, +1: the upper)."""

@@ -224,7 +224,7 @@ def _single(args, model, config, load: dict) -> tuple[list[dict], dict, float]:
     the report's ``config`` and the wall time (s)."""
     from sandbox.eval.datasets import load_pair
 
-    train, test, skipped = load_pair(args.data, **load)
+    train, test, skipped = load_pair(args.data, **load, workers=args.workers)
     _skipped.report(skipped, args.verbose, len(train))
     if not train:
         raise _skipped.no_usable(args.data, skipped, verbose=args.verbose)

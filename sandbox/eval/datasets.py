@@ -6,7 +6,8 @@ import warnings
 
 
 def load_pair(data: str, *, seed: int = 0, tasks=None, n_per_task=None, spec=None,
-              observe=None, cache=None, progress: bool = False, session: int | None = None):
+              observe=None, cache=None, progress: bool = False, session: int | None = None,
+              workers: int = 1):
     """The same trials preprocessed for training (smoothed) and as test streams (causal).
 
     ``data`` is a folder in the shared layout or ``synthetic:NAME``; ``spec`` (a
@@ -14,7 +15,8 @@ def load_pair(data: str, *, seed: int = 0, tasks=None, n_per_task=None, spec=Non
     the modalities (see :func:`sandbox.data.datasets.load_dataset`); ``cache``
     keeps a folder's loaded trials on disk (:mod:`sandbox.data.cache`; ``True``:
     the user's cache folder); ``progress`` draws a bar on stderr; ``session``
-    (synthetic sets only) is the recording session's seed. Returns
+    (synthetic sets only) is the recording session's seed; ``workers`` processes preprocess
+    a synthetic set's trials (forked, each trial both ways; the same trials). Returns
     ``(train, test, skipped)``; a trial either version cannot use is dropped
     from both, with its reason in ``skipped``.
     """
@@ -31,7 +33,7 @@ def load_pair(data: str, *, seed: int = 0, tasks=None, n_per_task=None, spec=Non
         warnings.simplefilter("always")
         kw["on_trial"] = shown.update if folder is not None else None
         if isinstance(data, str) and data.startswith("synthetic"):
-            train, test = _synthetic_pair(data, kw)
+            train, test = _synthetic_pair(data, kw, workers)
         else:
             train = load_dataset(data, preprocess="smooth", **kw)
             test = load_dataset(data, preprocess="causal", **kw)
@@ -42,15 +44,31 @@ def load_pair(data: str, *, seed: int = 0, tasks=None, n_per_task=None, spec=Non
     return train, test, skipped
 
 
-def _synthetic_pair(data: str, kw: dict) -> tuple[list, list]:
+def _synthetic_pair(data: str, kw: dict, workers: int = 1) -> tuple[list, list]:
     """A synthetic set generated once, then preprocessed both ways: the same demonstrations
-    as two ``load_dataset`` calls (same seed), without generating them twice."""
+    as two ``load_dataset`` calls (same seed), without generating them twice. With
+    ``workers`` > 1 the trials are preprocessed in that many forked processes (the
+    generated set is inherited, not sent; each returns its trials both ways)."""
     from sandbox.data.datasets import load_dataset
-    from sandbox.data.preprocess import preprocess_demonstration
+    from sandbox.eval.loocv import map_trials
 
     raw = load_dataset(data, preprocess="none", **kw)
-    return ([preprocess_demonstration(d, "smooth") for d in raw],
-            [preprocess_demonstration(d, "causal") for d in raw])
+    pairs = map_trials(_both_ways, len(raw), _RAW.__setitem__, ("demos", raw),
+                       workers=workers if len(raw) >= 4 * workers else 1)
+    _RAW.clear()
+    return [a for a, _ in pairs], [b for _, b in pairs]
+
+
+#: The generated set :func:`_both_ways` reads (set before the workers fork).
+_RAW: dict = {}
+
+
+def _both_ways(i: int) -> tuple:
+    """Trial ``i`` of the generated set, preprocessed for training and as a test stream."""
+    from sandbox.data.preprocess import preprocess_demonstration
+
+    demo = _RAW["demos"][i]
+    return preprocess_demonstration(demo, "smooth"), preprocess_demonstration(demo, "causal")
 
 
 def _n_files(data, tasks) -> int | None:

@@ -15,7 +15,7 @@ from __future__ import annotations
 import time
 from dataclasses import replace
 
-from sandbox.eval.loocv import EvalConfig, evaluate_trial, map_trials
+from sandbox.eval.loocv import EvalConfig, evaluate_trial, map_trials, trial_costs
 
 #: The value of ``report["config"]["mode"]`` of a test-only evaluation.
 MODE = "test-only"
@@ -102,7 +102,7 @@ def run_heldout(model, train, test, config: EvalConfig, *, workers: int = 1,
     check_compatible(model, test)
     start = time.perf_counter()
     results = map_trials(_run_one, len(test), _init, (model, list(train), list(test), config),
-                         workers=workers, progress=progress)
+                         workers=workers, progress=progress, cost=trial_costs(test))
     return results, time.perf_counter() - start
 
 

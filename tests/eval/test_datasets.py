@@ -1,13 +1,17 @@
 """sandbox/eval/datasets.py: the train/test versions of a set."""
 
 import numpy as np
+import pytest
 
 from sandbox.data.datasets import load_dataset
 from sandbox.eval.datasets import load_pair
 
 
-def test_a_synthetic_pair_is_each_version_as_loaded_on_its_own():
-    train, test, skipped = load_pair("synthetic:diverging", n_per_task=2, seed=3, session=1)
+@pytest.mark.parametrize("workers", [1, 2])
+def test_a_synthetic_pair_is_each_version_as_loaded_on_its_own(workers):
+    """Also when two forked workers preprocess the trials (10 trials: both take some)."""
+    train, test, skipped = load_pair("synthetic:diverging", n_per_task=2, seed=3, session=1,
+                                     workers=workers)
     for got, how in ((train, "smooth"), (test, "causal")):
         want = load_dataset("synthetic:diverging", n_per_task=2, seed=3, session=1,
                             preprocess=how)

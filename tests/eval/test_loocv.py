@@ -121,3 +121,19 @@ def test_two_workers_give_the_results_of_one(setup):
     one, _ = run_loocv(demos, demos, config, workers=1)
     two, _ = run_loocv(demos, demos, config, workers=2)
     assert one == two
+
+
+def _square(i: int) -> tuple[int, int]:
+    return i, i * i
+
+
+def test_map_trials_with_costs_returns_the_results_in_index_order():
+    """Costliest first across two workers, one item at a time: the results still come back
+    by index, as without costs and in one process."""
+    from sandbox.eval.loocv import map_trials
+
+    cost = [3.0, 9.0, 1.0, 7.0, 7.0, 0.5]
+    want = [(i, i * i) for i in range(6)]
+    for workers in (1, 2):
+        assert map_trials(_square, 6, lambda: None, (), workers=workers, cost=cost) == want
+    assert map_trials(_square, 6, lambda: None, (), workers=2) == want
