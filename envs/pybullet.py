@@ -76,7 +76,7 @@ class Simulation:
         """Load a URDF file as body ``name`` at ``position`` (3,) m, quaternion (x, y, z, w)."""
         if name in self.bodies:
             raise ValueError(f"name: a body called {name!r} exists already")
-        body = self.client.loadURDF(str(path), _vec(position), list(orientation),
+        body = self.client.loadURDF(str(path), vec3(position), list(orientation),
                                     useFixedBase=bool(fixed))
         self.bodies[name] = body
         return body
@@ -88,7 +88,7 @@ class Simulation:
         ``at_rest`` also zeroes its velocity (for a dynamic body moved kinematically).
         """
         body = self.bodies[name]
-        pybullet.resetBasePositionAndOrientation(body, _vec(position), orientation, **self._id)
+        pybullet.resetBasePositionAndOrientation(body, vec3(position), orientation, **self._id)
         if at_rest:
             pybullet.resetBaseVelocity(body, _ZERO, _ZERO, **self._id)
 
@@ -183,7 +183,7 @@ class Simulation:
         if len(positions) != n:
             raise ValueError(f"positions: expected {n} (one per step), got {len(positions)}")
         for position in positions:
-            teleport(body, _vec(position), IDENTITY, **ids)
+            teleport(body, vec3(position), IDENTITY, **ids)
             stop(body, _ZERO, _ZERO, **ids)
             step(**ids)
 
@@ -218,7 +218,7 @@ class Simulation:
         fov : float
             Vertical field of view (degrees).
         """
-        view = self.client.computeViewMatrixFromYawPitchRoll(_vec(target), distance, yaw, pitch,
+        view = self.client.computeViewMatrixFromYawPitchRoll(vec3(target), distance, yaw, pitch,
                                                              0.0, 2)
         proj = self.client.computeProjectionMatrixFOV(fov, width / height, 0.05, 20.0)
         _, _, rgba, _, _ = self.client.getCameraImage(
@@ -240,7 +240,7 @@ def _floats(x: ArrayLike) -> list[float]:
     return np.asarray(x, dtype=float).reshape(-1).tolist()
 
 
-def _vec(x: ArrayLike) -> list[float]:
+def vec3(x: ArrayLike) -> list[float]:
     """``x`` as three Python floats (a list of three floats as it is: see :func:`_floats`)."""
     if type(x) is list and len(x) == 3 and type(x[0]) is type(x[1]) is type(x[2]) is float:
         return x

@@ -31,7 +31,7 @@ from numpy.typing import NDArray
 
 from sandbox import urdf
 from sandbox.envs.human import HumanHand
-from sandbox.envs.pybullet import Simulation
+from sandbox.envs.pybullet import Simulation, vec3
 from sandbox.envs.robot import CLOSED_BELOW, RobotArm
 from sandbox.robot import FLOOR_Z, GRASP_OFFSET
 from sandbox.validation import check_positive
@@ -159,7 +159,7 @@ class HandoverTask:
             return
         a, b, c = self.hold_offset.tolist()
         self.sim.advance(len(hands), self._require_object(),
-                         [[x + a, y + b, z + c] for x, y, z in map(_floats3, hands)])
+                         [[x + a, y + b, z + c] for x, y, z in map(vec3, hands)])
 
     def grasp_point(self) -> FloatArray:
         """World position (3,) m of the object's grasp point."""
@@ -212,10 +212,3 @@ class HandoverTask:
         if self.object is None:
             raise RuntimeError("no object yet: reset the task first")
         return self.object
-
-
-def _floats3(x) -> list[float]:
-    """A position (3,) as three Python floats (an array's own values)."""
-    if type(x) is list and type(x[0]) is type(x[1]) is type(x[2]) is float:
-        return x
-    return x.tolist() if isinstance(x, np.ndarray) else [float(v) for v in x]

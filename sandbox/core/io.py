@@ -144,7 +144,8 @@ def save_model(model: IProMP, path: str | os.PathLike) -> None:
 
 
 def _put_options(model: IProMP, meta: dict) -> None:
-    """Write the options older files lack into ``meta``, only when set (older readers)."""
+    """Write the options older files lack into ``meta``: ``jitter_floor`` always (null too,
+    so a file tells its constant floor from the default), the others only when set."""
     meta["hyperparameters"]["jitter_floor"] = getattr(model, "jitter_floor", None)  # null too
     if getattr(model, "noise_floor", None) == "auto":     # the floors it learned (m)
         meta["floors_used"] = np.asarray(model.floors_used, dtype=float).tolist()

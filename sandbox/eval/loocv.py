@@ -344,7 +344,7 @@ def _run_all(train, test, config: EvalConfig, workers: int, progress: bool) -> l
 
 def trial_costs(trials) -> list[float]:
     """Each trial's duration (s): a fold's work grows with its updates, so with it."""
-    return [float(d.times[-1] - d.times[0]) for d in trials]
+    return [d.duration for d in trials]
 
 
 def map_trials(run_one, n: int, init, initargs: tuple, *, workers: int = 1,

@@ -46,6 +46,7 @@ from typing import Any
 import numpy as np
 
 from sandbox.core.fitting import motion_end
+from sandbox.data.synthetic.base import minimum_jerk
 from sandbox.validation import FloatArray, check_choice
 
 __all__ = ["KINDS", "POINT_GAINS", "emulate_tail", "with_tail"]
@@ -58,11 +59,6 @@ POINT_GAINS = (1.0, 0.6, 0.2)
 HOLD_NOISE_M = 0.0015
 #: How long (s) ``linger`` extends a recording.
 LINGER_S = 1.5
-
-
-def _minjerk(x: FloatArray) -> FloatArray:
-    x = np.clip(x, 0.0, 1.0)
-    return x**3 * (10 - 15 * x + 6 * x**2)
 
 
 def _n_position(demo: Any) -> int:
@@ -148,7 +144,7 @@ def _hold(c: _Context) -> None:
 
 def _drift_back(c: _Context) -> None:
     wait, dist = c.rng.uniform(0.1, 0.3), c.rng.uniform(0.10, 0.25)
-    s = _minjerk((c.t[c.after] - c.t_m - wait) / 0.6)[:, None]
+    s = minimum_jerk((c.t[c.after] - c.t_m - wait) / 0.6)[:, None]
     away = c.start - c.here[:3]
     away = away / max(float(np.linalg.norm(away)), 1e-6) * dist
     c.pos[c.after] = c.here + s * c.along(away) + c.noise(int(c.after.sum()))
@@ -156,7 +152,7 @@ def _drift_back(c: _Context) -> None:
 
 def _stop_short(c: _Context) -> None:
     short = c.rng.uniform(0.03, 0.08)
-    ramp = _minjerk((c.t - 0.5 * c.t_m) / max(0.5 * c.t_m, 1e-9))[:, None]
+    ramp = minimum_jerk((c.t - 0.5 * c.t_m) / max(0.5 * c.t_m, 1e-9))[:, None]
     off = c.along(-short * c.u)
     c.pos[:] = c.pos + ramp * off
     c.pos[c.after] = c.here + off + c.noise(int(c.after.sum()))
@@ -165,7 +161,7 @@ def _stop_short(c: _Context) -> None:
 def _overshoot(c: _Context) -> None:
     over = c.rng.uniform(0.04, 0.08)
     x = c.t[c.after] - c.t_m
-    s = np.where(x < 0.25, _minjerk(x / 0.25), 1 - _minjerk((x - 0.25) / 0.25))[:, None]
+    s = np.where(x < 0.25, minimum_jerk(x / 0.25), 1 - minimum_jerk((x - 0.25) / 0.25))[:, None]
     c.pos[c.after] = c.here + s * c.along(over * c.u) + c.noise(int(c.after.sum()))
 
 
