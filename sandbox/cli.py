@@ -170,12 +170,16 @@ def run(argv: Sequence[str] | None = None) -> NoReturn:
     after the exit handlers, it is ignored: the status is the command's.
     """
     atexit.register(_ignore_late_interrupts)   # the first registered runs last
-    try:
-        status = main(argv)
-    except KeyboardInterrupt:
-        print("error: interrupted", file=sys.stderr)
-        status = 130
-    _interrupts_end_the_process()
+    status: int | None = None
+    while True:   # a Ctrl-C as the handler goes in (seen in CI) is caught here too
+        try:
+            if status is None:
+                status = main(argv)
+            _interrupts_end_the_process()
+            break
+        except KeyboardInterrupt:
+            print("error: interrupted", file=sys.stderr)
+            status = 130
     sys.exit(status)
 
 

@@ -242,6 +242,30 @@ def test_ctrl_c_as_evaluate_finishes_is_never_a_death_by_signal(tmp_path):
     assert proc.returncode in (0, 130) and "Traceback" not in text, text[-800:]
 
 
+def test_a_ctrl_c_while_the_late_handler_goes_in_is_130(monkeypatch, capsys):
+    """issue 26 item 3, seen once more in CI: the SIGINT came while ``run`` was setting
+    its last handler, after the command's work, and escaped as a death by the signal."""
+    import sandbox.cli as cli
+    real, calls = signal.signal, []
+
+    def interrupted_once(signum, handler):
+        calls.append(signum)
+        if len(calls) == 1:
+            raise KeyboardInterrupt
+        return real(signum, handler)
+
+    monkeypatch.setattr(cli, "main", lambda argv=None: 0)
+    monkeypatch.setattr(signal, "signal", interrupted_once)
+    previous = signal.getsignal(signal.SIGINT)
+    try:
+        with pytest.raises(SystemExit) as leaving:
+            cli.run([])
+    finally:
+        real(signal.SIGINT, previous)
+    assert leaving.value.code == 130 and len(calls) == 2
+    assert "error: interrupted" in capsys.readouterr().err
+
+
 def test_a_worker_drops_a_ctrl_c_sent_before_it_set_its_handler():
     """issue 26 item 3: a worker forked with the parent's handler, Ctrl-C'd before its
     initializer ignored SIGINT, left at once (status 130), breaking the pool. It is forked
