@@ -54,9 +54,10 @@ class Prediction:
         Probability that the hand had started moving, against the rest
         hypothesis (:mod:`sandbox.core.rest`); 1 when it was not weighed.
     observations : tuple of ndarray or None
-        The observations ``(times, values)`` it was made from (:func:`predict` keeps
-        them): what :meth:`for_task` conditions another task's robot with, up to
-        that task's end (:func:`conditioned_robot`). None: :attr:`factors` do.
+        The observations ``(times, values)`` it was made from when the robot is
+        conditioned by a scorer of its own (``shrinkage="robot"``'s weights or a
+        ``condition_floor``'s noise, :mod:`sandbox.core.condfloor`): what
+        :meth:`for_task` conditions another task's robot with; None otherwise.
     """
 
     task_index: int
@@ -95,13 +96,13 @@ class Prediction:
         if self.factors is None:
             raise ValueError("for_task: this prediction kept no factors (marginal likelihood)")
         scorer = Scorer(model) if scorer is None else scorer
-        T = float(self.durations[k])
-        if self.observations is None:
-            robot = condition_robot(scorer.weights[k], self.factors[k], model.n_human,
-                                    scorer.rank[k])
-        else:
-            robot = conditioned_robot(model, scorer, *self.observations, k, T, self.factors[k])
-        return replace(self, task_index=int(k), robot=robot, duration=T,
+        factor = self.factors[k]
+        if self.observations is not None:          # the robot's own scorer (conditioner)
+            scorer = scorer.conditioner
+            factor = scorer.joint_pairs(*self.observations, self.durations[k:k + 1],
+                                        np.array([k]))[1][0]
+        robot = condition_robot(scorer.weights[k], factor, model.n_human, scorer.rank[k])
+        return replace(self, task_index=int(k), robot=robot, duration=float(self.durations[k]),
                        task_posterior=self.task_posterior if posterior is None else posterior)
 
     def ended_probability(self, t: float, task: int | None = None) -> float:
@@ -153,49 +154,13 @@ def predict(model: IProMP, scorer: Scorer, times: FloatArray, values: FloatArray
         chosen = post
     k = chosen_task(post, chosen) if task is None else int(task)
     T = float(est.durations[k]) if duration is None else float(duration)
-    factor = est.factors[k] if duration is None and est.factors is not None else None
-    robot = conditioned_robot(model, scorer, times, values, k, T, factor)
+    cond = scorer.conditioner     # shrinkage="robot" or condition_floor: another scorer
+    if cond is scorer and duration is None and est.factors is not None:
+        factor = est.factors[k]
+    else:
+        factor = cond.joint_pairs(times, values, np.array([T]), np.array([k]))[1][0]
+    robot = condition_robot(cond.weights[k], factor, model.n_human, cond.rank[k])
+    observations = None if cond is scorer else (times, values)
     return Prediction(k, post, est.alphas, est.durations, est.log_likelihood, robot, T,
                       est.factors, est.grid, int(np.isfinite(values).sum()), p_motion,
-                      (times, values))
-
-
-def conditioned_robot(model: IProMP, scorer: Scorer, times: FloatArray, values: FloatArray,
-                      k: int, duration: float, factor: FloatArray | None = None
-                      ) -> WeightDistribution:
-    """Task ``k``'s robot weights conditioned on the observations of its motion (eq. 8).
-
-    Only the observations up to the motion's end ``duration`` (s) condition the robot:
-    what the hand does after the meeting (waits, lingers, retracts, overshoots; a frozen
-    tracker) is no evidence about where the partners met, and as the motion's final state
-    it would be counted once per observation (issue 21). At least the first observation
-    is kept. The task posterior and the speeds still score every observation.
-
-    Parameters
-    ----------
-    model : IProMP
-    scorer : Scorer
-        ``Scorer(model)``; the robot is conditioned by its :attr:`~Scorer.conditioner`.
-    times : ndarray, shape (s,)
-        Observation times (s).
-    values : ndarray, shape (s, P)
-        Observations (normalised), NaN where not observed.
-    k : int
-        The task.
-    duration : float
-        Its motion's duration :math:`T` (s).
-    factor : ndarray, shape (R+1, R+1), optional
-        ``scorer``'s augmented factor of all these observations at (``duration``, ``k``),
-        reused when it is what conditions the robot.
-
-    Returns
-    -------
-    WeightDistribution
-        Over the Q robot dims.
-    """
-    cond = scorer.conditioner     # shrinkage="robot" or condition_floor: another scorer
-    keep = times <= max(duration, float(times[0]))
-    if factor is None or cond is not scorer or not keep.all():
-        factor = cond.joint_pairs(times[keep], values[keep], np.array([duration]),
-                                  np.array([k]))[1][0]
-    return condition_robot(cond.weights[k], factor, model.n_human, cond.rank[k])
+                      observations)
