@@ -195,7 +195,7 @@ def test_keys_move_the_hand_and_the_posterior_follows(tmp_path):
     term = Terminal(["--time-limit", "30"], tmp_path)
     try:
         url = term.wait_for(lambda s: re.search(r"meshcat viewer: (http://127\.0\.0\.1:\d+)", s),
-                            what="the viewer's URL")
+                            timeout=240.0, what="the viewer's URL")   # fits first: slow under load
         assert url
         term.wait_for(lambda s: "press space" in s and "q  quit" in s, what="the help")
         assert "observes hand and re-predicts every 0.2 s" in term.text
