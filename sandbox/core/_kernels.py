@@ -169,7 +169,6 @@ def _scores_py(Kt, eps, gamma_term, offset, L, loglik, block: int) -> bool:
     and factors only those rows and the augmented row, in as many lanes as it has
     pairs; the lanes are independent, so none of this changes a result."""
     M, n, _ = Kt.shape
-    R = n - 1
     buf = np.empty((n, n, min(block, M)))
     acc = np.empty(min(block, M))
     write = L.shape[0] == M
