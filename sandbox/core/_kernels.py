@@ -317,8 +317,11 @@ def _pair_stats_py(psi, values, present, tasks, dims, starts, modality, kappa, c
             for p in range(b - a):
                 V = blocks[k, a + p]                                 # (N, R+1)
                 Kt[m] += V.T @ (W @ V)
-                for c in range(N):
-                    eps[m] += (ab[c, p] / columns[0, a + p]) * V[c]
+                e, sp = eps[m], columns[0, a + p]
+                for c in range(N):                  # eps[m] += (ab / sigma) V[c], no temporaries
+                    x = ab[c, p] / sp
+                    for j in range(V.shape[1]):
+                        e[j] += x * V[c, j]
                 if member[k, a + p]:
                     gamma_term[m] += gamma[p] / columns[1, a + p]
                     offset[m] += count * columns[2, a + p] + ld
