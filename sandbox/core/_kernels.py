@@ -72,6 +72,8 @@ def _compile():
     globals()["_factor_block"] = jit(_factor_block_py)
     globals()["_active_rows"] = jit(_active_rows_py)
     globals()["_write_factor"] = jit(_write_factor_py)
+    globals()["_log_pivots"] = jit(_log_pivots_py)
+    globals()["_gather"] = jit(_gather_py)
     globals()["_group_part"] = jit(_group_part_py)
     globals()["_pair_stats"] = jit(_pair_stats_py)
     globals()["_product"] = jit(_product_py)
@@ -167,7 +169,6 @@ def _scores_py(Kt, eps, gamma_term, offset, L, loglik, block: int) -> bool:
     and factors only those rows and the augmented row, in as many lanes as it has
     pairs; the lanes are independent, so none of this changes a result."""
     M, n, _ = Kt.shape
-    R = n - 1
     buf = np.empty((n, n, min(block, M)))
     acc = np.empty(min(block, M))
     write = L.shape[0] == M
@@ -180,28 +181,47 @@ def _scores_py(Kt, eps, gamma_term, offset, L, loglik, block: int) -> bool:
         w = 1
         while w < block and s + w < M and active[s + w] == r:
             w += 1
-        for i in range(r):
-            for j in range(i + 1):
-                for b in range(w):
-                    buf[i, j, b] = Kt[s + b, i, j]
-            for b in range(w):
-                buf[i, i, b] += 1.0                                   # K = I + J
-        for j in range(r):
-            for b in range(w):
-                buf[r, j, b] = eps[s + b, j] - Kt[s + b, j, R]       # e
-        for b in range(w):
-            buf[r, r, b] = gamma_term[s + b] - 2.0 * eps[s + b, R] + Kt[s + b, R, R]
+        _gather(Kt, eps, gamma_term, buf, s, w, r)
         if not _factor_block(buf, acc, r + 1, w):
             return False
         for b in range(w):
             if write:
                 _write_factor(buf, b, r, L[s + b])
-            ld = 0.0
-            for j in range(r):
-                ld += log(buf[j, j, b])
+            ld = _log_pivots(buf, b, r)
             loglik[s + b] = -0.5 * (offset[s + b] + 2.0 * ld + buf[r, r, b] ** 2)
         s += w
     return True
+
+
+def _gather_py(Kt, eps, gamma_term, buf, s: int, w: int, r: int) -> None:
+    """The augmented matrices of pairs ``s .. s+w-1`` (active rows ``r``) into the lanes of
+    ``buf``: K = I + J from the lower triangle of ``Kt``, e and d^T B^-1 d in row r. One
+    pair after another, so that each pair's statistics are read in order (the grid's
+    ``Kt`` is megabytes: read lane by lane, every read of a row was a cache miss)."""
+    R = Kt.shape[1] - 1
+    for b in range(w):
+        K = Kt[s + b]
+        for i in range(r):
+            for j in range(i + 1):
+                buf[i, j, b] = K[i, j]
+            buf[i, i, b] += 1.0                                       # K = I + J
+        for j in range(r):
+            buf[r, j, b] = eps[s + b, j] - K[j, R]                    # e
+        buf[r, r, b] = gamma_term[s + b] - 2.0 * eps[s + b, R] + K[R, R]
+
+
+def _log_pivots_py(buf, b: int, r: int) -> float:
+    """:math:`\\sum_{j<r} \\log` ``buf[j, j, b]`` (half of log|K|) as the log of the pivots'
+    running product, one ``log`` per factor of 1e100 (pivots of K = I + J are about 1 or
+    more): a ``log`` costs some twenty multiplications, and a grid takes r of them per pair.
+    Agrees with the sum of logs within a few units of round-off (relative)."""
+    ld, prod = 0.0, 1.0
+    for j in range(r):
+        prod *= buf[j, j, b]
+        if prod > 1e100 or prod < 1e-100:
+            ld += log(prod)
+            prod = 1.0
+    return ld + log(prod)
 
 
 def _write_factor_py(buf, b: int, r: int, out) -> None:
@@ -297,8 +317,11 @@ def _pair_stats_py(psi, values, present, tasks, dims, starts, modality, kappa, c
             for p in range(b - a):
                 V = blocks[k, a + p]                                 # (N, R+1)
                 Kt[m] += V.T @ (W @ V)
-                for c in range(N):
-                    eps[m] += (ab[c, p] / columns[0, a + p]) * V[c]
+                e, sp = eps[m], columns[0, a + p]
+                for c in range(N):                  # eps[m] += (ab / sigma) V[c], no temporaries
+                    x = ab[c, p] / sp
+                    for j in range(V.shape[1]):
+                        e[j] += x * V[c, j]
                 if member[k, a + p]:
                     gamma_term[m] += gamma[p] / columns[1, a + p]
                     offset[m] += count * columns[2, a + p] + ld
@@ -366,3 +389,5 @@ _pair_stats = _pair_stats_py
 _factor_block = _factor_block_py     # replaced by their compiled versions in _compile
 _active_rows = _active_rows_py
 _write_factor = _write_factor_py
+_log_pivots = _log_pivots_py
+_gather = _gather_py

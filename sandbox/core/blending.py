@@ -79,7 +79,9 @@ def blend_unchecked(means, covs, act):
 def blend_pair(m1, S1, a1, m2, S2, a2):
     """:func:`blend_unchecked` of two distributions given apart (no stacking, no copies):
     means (T, Q), covariances (T, Q, Q), activations (T,) each; the same numbers."""
-    mean, cov, a_acc = _pair(m1, S1, a1, m2, S2, a2)                       # eq. 16
+    if np.all(a1 > 0) and np.all(a2 > 0):         # the usual case: activation 1 after
+        return _product(m1, S1, a1, m2, S2, a2)                            # eq. 16
+    mean, cov, a_acc = _pair(m1, S1, a1, m2, S2, a2)
     if np.any(a_acc != 1.0):
         cov = cov / a_acc[:, None, None]
     return mean, cov

@@ -201,4 +201,4 @@ def condition_robot(weights: WeightDistribution, factor: FloatArray, n_human: in
     if weights.factor.shape[1] > rank:     # columns the observations do not see (compress_human)
         new_factor = np.hstack([new_factor, weights.factor[n_human * N:, rank:]])
     mean = weights.mean[n_human * N:] + U_r @ kinv_e          # eq. 8
-    return WeightDistribution(mean, new_factor, weights.reg[n_human:], N)
+    return WeightDistribution._derived(mean, new_factor, weights.reg[n_human:], N)

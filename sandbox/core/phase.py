@@ -140,12 +140,9 @@ def estimate_phase(scorer: Scorer, tasks, times: FloatArray, values: FloatArray,
         Sufficient statistics of exactly these observations on the lattice
         (:mod:`sandbox.core.statistics`); used for the grid when given (joint mode).
     """
-    nominal = np.array([t.nominal_duration for t in tasks])
-    a_mean = np.array([t.alpha_mean for t in tasks])
-    a_std = np.array([t.alpha_std for t in tasks])
     if stats is not None and mode == "joint":
-        durations, spans = stats.durations, stats.spans
         loglik, factors_of = stats.grid()                 # every task's pairs, one batch
+        layout = stats.layout(tasks)
     else:
         lattice = Lattice.for_tasks(tasks, n_candidates, width)
         durations, spans = lattice.durations, lattice.spans()
@@ -153,17 +150,14 @@ def estimate_phase(scorer: Scorer, tasks, times: FloatArray, values: FloatArray,
                                                                          durations, spans)
         loglik = np.concatenate(scores.loglik)
         factors_of = _picker(None if scores.factors is None else np.concatenate(scores.factors))
-    lengths = spans[:, 1] - spans[:, 0]
-    starts = np.concatenate([[0], np.cumsum(lengths)[:-1]])
-    task_of = np.repeat(np.arange(len(tasks)), lengths)
-    T = durations[np.arange(loglik.size) - np.repeat(starts - spans[:, 0], lengths)]
-    lp = log_alpha_prior(T / nominal[task_of], a_mean[task_of], a_std[task_of])  # eq. 10
+        layout = GridLayout.of(tasks, durations, spans)
+    nominal, a_mean, a_std = layout.nominal, layout.alpha_mean, layout.alpha_std
+    lengths, starts, T, lp = layout.lengths, layout.starts, layout.T, layout.log_prior
     f = loglik + lp                               # eq. 11: log posterior (eq. 12 + prior)
     best = _argmax_per_task(f, starts, lengths)   # eq. 13
     w = np.exp(f - np.repeat(f[best], lengths))
     w /= np.repeat(np.add.reduceat(w, starts), lengths)
-    cuts = list(zip(starts.tolist(), (starts + lengths).tolist()))
-    grid = [(T[a:b], w[a:b]) for a, b in cuts]
+    grid = [(T[a:b], w[a:b]) for a, b in layout.cuts]
     best_T, best_ll, best_lp = T[best], loglik[best], lp[best]
     factors = factors_of(best)
     brackets = [None if i in (a, a + n - 1) else
@@ -174,6 +168,52 @@ def estimate_phase(scorer: Scorer, tasks, times: FloatArray, values: FloatArray,
         brackets = _refine(pairs, times, values, tasks, brackets, nominal, a_mean, a_std,
                            best_T, best_ll, best_lp, factors)
     return PhaseEstimate(best_T, best_T / nominal, best_ll, best_lp, factors, lengths, grid)
+
+
+@dataclass(frozen=True, eq=False)
+class GridLayout:
+    """What the phase grid of :func:`estimate_phase` needs besides the likelihoods: it
+    depends only on the tasks and the lattice, so a stream's statistics keep it
+    (:meth:`~sandbox.core.statistics.StreamStatistics.layout`).
+
+    Attributes
+    ----------
+    nominal, alpha_mean, alpha_std : ndarray, shape (K,)
+        Each task's :math:`T_{nom}` (s) and speed prior.
+    lengths, starts : ndarray of int, shape (K,)
+        Each task's candidates and where they start in the packed grid.
+    T : ndarray, shape (M,)
+        The duration (s) of every packed (candidate, task) pair.
+    log_prior : ndarray, shape (M,)
+        :math:`\\log p(\\alpha)` of every pair (eq. 10).
+    cuts : list of (int, int)
+        Each task's ``[start, stop)`` in the packed grid.
+    """
+
+    nominal: FloatArray
+    alpha_mean: FloatArray
+    alpha_std: FloatArray
+    lengths: np.ndarray
+    starts: np.ndarray
+    T: FloatArray
+    log_prior: FloatArray
+    cuts: list
+
+    @classmethod
+    def of(cls, tasks, durations: FloatArray, spans: np.ndarray) -> GridLayout:
+        """The layout of ``tasks`` on the lattice ``durations`` (C,) with ``spans`` (K, 2)."""
+        nominal = np.array([t.nominal_duration for t in tasks])
+        a_mean = np.array([t.alpha_mean for t in tasks])
+        a_std = np.array([t.alpha_std for t in tasks])
+        lengths = spans[:, 1] - spans[:, 0]
+        starts = np.concatenate([[0], np.cumsum(lengths)[:-1]])
+        task_of = np.repeat(np.arange(len(tasks)), lengths)
+        T = durations[np.arange(int(lengths.sum())) - np.repeat(starts - spans[:, 0], lengths)]
+        lp = log_alpha_prior(T / nominal[task_of], a_mean[task_of], a_std[task_of])  # eq. 10
+        cuts = list(zip(starts.tolist(), (starts + lengths).tolist()))
+        for a in (nominal, a_mean, a_std, lengths, starts, T, lp):
+            a.setflags(write=False)
+        return cls(nominal, a_mean, a_std, lengths, starts, T, lp, cuts)
 
 
 def _picker(factors: FloatArray | None):

@@ -107,6 +107,23 @@ class WeightDistribution:
         object.__setattr__(self, "reg", reg)
         object.__setattr__(self, "n_basis", n)
 
+    @classmethod
+    def _derived(cls, mean: FloatArray, factor: FloatArray, reg: FloatArray,
+                 n_basis: int) -> WeightDistribution:
+        """A distribution computed from checked ones (a posterior: the inner loop of an
+        update), without the constructor's checks of shapes and signs; infinite or NaN
+        entries are still a ``ValueError``. ``mean`` and ``factor`` must be new arrays (they
+        are made read-only, not copied); ``reg`` a read-only one."""
+        if not (np.isfinite(mean).all() and np.isfinite(factor).all()):
+            raise ValueError("mean, factor: expected finite values, got infinity or NaN")
+        out = object.__new__(cls)
+        for name, a in (("mean", mean), ("factor", factor), ("reg", reg)):
+            a = np.asarray(a, dtype=np.float64)
+            a.setflags(write=False)
+            object.__setattr__(out, name, a)
+        object.__setattr__(out, "n_basis", int(n_basis))
+        return out
+
     @property
     def n_dims(self) -> int:
         """Number of trajectory dims D."""

@@ -44,7 +44,7 @@ from sandbox.core import _kernels
 from sandbox.core.factor import factor_loglik, factor_scores
 from sandbox.core.interaction import LOG_2PI
 from sandbox.core.likelihood import Scorer, Scores
-from sandbox.core.phase import Lattice
+from sandbox.core.phase import GridLayout, Lattice
 
 
 class _GroupStats:
@@ -83,6 +83,7 @@ class StreamStatistics:
         self.pairs = np.array([(k, c) for k, (a, b) in enumerate(spans) for c in range(a, b)],
                               dtype=np.int64).reshape(-1, 2).T
         self.cuts = np.cumsum(spans[:, 1] - spans[:, 0])[:-1]
+        self._layout: tuple[object, GridLayout] | None = None
         self.reset()
 
     def reset(self) -> None:
@@ -174,6 +175,14 @@ class StreamStatistics:
             return self.packed_loglik(), self.pair_factors
         ll, L = self.packed_scores()
         return ll, lambda index: L[index]
+
+    def layout(self, tasks) -> GridLayout:
+        """The phase grid's :class:`~sandbox.core.phase.GridLayout` of ``tasks`` (a sequence
+        of :class:`~sandbox.core.model.TaskModel`) on this lattice, made once per sequence:
+        it depends on no observation."""
+        if self._layout is None or self._layout[0] is not tasks:
+            self._layout = (tasks, GridLayout.of(tasks, self.durations, self.spans))
+        return self._layout[1]
 
     def pair_factors(self, index: np.ndarray) -> np.ndarray:
         """Augmented factors (n, R+1, R+1) of the packed pairs ``index`` (n,): the same

@@ -227,3 +227,20 @@ def test_the_blend_kernel_matches_the_numpy_path_and_leaves_singular_knots_to_it
     got = blend_pair(*args)
     for a, b in zip(ref, got):
         np.testing.assert_array_equal(b, a)
+
+
+def test_the_log_determinant_survives_pivots_whose_product_overflows(monkeypatch):
+    """The kernel sums log|K| as the log of the pivots' running product, flushed every
+    factor of 1e100: pivots of 1e40 over 30 rows (a product of 1e1200) and of 1e-4 (1e-120:
+    a matrix that is not I + J, for the other side) give the numpy path's log-likelihoods."""
+    pytest.importorskip("numba")
+    M, R = 6, 30
+    Kt, eps, gamma, offset = _pairs(np.random.default_rng(8), M, R)
+    Kt *= 1e-3
+    idx = np.arange(R)
+    Kt[:3, idx, idx] += 1e80                          # K = I + J with pivots about 1e40
+    Kt[3:, :R, :R] = np.eye(R) * (1e-8 - 1.0)           # K = I + J = 1e-8 I: pivots 1e-4
+    Kt[3:, :R, R] = Kt[3:, R, :R] = eps[3:, :R] = 0.0    # e = 0: the last pivot is kept
+    (ll0, _), (ll1, _) = _both(monkeypatch, Kt, eps, gamma, offset)
+    assert np.all(np.isfinite(ll0))
+    np.testing.assert_allclose(ll1, ll0, rtol=1e-12, atol=0)

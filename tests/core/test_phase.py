@@ -74,3 +74,34 @@ def test_refinement_never_lowers_the_objective(model):
     fine = estimate_phase(scorer, model.task_models, t, y, refine_steps=3)
     objective = fine.log_likelihood + fine.log_prior
     assert np.all(objective >= grid.log_likelihood + grid.log_prior - 1e-9)
+
+
+def test_the_grid_layout_is_kept_by_the_statistics_and_is_what_the_lattice_gives(model):
+    """StreamStatistics.layout: made once per tasks sequence (the same object afterwards),
+    equal to GridLayout.of on the lattice, read-only; the estimates with and without the
+    statistics share its grid and agree to round-off."""
+    from sandbox.core.phase import GridLayout
+    from sandbox.core.statistics import StreamStatistics
+
+    tasks = model.task_models
+    scorer = Scorer(model)
+    lattice = Lattice.for_tasks(tasks, 30)
+    stats = StreamStatistics(scorer, lattice)
+    demo = synth.replay(1, 2.0, noise=0.002, rng=np.random.default_rng(3))
+    t, y = demo.times[:90:5] - demo.times[0], demo.human[:90:5]
+    for ti, yi in zip(t, y):
+        stats.add(ti, yi)
+    layout = stats.layout(tasks)
+    assert stats.layout(tasks) is layout
+    fresh = GridLayout.of(tasks, lattice.durations, lattice.spans())
+    for name in ("nominal", "alpha_mean", "alpha_std", "lengths", "starts", "T", "log_prior"):
+        np.testing.assert_array_equal(getattr(layout, name), getattr(fresh, name))
+        assert not getattr(layout, name).flags.writeable
+    assert layout.cuts == fresh.cuts
+    assert layout.T.size == int(layout.lengths.sum()) == stats.pairs.shape[1]
+    a = estimate_phase(scorer, tasks, t, y, n_candidates=30, stats=stats)
+    b = estimate_phase(scorer, tasks, t, y, n_candidates=30)
+    np.testing.assert_allclose(a.durations, b.durations, rtol=1e-9)
+    for (Ta, wa), (Tb, wb) in zip(a.grid, b.grid):
+        np.testing.assert_array_equal(Ta, Tb)
+        np.testing.assert_allclose(wa, wb, rtol=1e-6, atol=1e-12)

@@ -57,3 +57,23 @@ def test_bad_distribution():
         WeightDistribution(np.zeros(4), np.zeros((4, 1)), np.array([1.0, 0.0]), 2)
     with pytest.raises(ValueError, match="entries"):
         WeightDistribution(np.zeros(5), np.zeros((5, 1)), np.array([1.0, 1.0]), 2)
+
+
+def test_a_derived_distribution_is_the_checked_one_and_refuses_non_finite_values():
+    """WeightDistribution._derived (an update's posterior, no shape checks): the same arrays as
+    the public constructor, read-only; NaN or infinity is still a ValueError."""
+    rng = np.random.default_rng(0)
+    mean, factor, reg = rng.normal(size=10), rng.normal(size=(10, 3)), np.array([0.1, 0.2])
+    reg.setflags(write=False)
+    ref = WeightDistribution(mean.copy(), factor.copy(), reg, 5)
+    got = WeightDistribution._derived(mean.copy(), factor.copy(), reg, 5)
+    for name in ("mean", "factor", "reg"):
+        np.testing.assert_array_equal(getattr(got, name), getattr(ref, name))
+        assert not getattr(got, name).flags.writeable
+    assert got.n_basis == 5 and got.n_dims == 2
+    bad = factor.copy()
+    bad[2, 1] = np.nan
+    with pytest.raises(ValueError, match="finite"):
+        WeightDistribution._derived(mean.copy(), bad, reg, 5)
+    with pytest.raises(ValueError, match="finite"):
+        WeightDistribution._derived(np.full(10, np.inf), factor.copy(), reg, 5)
