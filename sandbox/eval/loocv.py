@@ -36,6 +36,7 @@ from sandbox.core.phase import Lattice
 from sandbox.core.statistics import StreamStatistics
 from sandbox.core.stream import ObservationStream
 from sandbox.eval import metrics
+from sandbox.eval.oracle import held_trajectory, oracle_robot
 from sandbox.eval.progress import bar
 
 RATIOS = tuple(round(0.1 * i, 1) for i in range(1, 10))
@@ -144,7 +145,7 @@ def evaluate_trial(model: IProMP, test, config: EvalConfig, fk, truth=None) -> d
     t_obs, y_obs = kept_observations(model, t, test.human, config.subsample)
     opts = dict(likelihood=config.likelihood, n_candidates=config.n_candidates,
                 refine_steps=config.refine_steps)
-    oracle = predict(model, scorer, t_obs, y_obs, task=k, duration=T, **opts)
+    oracle = oracle_robot(model, scorer, t_obs, y_obs, k, T)
     windows = {w: update_times(t, t_obs, w) for w in config.windows}
     cuts = {f: f * T for f in config.ratios}
     shared = set(cuts.values())
@@ -152,7 +153,8 @@ def evaluate_trial(model: IProMP, test, config: EvalConfig, fk, truth=None) -> d
         shared |= {x for times in windows.values() for x in times}
     preds = predictions_at(model, scorer, t_obs, y_obs, sorted(shared), config, opts)
     out = {"task": test.task, "source": test.source, "duration": T,
-           "oracle": _score(oracle.trajectory(model.basis, t), q, goal, fk, 0.0), "static": {}}
+           "oracle": _score(held_trajectory(oracle, T, model.basis, t), q, goal, fk, 0.0),
+           "static": {}}
     for f, cut in cuts.items():
         pred = preds[cut]
         res = _score(pred.trajectory(model.basis, t), q, goal, fk, abs(pred.duration - T))
@@ -190,9 +192,9 @@ def predictions_at(model, scorer, t_obs, y_obs, times, config, opts) -> dict:
 def _score(traj, q, goal, fk, e_phi) -> dict:
     mean, cov = traj
     e_q = None if fk is metrics.task_goal else metrics.joint_rms(mean, q)   # n/a in task space
+    nll, coverage = metrics.calibration(q, mean, cov)
     return {"e_p": float(np.linalg.norm(fk(mean[-1]) - goal)),
-            "e_q": e_q, "e_phi": float(e_phi),
-            "nll": metrics.gaussian_nll(q, mean, cov), "coverage": metrics.coverage(q, mean, cov)}
+            "e_q": e_q, "e_phi": float(e_phi), "nll": nll, "coverage": coverage}
 
 
 def _dynamic(pred, test, t, q, T, goal, fk, config, times, preds, t_obs) -> dict:

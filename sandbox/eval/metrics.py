@@ -72,20 +72,41 @@ def time_to_correct(fractions: FloatArray, goal_errors: FloatArray, tol: float =
 
 def gaussian_nll(q: FloatArray, mean: FloatArray, cov: FloatArray) -> float:
     """Mean over steps of :math:`-\\log\\mathcal{N}(q_t; \\mu_t, \\Sigma_t)` (nats per step)."""
-    d = (np.asarray(q) - mean)[..., None]
-    L = np.linalg.cholesky(cov)
-    w = np.linalg.solve(L, d)[..., 0]
-    logdet = 2.0 * np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(axis=-1)
-    Q = mean.shape[-1]
-    return float(np.mean(0.5 * (Q * np.log(2 * np.pi) + logdet + (w**2).sum(axis=-1))))
+    return calibration(q, mean, cov)[0]
 
 
 def coverage(q: FloatArray, mean: FloatArray, cov: FloatArray) -> float:
     """Fraction of steps whose true q lies in the 95 % ellipsoid of N(mean_t, cov_t)."""
+    return calibration(q, mean, cov)[1]
+
+
+def calibration(q: FloatArray, mean: FloatArray, cov: FloatArray) -> tuple[float, float]:
+    """:func:`gaussian_nll` and :func:`coverage` of one predicted distribution, from one
+    Cholesky factorisation of its covariances.
+
+    Parameters
+    ----------
+    q : ndarray, shape (T, Q)
+        True robot joints (rad).
+    mean : ndarray, shape (T, Q)
+    cov : ndarray, shape (T, Q, Q)
+        Predicted per-step distribution.
+
+    Returns
+    -------
+    nll : float
+        Mean over steps of :math:`-\\log\\mathcal{N}(q_t; \\mu_t, \\Sigma_t)` (nats per step).
+    coverage : float
+        Fraction of steps whose q lies in the 95 % ellipsoid.
+    """
     d = (np.asarray(q) - mean)[..., None]
-    w = np.linalg.solve(np.linalg.cholesky(cov), d)[..., 0]
+    L = np.linalg.cholesky(cov)
+    m2 = (np.linalg.solve(L, d)[..., 0] ** 2).sum(axis=-1)      # squared Mahalanobis (T,)
+    logdet = 2.0 * np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(axis=-1)
+    Q = mean.shape[-1]
+    nll = float(np.mean(0.5 * (Q * np.log(2 * np.pi) + logdet + m2)))
     # the chi-square 95 % quantile, as scipy.stats.chi2.ppf computes it (equal to the bit)
-    return float(np.mean((w**2).sum(axis=-1) <= 2.0 * gammaincinv(mean.shape[-1] / 2.0, 0.95)))
+    return nll, float(np.mean(m2 <= 2.0 * gammaincinv(Q / 2.0, 0.95)))
 
 
 def window_metric(errors: dict[str, Sequence[float]], gamma: Sequence[float]) -> list[float]:
