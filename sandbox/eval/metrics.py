@@ -128,7 +128,7 @@ def window_metric(errors: dict[str, Sequence[float]], gamma: Sequence[float]) ->
 
 def bootstrap_ci(values: FloatArray, groups: FloatArray | None = None, *, n_boot: int = 1000,
                  level: float = 0.95, rng: np.random.Generator | None = None,
-                 statistic: Callable | None = None,
+                 statistic: Callable | str | None = None,
                  draws: list[np.ndarray] | None = None) -> tuple[float, float]:
     """Percentile bootstrap confidence interval of a mean (or ``statistic``).
 
@@ -146,9 +146,11 @@ def bootstrap_ci(values: FloatArray, groups: FloatArray | None = None, *, n_boot
         Coverage of the interval.
     rng : numpy.random.Generator, optional
         Source of the resamples (default: seeded with 0).
-    statistic : callable, optional
+    statistic : callable or "pooled", optional
         ``statistic(values, groups) -> float`` of a resample; default the macro
         mean (mean over groups of the group means), computed for all resamples at once.
+        ``"pooled"``: the mean over all resampled values (e.g. a share of trials),
+        computed for all resamples at once, equal to ``lambda v, g: v.mean()``.
     draws : list of ndarray, optional
         The resamples, as returned by :func:`within_group_draws` for these
         ``groups``; pass them to reuse one set of resamples over many measures
@@ -163,6 +165,10 @@ def bootstrap_ci(values: FloatArray, groups: FloatArray | None = None, *, n_boot
         draws = within_group_draws(groups, n_boot, rng)
     if statistic is None:
         samples = macro_mean_samples(values, draws)
+    elif statistic == "pooled":
+        samples = values[np.concatenate(draws, axis=1)].mean(axis=1)
+    elif isinstance(statistic, str):
+        raise ValueError(f"statistic: expected a callable or 'pooled', got {statistic!r}")
     else:
         picks = np.concatenate(draws, axis=1)
         samples = np.array([statistic(values[p], groups[p]) for p in picks])
@@ -192,11 +198,14 @@ def within_group_draws(groups: Sequence, n_boot: int,
     """
     groups = np.asarray(groups)
     members = [np.flatnonzero(groups == g) for g in np.unique(groups)]
-    draws = [np.empty((n_boot, m.size), dtype=int) for m in members]
-    for b in range(n_boot):
-        for d, m in zip(draws, members):
-            d[b] = rng.choice(m, size=m.size, replace=True)
-    return draws
+    sizes = np.array([m.size for m in members], dtype=np.int64)
+    # one call, in the order of resample by resample and group by group: each position
+    # draws below its group's size, the same numbers as rng.choice(m, size=m.size) per
+    # group and resample (Generator.integers with an array bound)
+    picks = rng.integers(0, np.tile(np.repeat(sizes, sizes), n_boot))
+    picks = picks.reshape(n_boot, int(sizes.sum()))
+    ends = np.cumsum(sizes)
+    return [m[picks[:, end - m.size:end]] for m, end in zip(members, ends)]
 
 
 def macro_mean_samples(values: FloatArray, draws: list[np.ndarray]) -> FloatArray:
