@@ -350,7 +350,7 @@ def trial_costs(trials) -> list[float]:
 
 
 def map_trials(run_one, n: int, init, initargs: tuple, *, workers: int = 1,
-               progress: bool = False, cost=None) -> list:
+               progress: bool = False, cost=None, meanwhile=None) -> list:
     """``[run_one(i) for i in range(n)]`` after ``init(*initargs)``, in this process or in
     ``workers`` forked processes (each initialised once), on one BLAS thread, in order.
 
@@ -358,6 +358,9 @@ def map_trials(run_one, n: int, init, initargs: tuple, *, workers: int = 1,
     work (e.g. :func:`trial_costs`): the workers then take the items one at a time,
     costliest first, so that none waits long for the others at the end (in chunks of
     ``n / (8 workers)`` in index order without it). The results are the same either way.
+    Before forking, this process loads numba's kernel (once for all the workers); a
+    ``meanwhile`` callable is called instead once the workers have started (e.g. loading
+    that kernel while they load data: workers forked later inherit it).
     """
     results: list = [None] * n
     with one_blas_thread(), bar(n, "trials", progress) as shown:
@@ -367,13 +370,16 @@ def map_trials(run_one, n: int, init, initargs: tuple, *, workers: int = 1,
                 results[i] = run_one(i)
                 shown.update()
             return results
-        _kernels.factor_kernel(1)    # numba's kernel loaded once here, not in every worker
+        if meanwhile is None:
+            _kernels.factor_kernel(1)    # numba's kernel loaded once here, not in every worker
         order = list(range(n)) if cost is None else sorted(range(n), key=lambda i: -cost[i])
         chunk = max(1, n // (8 * workers)) if cost is None else 1
         with ProcessPoolExecutor(workers, mp_context=get_context("fork"),
                                  initializer=_init_worker, initargs=(init, initargs)) as pool:
             with _sigint_blocked():      # the workers are forked here, by the first submit
                 answers = pool.map(run_one, order, chunksize=chunk)
+            if meanwhile is not None:
+                meanwhile()
             for i, res in zip(order, answers):
                 results[i] = res
                 shown.update()
