@@ -34,14 +34,49 @@ def load_pair(data: str, *, seed: int = 0, tasks=None, n_per_task=None, spec=Non
         kw["on_trial"] = shown.update if folder is not None else None
         if isinstance(data, str) and data.startswith("synthetic"):
             train, test = _synthetic_pair(data, kw, workers)
+            more: list[str] = []
+        elif folder and workers > 1:
+            train, test, more = _folder_pair(data, kw)
+            shown.update(2 * folder)      # the workers draw no bar: it fills at the end
         else:
             train = load_dataset(data, preprocess="smooth", **kw)
             test = load_dataset(data, preprocess="causal", **kw)
-    skipped = sorted({str(w.message) for w in caught})
+            more = []
+    skipped = sorted({str(w.message) for w in caught} | set(more))
     keep = {d.source for d in train} & {d.source for d in test}
     train = [d for d in train if d.source in keep]
     test = [d for d in test if d.source in keep]
     return train, test, skipped
+
+
+def _folder_pair(data, kw: dict) -> tuple[list, list, list[str]]:
+    """A folder's two versions loaded at once by two forked processes (each version one
+    :func:`~sandbox.data.datasets.load_dataset`: the same trials), while this process
+    loads numba's kernel, which the leave-one-out's workers then inherit. Returns
+    ``(train, test, warnings)``: the workers' warnings (skipped files) as text."""
+    from sandbox.core import _kernels
+    from sandbox.eval.loocv import map_trials
+
+    kw = {**kw, "on_trial": None}
+    try:
+            versions = map_trials(_one_version, 2, _RAW.__setitem__, ("folder", (data, kw)),
+                              workers=2, meanwhile=lambda: _kernels.factor_kernel(1))
+    finally:
+        _RAW.clear()
+    (train, warned_train), (test, warned_test) = versions
+    return train, test, warned_train + warned_test
+
+
+def _one_version(i: int) -> tuple[list, list[str]]:
+    """Version ``i`` (0: smooth, 1: causal) of the folder in ``_RAW``, with the text of the
+    warnings raised while loading it."""
+    from sandbox.data.datasets import load_dataset
+
+    data, kw = _RAW["folder"]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        demos = load_dataset(data, preprocess=("smooth", "causal")[i], **kw)
+    return demos, [str(w.message) for w in caught]
 
 
 def _synthetic_pair(data: str, kw: dict, workers: int = 1) -> tuple[list, list]:

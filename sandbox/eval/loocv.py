@@ -36,6 +36,7 @@ from sandbox.core.phase import Lattice
 from sandbox.core.statistics import StreamStatistics
 from sandbox.core.stream import ObservationStream
 from sandbox.eval import metrics
+from sandbox.eval.oracle import held_trajectory, oracle_robot
 from sandbox.eval.progress import bar
 
 RATIOS = tuple(round(0.1 * i, 1) for i in range(1, 10))
@@ -144,7 +145,7 @@ def evaluate_trial(model: IProMP, test, config: EvalConfig, fk, truth=None) -> d
     t_obs, y_obs = kept_observations(model, t, test.human, config.subsample)
     opts = dict(likelihood=config.likelihood, n_candidates=config.n_candidates,
                 refine_steps=config.refine_steps)
-    oracle = predict(model, scorer, t_obs, y_obs, task=k, duration=T, **opts)
+    oracle = oracle_robot(model, scorer, t_obs, y_obs, k, T)
     windows = {w: update_times(t, t_obs, w) for w in config.windows}
     cuts = {f: f * T for f in config.ratios}
     shared = set(cuts.values())
@@ -152,7 +153,8 @@ def evaluate_trial(model: IProMP, test, config: EvalConfig, fk, truth=None) -> d
         shared |= {x for times in windows.values() for x in times}
     preds = predictions_at(model, scorer, t_obs, y_obs, sorted(shared), config, opts)
     out = {"task": test.task, "source": test.source, "duration": T,
-           "oracle": _score(oracle.trajectory(model.basis, t), q, goal, fk, 0.0), "static": {}}
+           "oracle": _score(held_trajectory(oracle, T, model.basis, t), q, goal, fk, 0.0),
+           "static": {}}
     for f, cut in cuts.items():
         pred = preds[cut]
         res = _score(pred.trajectory(model.basis, t), q, goal, fk, abs(pred.duration - T))
@@ -190,9 +192,9 @@ def predictions_at(model, scorer, t_obs, y_obs, times, config, opts) -> dict:
 def _score(traj, q, goal, fk, e_phi) -> dict:
     mean, cov = traj
     e_q = None if fk is metrics.task_goal else metrics.joint_rms(mean, q)   # n/a in task space
+    nll, coverage = metrics.calibration(q, mean, cov)
     return {"e_p": float(np.linalg.norm(fk(mean[-1]) - goal)),
-            "e_q": e_q, "e_phi": float(e_phi),
-            "nll": metrics.gaussian_nll(q, mean, cov), "coverage": metrics.coverage(q, mean, cov)}
+            "e_q": e_q, "e_phi": float(e_phi), "nll": nll, "coverage": coverage}
 
 
 def _dynamic(pred, test, t, q, T, goal, fk, config, times, preds, t_obs) -> dict:
@@ -348,7 +350,7 @@ def trial_costs(trials) -> list[float]:
 
 
 def map_trials(run_one, n: int, init, initargs: tuple, *, workers: int = 1,
-               progress: bool = False, cost=None) -> list:
+               progress: bool = False, cost=None, meanwhile=None) -> list:
     """``[run_one(i) for i in range(n)]`` after ``init(*initargs)``, in this process or in
     ``workers`` forked processes (each initialised once), on one BLAS thread, in order.
 
@@ -356,6 +358,9 @@ def map_trials(run_one, n: int, init, initargs: tuple, *, workers: int = 1,
     work (e.g. :func:`trial_costs`): the workers then take the items one at a time,
     costliest first, so that none waits long for the others at the end (in chunks of
     ``n / (8 workers)`` in index order without it). The results are the same either way.
+    Before forking, this process loads numba's kernel (once for all the workers); a
+    ``meanwhile`` callable is called instead once the workers have started (e.g. loading
+    that kernel while they load data: workers forked later inherit it).
     """
     results: list = [None] * n
     with one_blas_thread(), bar(n, "trials", progress) as shown:
@@ -365,13 +370,16 @@ def map_trials(run_one, n: int, init, initargs: tuple, *, workers: int = 1,
                 results[i] = run_one(i)
                 shown.update()
             return results
-        _kernels.factor_kernel(1)    # numba's kernel loaded once here, not in every worker
+        if meanwhile is None:
+            _kernels.factor_kernel(1)    # numba's kernel loaded once here, not in every worker
         order = list(range(n)) if cost is None else sorted(range(n), key=lambda i: -cost[i])
         chunk = max(1, n // (8 * workers)) if cost is None else 1
         with ProcessPoolExecutor(workers, mp_context=get_context("fork"),
                                  initializer=_init_worker, initargs=(init, initargs)) as pool:
             with _sigint_blocked():      # the workers are forked here, by the first submit
                 answers = pool.map(run_one, order, chunksize=chunk)
+            if meanwhile is not None:
+                meanwhile()
             for i, res in zip(order, answers):
                 results[i] = res
                 shown.update()

@@ -72,20 +72,41 @@ def time_to_correct(fractions: FloatArray, goal_errors: FloatArray, tol: float =
 
 def gaussian_nll(q: FloatArray, mean: FloatArray, cov: FloatArray) -> float:
     """Mean over steps of :math:`-\\log\\mathcal{N}(q_t; \\mu_t, \\Sigma_t)` (nats per step)."""
-    d = (np.asarray(q) - mean)[..., None]
-    L = np.linalg.cholesky(cov)
-    w = np.linalg.solve(L, d)[..., 0]
-    logdet = 2.0 * np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(axis=-1)
-    Q = mean.shape[-1]
-    return float(np.mean(0.5 * (Q * np.log(2 * np.pi) + logdet + (w**2).sum(axis=-1))))
+    return calibration(q, mean, cov)[0]
 
 
 def coverage(q: FloatArray, mean: FloatArray, cov: FloatArray) -> float:
     """Fraction of steps whose true q lies in the 95 % ellipsoid of N(mean_t, cov_t)."""
+    return calibration(q, mean, cov)[1]
+
+
+def calibration(q: FloatArray, mean: FloatArray, cov: FloatArray) -> tuple[float, float]:
+    """:func:`gaussian_nll` and :func:`coverage` of one predicted distribution, from one
+    Cholesky factorisation of its covariances.
+
+    Parameters
+    ----------
+    q : ndarray, shape (T, Q)
+        True robot joints (rad).
+    mean : ndarray, shape (T, Q)
+    cov : ndarray, shape (T, Q, Q)
+        Predicted per-step distribution.
+
+    Returns
+    -------
+    nll : float
+        Mean over steps of :math:`-\\log\\mathcal{N}(q_t; \\mu_t, \\Sigma_t)` (nats per step).
+    coverage : float
+        Fraction of steps whose q lies in the 95 % ellipsoid.
+    """
     d = (np.asarray(q) - mean)[..., None]
-    w = np.linalg.solve(np.linalg.cholesky(cov), d)[..., 0]
+    L = np.linalg.cholesky(cov)
+    m2 = (np.linalg.solve(L, d)[..., 0] ** 2).sum(axis=-1)      # squared Mahalanobis (T,)
+    logdet = 2.0 * np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(axis=-1)
+    Q = mean.shape[-1]
+    nll = float(np.mean(0.5 * (Q * np.log(2 * np.pi) + logdet + m2)))
     # the chi-square 95 % quantile, as scipy.stats.chi2.ppf computes it (equal to the bit)
-    return float(np.mean((w**2).sum(axis=-1) <= 2.0 * gammaincinv(mean.shape[-1] / 2.0, 0.95)))
+    return nll, float(np.mean(m2 <= 2.0 * gammaincinv(Q / 2.0, 0.95)))
 
 
 def window_metric(errors: dict[str, Sequence[float]], gamma: Sequence[float]) -> list[float]:
@@ -107,7 +128,7 @@ def window_metric(errors: dict[str, Sequence[float]], gamma: Sequence[float]) ->
 
 def bootstrap_ci(values: FloatArray, groups: FloatArray | None = None, *, n_boot: int = 1000,
                  level: float = 0.95, rng: np.random.Generator | None = None,
-                 statistic: Callable | None = None,
+                 statistic: Callable | str | None = None,
                  draws: list[np.ndarray] | None = None) -> tuple[float, float]:
     """Percentile bootstrap confidence interval of a mean (or ``statistic``).
 
@@ -125,9 +146,11 @@ def bootstrap_ci(values: FloatArray, groups: FloatArray | None = None, *, n_boot
         Coverage of the interval.
     rng : numpy.random.Generator, optional
         Source of the resamples (default: seeded with 0).
-    statistic : callable, optional
+    statistic : callable or "pooled", optional
         ``statistic(values, groups) -> float`` of a resample; default the macro
         mean (mean over groups of the group means), computed for all resamples at once.
+        ``"pooled"``: the mean over all resampled values (e.g. a share of trials),
+        computed for all resamples at once, equal to ``lambda v, g: v.mean()``.
     draws : list of ndarray, optional
         The resamples, as returned by :func:`within_group_draws` for these
         ``groups``; pass them to reuse one set of resamples over many measures
@@ -142,6 +165,10 @@ def bootstrap_ci(values: FloatArray, groups: FloatArray | None = None, *, n_boot
         draws = within_group_draws(groups, n_boot, rng)
     if statistic is None:
         samples = macro_mean_samples(values, draws)
+    elif statistic == "pooled":
+        samples = values[np.concatenate(draws, axis=1)].mean(axis=1)
+    elif isinstance(statistic, str):
+        raise ValueError(f"statistic: expected a callable or 'pooled', got {statistic!r}")
     else:
         picks = np.concatenate(draws, axis=1)
         samples = np.array([statistic(values[p], groups[p]) for p in picks])
@@ -171,11 +198,14 @@ def within_group_draws(groups: Sequence, n_boot: int,
     """
     groups = np.asarray(groups)
     members = [np.flatnonzero(groups == g) for g in np.unique(groups)]
-    draws = [np.empty((n_boot, m.size), dtype=int) for m in members]
-    for b in range(n_boot):
-        for d, m in zip(draws, members):
-            d[b] = rng.choice(m, size=m.size, replace=True)
-    return draws
+    sizes = np.array([m.size for m in members], dtype=np.int64)
+    # one call, in the order of resample by resample and group by group: each position
+    # draws below its group's size, the same numbers as rng.choice(m, size=m.size) per
+    # group and resample (Generator.integers with an array bound)
+    picks = rng.integers(0, np.tile(np.repeat(sizes, sizes), n_boot))
+    picks = picks.reshape(n_boot, int(sizes.sum()))
+    ends = np.cumsum(sizes)
+    return [m[picks[:, end - m.size:end]] for m, end in zip(members, ends)]
 
 
 def macro_mean_samples(values: FloatArray, draws: list[np.ndarray]) -> FloatArray:

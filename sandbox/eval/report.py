@@ -71,7 +71,7 @@ def _section(trials: list[dict], tasks: list[str], get, keys, n_boot: int,
             if task == "mean" and key == "recognition" and values.size:
                 entry["recognition_share"] = float(values.mean())     # of trials, not tasks
                 entry["recognition_share_ci"] = list(metrics.bootstrap_ci(
-                    values, groups, draws=cache[key_], statistic=lambda v, g: v.mean()))
+                    values, groups, draws=cache[key_], statistic="pooled"))
         out[task] = entry
     return out
 

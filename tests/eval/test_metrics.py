@@ -90,6 +90,35 @@ def test_vectorised_bootstrap_equals_the_per_resample_loop_exactly():
     np.testing.assert_allclose(custom, expected, rtol=0, atol=1e-15)
 
 
+def test_within_group_draws_are_the_per_resample_choices_and_leave_the_rng_alike():
+    groups = np.array(["b"] * 7 + ["a"] * 12 + ["c"] * 3 + ["d"])      # "d": one member
+    np.random.default_rng(2).shuffle(groups)
+    ref_rng, rng = np.random.default_rng(11), np.random.default_rng(11)
+    members = [np.flatnonzero(groups == g) for g in np.unique(groups)]
+    expected = [np.empty((50, m.size), dtype=int) for m in members]
+    for b in range(50):
+        for d, m in zip(expected, members):
+            d[b] = ref_rng.choice(m, size=m.size, replace=True)
+    got = metrics.within_group_draws(groups, 50, rng)
+    assert len(got) == len(expected)
+    for a, b in zip(got, expected):
+        np.testing.assert_array_equal(a, b)
+    assert rng.integers(0, 2**62) == ref_rng.integers(0, 2**62)       # same state after
+    assert [d.shape for d in metrics.within_group_draws(groups, 0, rng)] == \
+        [(0, m.size) for m in members]
+
+
+def test_pooled_statistic_equals_the_per_resample_mean_and_names_are_checked():
+    rng = np.random.default_rng(4)
+    groups = np.array(["x"] * 9 + ["y"] * 5 + ["z"] * 17)
+    values = (rng.random(groups.size) < 0.6).astype(float)        # a share, as recognition
+    draws = metrics.within_group_draws(groups, 300, np.random.default_rng(0))
+    assert metrics.bootstrap_ci(values, groups, draws=draws, statistic="pooled") == \
+        metrics.bootstrap_ci(values, groups, draws=draws, statistic=lambda v, g: v.mean())
+    with pytest.raises(ValueError, match="pooled"):
+        metrics.bootstrap_ci(values, groups, draws=draws, statistic="median")
+
+
 def test_report_sections_reuse_draws_without_changing_intervals():
     from sandbox.eval.report import _section
 
