@@ -24,13 +24,13 @@ as the motions' other ranks),
 
 .. math::  \\pi_q(a) = \\hat P_i(\\ell_{q,i} \\le a),
 
-the share of calibration motions whose lowest answer was as low (a power-law tail
-below the lowest, :func:`~sandbox.core.conformal.rank` on :math:`-\\log a`), and the
-familiarity is the lower of the two in the scale of one (Šidák),
+the share of calibration motions whose lowest answer was as low (:func:`motion_rank`,
+a graded tail below the lowest), and the familiarity is the lower of the two, each
+divided by its share :math:`w_q` of ``alpha`` (weighted Bonferroni, :data:`WEIGHTS`),
 
-.. math::  f = 1 - (1 - \\min_q \\pi_q)^2.
+.. math::  f = \\min\\left(1, \\min_q \\pi_q / w_q\\right).
 
-Each question then has about half of ``alpha`` whatever the other's tail does,
+Each question then has its share of ``alpha`` whatever the other's tail does,
 and the split-conformal threshold over the calibration motions' lowest :math:`f`
 (:func:`~sandbox.core.conformal.conformal_threshold`) still makes the decision
 honest. Without the where-question (``score="timing"``) :math:`f = a_1`, as before;

@@ -308,6 +308,8 @@ def test_a_goal_or_position_calibration_ranks_its_statistics_and_round_trips(sco
     bare.save(tmp_path / "m.npz")
     loaded = IProMP.load(tmp_path / "m.npz")
     assert loaded.calibration.components == names
+    assert cal.motion.shape == (2, len(train))       # each motion's lowest answer to each
+    np.testing.assert_array_equal(loaded.calibration.motion, cal.motion)
     demo = unseen(1, seed=11)
     times, stats, tasks = stream_record(loaded, demo.times, demo.human, **OPTIONS)
     assert stats.shape == (times.size, len(COMPONENTS))
