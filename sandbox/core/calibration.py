@@ -26,12 +26,13 @@ The statistics ask two questions (:data:`~sandbox.core.evidence.SEPARATE`): how 
 so far went, and where the hand is and heads (the goal and the position, which see
 something only in a few updates: in one Fisher combination of all :math:`J` their tiny
 :math:`p` would be diluted among ranks that see nothing). Each question's ranks are
-combined apart, made a per-motion p-value against the calibration motions' lowest, and
-the familiarity is the lower of the two (Šidák; :mod:`sandbox.core.questions`). The
+combined apart and the familiarity is the lower of the two (Šidák; with
+``per_motion=True`` each first made a per-motion p-value, :mod:`sandbox.core.questions`). The
 position asks the same question at every phase, so its quantiles are those of all the
 task's updates (:data:`BINLESS`): binned by elapsed time, the bins around the handover
 hold the calibration motions' tails after it, which hid an odd end reached on time
-(synthetic endpoint family, position alone, 0.57 binned, 0.84 not; docs, Results).
+(synthetic endpoint family, position alone, 0.57 binned, 0.84 not; ``score="position"``
+0.45 binned, 0.65 not; docs, Results).
 
 **Threshold (split-conformal, per motion).** Each calibration motion's lowest
 familiarity :math:`\\ell_i` over its updates is computed as a new motion's
@@ -245,7 +246,9 @@ class Calibration:
             Left bin edges (s); bins holding no update are merged into the one before.
         **settings
             ``likelihood``, ``subsample``, ``dow_t``, ``end_prob`` as stored (with
-            ``end_prob``, the updates past each motion's estimated end are left out).
+            ``end_prob``, the updates past each motion's estimated end are left out);
+            ``per_motion=True``: each question's answer made a per-motion p-value first
+            (:mod:`sandbox.core.questions`; measured, not the default: docs, Results).
         """
         alpha = check_fraction(alpha, "alpha")
         full, held_out = leave_one_out(records, n_tasks, edges=edges, **settings)
@@ -275,6 +278,7 @@ def leave_one_out(records, n_tasks: int, *, edges=None,
         Familiarity of record i's finite updates against the other records.
     """
     n_tasks = check_integer(n_tasks, "n_tasks", 1)
+    per_motion = bool(settings.pop("per_motion", False))
     end_prob = settings.get("end_prob")
     if end_prob is not None:
         settings["end_prob"] = check_fraction(end_prob, "end_prob")
@@ -292,8 +296,8 @@ def leave_one_out(records, n_tasks: int, *, edges=None,
                        extra=q[1:] if q.shape[0] > 1 else None, **settings)
     found = [_against_others(full, times, values, tasks, bins, owner == i, binless)
              for i in range(len(records))]
-    if found[0].shape[1] == 1:
-        return full, [a[:, 0] for a in found]
+    if found[0].shape[1] == 1 or not per_motion:
+        return full, [np.array([combine(x, None) for x in a]) for a in found]
     lowest = np.array([a.min(axis=0) if a.size else np.full(a.shape[1], np.inf) for a in found])
     held_out = []
     for i, a in enumerate(found):                # against the other motions' lowest answers

@@ -18,7 +18,9 @@ the other sees nothing below it: with a tail the position or the goal took the
 whole ``alpha`` and a slowed motion, which only the fit sees, went from 0.77 to
 0.03 flagged (docs, Results).
 
-So each answer is first made a **per-motion p-value** against the calibration
+With ``per_motion=True`` (:meth:`~sandbox.core.calibration.Calibration.from_records`;
+measured, not the default: it halves the fit's share of ``alpha``, docs, Results) each
+answer is first made a **per-motion p-value** against the calibration
 motions' lowest answers of that question (:func:`motion_quantiles`, leave-one-out
 as the motions' other ranks),
 

@@ -124,13 +124,14 @@ def test_a_calibration_before_the_goal_ranks_its_own_four_of_all_statistics():
     rng = np.random.default_rng(6)
     five = records(rng, 30, 5)
     old = Calibration.from_records([(t, v[:, :4], k) for t, v, k in five], 2, edges=[0.0])
-    new = Calibration.from_records(five, 2, edges=[0.0])
+    new = Calibration.from_records(five, 2, edges=[0.0], per_motion=True)
     v = np.array([1.0, 0.5, 2.0, 1.5, 0.0])
     f4 = old.familiarity(0.5, v[:4], 1)
     assert old.familiarity(0.5, v, 1) == f4 and old.motion is None
     assert old.familiarity(0.5, v + [0, 0, 0, 0, 30.0], 1) == f4
     assert new.motion.shape == (2, 30) and np.all(np.diff(new.motion, axis=1) >= 0)
     assert new.answers(0.5, v, 1) == pytest.approx([f4, 1.0], rel=1e-12)
+    assert Calibration.from_records(five, 2, edges=[0.0]).motion is None     # the default
     pi = motion_rank(new.motion[0], f4)
     assert new.familiarity(0.5, v, 1) == pytest.approx(min(1.0, 2.0 * pi), rel=1e-12)
     far = new.familiarity(0.5, v + [0, 0, 0, 0, 30.0], 1)   # below every motion's goal
@@ -191,7 +192,8 @@ def test_a_question_whose_calibration_motions_reach_tiny_answers_keeps_the_other
     def lowest(c, recs):
         return np.array([min(c.familiarity(t, v, k) for t, v, k in zip(*r)) for r in recs])
 
-    cal = Calibration.from_records(tailed(100), 2, alpha=0.1, edges=[0.0, 0.6, 1.2])
+    cal = Calibration.from_records(tailed(100), 2, alpha=0.1, edges=[0.0, 0.6, 1.2],
+                                   per_motion=True)
     legacy = replace(cal, motion=None)                 # split-conformal on 100 others
     legacy = replace(legacy, threshold=conformal_threshold(lowest(legacy, tailed(100)), 0.1))
     fresh, shifted = tailed(300), tailed(100, shift=np.log(3.0))
