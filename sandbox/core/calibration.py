@@ -20,24 +20,20 @@ larger value (a p-value under the calibration motions' distribution). The
 
 the familiarity in (0, 1] (exact for independent uniform :math:`p_j`; the
 statistics are not independent, so :math:`f` is a score, not a p-value, and the
-threshold below makes the decision honest). The goal and the position
-(:data:`~sandbox.core.evidence.SEPARATE`) ask another question (where the hand is
-heading, where it is now) than how the fit so far went, and see something only in a
-few updates (the last tenths of a second before an odd end): in one Fisher
-combination of all :math:`J` a tiny :math:`p` of theirs would be diluted among ranks
-that see nothing. So they are combined with each other (Fisher,
-:math:`f_{where}`), the others apart (:math:`f_{fit}`), and the familiarity is the
-lower of the two questions' p-values in the scale of one (Šidák's correction, exact for
-independent uniform p-values, conservative for positively dependent ones),
+threshold below makes the decision honest).
 
-.. math::  f = 1 - (1 - \\min(f_{fit}, f_{where}))^2.
+The statistics ask two questions (:data:`~sandbox.core.evidence.SEPARATE`): how the fit
+so far went, and where the hand is and heads (the goal and the position, which see
+something only in a few updates: in one Fisher combination of all :math:`J` their tiny
+:math:`p` would be diluted among ranks that see nothing). Each question's ranks are
+combined apart and the familiarity is the lower of the two (Šidák; with
+``per_motion=True`` each first made a per-motion p-value, :mod:`sandbox.core.questions`). The
+position asks the same question at every phase, so its quantiles are those of all the
+task's updates (:data:`BINLESS`): binned by elapsed time, the bins around the handover
+hold the calibration motions' tails after it, which hid an odd end reached on time
+(synthetic endpoint family, position alone, 0.57 binned, 0.84 not; ``score="position"``
+0.45 binned, 0.65 not; docs, Results).
 
-Where they see nothing (:math:`f_{where}` near 1) it is :math:`2 f_{fit}` to first
-order, so motions rank as without them. Measured (``python -m sandbox ood``, hand,
-detection before the handover at 5 % false alarms; docs, Results): the synthetic
-endpoint family 0.30 without the goal, 0.62 with all five in one combination, 0.66 this
-way, 0.79 with the position too (0.72 with the three apart); the recorded set's
-leave-task-out (hand) 0.14, 0.11 and 0.13, (hand, arm, EMG) 0.33 timing, 0.38 all.
 **Threshold (split-conformal, per motion).** Each calibration motion's lowest
 familiarity :math:`\\ell_i` over its updates is computed as a new motion's
 would be: the motion streamed by a model fitted without it
@@ -72,8 +68,11 @@ from sandbox.core.conformal import (
     ongoing,
     rank,
 )
-from sandbox.core.evidence import ANALYTIC, COMPONENTS, SEPARATE, TIMING
+from sandbox.core.evidence import ANALYTIC, COMPONENTS, TIMING
 from sandbox.core.limits import MAX_SUBSAMPLE, MAX_TIME_S
+from sandbox.core.questions import answers, combine, groups, motion_quantiles
+from sandbox.core.records import pool as _pool
+from sandbox.core.records import populated as _populated
 from sandbox.validation import (
     FloatArray,
     check_array,
@@ -83,6 +82,9 @@ from sandbox.validation import (
     check_number,
     check_positive,
 )
+
+__all__ = ["BINLESS", "COMPONENTS", "EDGES", "LEVELS", "NAMES", "Calibration", "check",
+           "conformal_threshold", "fisher", "leave_one_out", "ongoing", "rank"]
 
 #: Left edges of the time bins, as fractions of the model's mean duration (last bin open).
 EDGES = (0.0, 0.2, 0.4, 0.6, 0.8, 1.0, 1.3, 1.7)
@@ -96,6 +98,8 @@ EXTRA_MIN_TAIL = 0.1
 NAMES = (("mahalanobis",), TIMING, TIMING + ("goal",), TIMING + ("position",), COMPONENTS)
 #: Fewest updates of a (task, time bin) cell for its own quantiles (else the bin's).
 MIN_CELL = 20
+#: Statistics ranked against all of the task's updates, whatever the elapsed time.
+BINLESS = ("position",)
 
 
 @dataclass(frozen=True, eq=False)
@@ -134,6 +138,10 @@ class Calibration:
         probability that the motion had ended reached ``end_prob``
         (:func:`~sandbox.core.conformal.ongoing`) is neither calibrated nor ranked;
         None (files before the gate): every update.
+    motion : ndarray or None, shape (2, n)
+        The calibration motions' lowest answer to each question, as :math:`-\\log`
+        (:func:`~sandbox.core.questions.motion_quantiles`), with the goal or the
+        position; None: the answers compared as they are (files before it).
     """
 
     edges: FloatArray
@@ -148,8 +156,11 @@ class Calibration:
     components: tuple = ("mahalanobis",)
     extra: FloatArray | None = None
     end_prob: float | None = None
+    motion: FloatArray | None = None
 
     def __post_init__(self) -> None:
+        if self.motion is not None:            # a model file's metadata holds a list
+            object.__setattr__(self, "motion", np.asarray(self.motion, dtype=np.float64))
         check(self)
 
     @property
@@ -180,10 +191,17 @@ class Calibration:
         :data:`EXTRA_MIN_TAIL` of its log), except the
         :data:`~sandbox.core.evidence.ANALYTIC` ones, p-value bounds: they rank as
         :math:`e^{-s}` (their stored quantiles only describe them). The ranks combine
-        by Fisher's method, the :data:`~sandbox.core.evidence.SEPARATE` ones apart
-        (module docstring). NaN when the first statistic is NaN; a later NaN
-        statistic counts as no evidence (rank 1).
+        by Fisher's method per question, and the questions as
+        :func:`~sandbox.core.questions.combine` says (module docstring). NaN when the
+        first statistic is NaN; a later NaN statistic counts as no evidence (rank 1).
         """
+        found = self.answers(t, value, task, ended)
+        return float("nan") if np.isnan(found[0]) else combine(found, self.motion)
+
+    def answers(self, t: float, value, task: int, ended: float = 0.0) -> FloatArray:
+        """Each question's Fisher combination of its ranks, shape (M,) (M = 2 with the goal
+        or the position, else 1; :func:`~sandbox.core.questions.answers`), NaN where
+        :meth:`familiarity` is; same arguments."""
         v = np.atleast_1d(np.asarray(value, dtype=np.float64))
         names = tuple(self.components)
         where = [COMPONENTS.index(n) for n in names]
@@ -193,23 +211,18 @@ class Calibration:
             raise ValueError(f"value: expected {len(names)} statistics {names}, got shape "
                              f"{v.shape}")
         if not np.isfinite(v[0]) or (self.end_prob is not None and ended >= self.end_prob):
-            return float("nan")
+            return np.full(len(groups(names)), np.nan)
         b = max(int(np.searchsorted(self.edges, t, side="right")) - 1, 0)
         q = self.stack[:, int(task), b]
         if v.size == 1:
-            return rank(q[0], v[0])
+            return np.array([rank(q[0], v[0])])
         ranks = [rank(q[j], v[j], EXTRA_MIN_TAIL) if np.isfinite(v[j]) else 1.0
                  for j in range(v.size)]
         ranks[0] = rank(q[0], v[0])
         for j, name in enumerate(names):
             if name in ANALYTIC:
                 ranks[j] = float(np.exp(-v[j])) if np.isfinite(v[j]) else 1.0
-        apart = [j for j, name in enumerate(names) if name in SEPARATE]
-        if not apart:
-            return fisher(np.array(ranks))
-        fit = fisher(np.array([r for j, r in enumerate(ranks) if j not in apart]))
-        least = min(fit, fisher(np.array([ranks[j] for j in apart])))
-        return float(least * (2.0 - least))          # 1 - (1 - least)^2: the lower of two
+        return answers(np.array(ranks), names)
 
     @classmethod
     def from_records(cls, records, n_tasks: int, *, alpha: float = 0.05, edges=None,
@@ -233,7 +246,9 @@ class Calibration:
             Left bin edges (s); bins holding no update are merged into the one before.
         **settings
             ``likelihood``, ``subsample``, ``dow_t``, ``end_prob`` as stored (with
-            ``end_prob``, the updates past each motion's estimated end are left out).
+            ``end_prob``, the updates past each motion's estimated end are left out);
+            ``per_motion=True``: each question's answer made a per-motion p-value first
+            (:mod:`sandbox.core.questions`; measured, not the default: docs, Results).
         """
         alpha = check_fraction(alpha, "alpha")
         full, held_out = leave_one_out(records, n_tasks, edges=edges, **settings)
@@ -263,6 +278,7 @@ def leave_one_out(records, n_tasks: int, *, edges=None,
         Familiarity of record i's finite updates against the other records.
     """
     n_tasks = check_integer(n_tasks, "n_tasks", 1)
+    per_motion = bool(settings.pop("per_motion", False))
     end_prob = settings.get("end_prob")
     if end_prob is not None:
         settings["end_prob"] = check_fraction(end_prob, "end_prob")
@@ -270,22 +286,31 @@ def leave_one_out(records, n_tasks: int, *, edges=None,
     edges = check_array(EDGES if edges is None else edges, "edges", 1)
     edges = _populated(np.sort(edges), times)
     bins = np.searchsorted(edges, times, side="right") - 1
-    q, counts = _cells(values, tasks, bins, (n_tasks, edges.size))
-    names = [n for n in NAMES if len(n) == q.shape[0]]   # the first of a length, unless named
-    if not names or len(settings.setdefault("components", names[0])) != q.shape[0]:
+    names = [n for n in NAMES if len(n) == values.shape[1]]   # the first of a length, unless named
+    if not names or len(settings.setdefault("components", names[0])) != values.shape[1]:
         raise ValueError(f"records: expected {' or '.join(sorted({str(len(n)) for n in NAMES}))} "
-                         f"statistics per update ({NAMES}), got {q.shape[0]}")
+                         f"statistics per update ({NAMES}), got {values.shape[1]}")
+    binless = [j for j, n in enumerate(settings["components"]) if n in BINLESS]
+    q, counts = _cells(values, tasks, bins, (n_tasks, edges.size), binless)
     full = Calibration(edges, q[0], counts, 0.0, 1.0, n_motions=len(records),
                        extra=q[1:] if q.shape[0] > 1 else None, **settings)
-    held_out = [_against_others(full, times, values, tasks, bins, owner == i)
-                for i in range(len(records))]
-    return full, held_out
+    found = [_against_others(full, times, values, tasks, bins, owner == i, binless)
+             for i in range(len(records))]
+    if found[0].shape[1] == 1 or not per_motion:
+        return full, [np.array([combine(x, None) for x in a]) for a in found]
+    lowest = np.array([a.min(axis=0) if a.size else np.full(a.shape[1], np.inf) for a in found])
+    held_out = []
+    for i, a in enumerate(found):                # against the other motions' lowest answers
+        others = motion_quantiles(np.delete(lowest, i, axis=0))
+        held_out.append(np.array([combine(x, others) for x in a]))
+    return replace(full, motion=motion_quantiles(lowest)), held_out
 
 
-def _cells(values: FloatArray, tasks: np.ndarray, bins: np.ndarray,
-           cells: tuple[int, int]) -> tuple[FloatArray, FloatArray]:
+def _cells(values: FloatArray, tasks: np.ndarray, bins: np.ndarray, cells: tuple[int, int],
+           binless=()) -> tuple[FloatArray, FloatArray]:
     """Quantiles (J, K, B, L) of ``values`` (n, J) and counts (K, B) per (task, bin); thin
-    cells use the whole bin."""
+    cells use the whole bin; statistics ``binless`` (indices) those of the task in every bin
+    (of all updates when the task has fewer than :data:`MIN_CELL`)."""
     K, B = cells
     q, counts = np.empty((values.shape[1], K, B, LEVELS.size)), np.zeros((K, B))
     for b in range(B):
@@ -299,19 +324,24 @@ def _cells(values: FloatArray, tasks: np.ndarray, bins: np.ndarray,
                 q[:, k, b], counts[k, b] = np.quantile(values[mine], LEVELS, axis=0).T, n
             else:
                 q[:, k, b], counts[k, b] = pooled, int(in_bin.sum())
+    for k in range(K) if binless else ():
+        mine = values[tasks == k] if np.sum(tasks == k) >= MIN_CELL else values
+        q[binless, k] = np.quantile(mine[:, binless], LEVELS, axis=0).T[:, None]
     return q, counts
 
 
-def _against_others(full: Calibration, times, values, tasks, bins, mine) -> FloatArray:
-    """Familiarities of one calibration motion's updates against the quantiles of the others."""
+def _against_others(full: Calibration, times, values, tasks, bins, mine,
+                    binless=()) -> FloatArray:
+    """Answers (s, M) of one calibration motion's updates against the quantiles of the others
+    (:meth:`Calibration.answers`)."""
     if not mine.any():
-        return np.empty(0)
-    q, counts = _cells(values[~mine], tasks[~mine], bins[~mine], full.counts.shape)
+        return np.empty((0, len(groups(tuple(full.components)))))
+    q, counts = _cells(values[~mine], tasks[~mine], bins[~mine], full.counts.shape, binless)
     empty = counts == 0
     q[:, empty], counts[empty] = full.stack[:, empty], full.counts[empty]
     others = replace(full, quantiles=q[0], counts=counts,
                      extra=q[1:] if q.shape[0] > 1 else None)
-    return np.array([others.familiarity(t, v, k)
+    return np.array([others.answers(t, v, k)
                      for t, v, k in zip(times[mine], values[mine], tasks[mine])])
 
 
@@ -337,6 +367,12 @@ def check(cal: Calibration) -> Calibration:
     check_integer(cal.n_motions, "calibration n_motions", 0)
     if cal.end_prob is not None:
         check_fraction(cal.end_prob, "calibration end_prob")
+    if cal.motion is not None:
+        motion = check_array(cal.motion, "calibration motion quantiles", 2,
+                             shape=(len(groups(tuple(cal.components))), None))
+        if motion.shape[0] < 2 or np.any(np.diff(motion, axis=1) < 0) or np.any(motion < 0):
+            raise ValueError("calibration motion quantiles: expected non-negative, "
+                             "non-decreasing rows of the two questions")
     return cal
 
 
@@ -353,48 +389,3 @@ def _check_extra(cal: Calibration, q: FloatArray) -> None:
                         shape=(len(names) - 1,) + q.shape)
     if np.any(np.diff(extra, axis=3) < 0) or np.any(extra < 0):
         raise ValueError("calibration extra quantiles: expected non-negative, non-decreasing rows")
-
-
-def _pool(records, n_tasks: int, end_prob: float | None = None):
-    if len(records) == 0:
-        raise ValueError("records: expected at least one calibration motion, got none")
-    time_parts: list[np.ndarray] = []
-    value_parts: list[np.ndarray] = []
-    tasks, owner = [], []
-    for i, (t, v, k, *ended) in enumerate(records):
-        t, v = np.asarray(t, dtype=np.float64), np.array(v, dtype=np.float64)
-        v = v[:, None] if v.ndim == 1 else v
-        k = np.asarray(k)
-        if (t.ndim != 1 or v.ndim != 2 or t.shape != k.shape or v.shape[0] != t.size
-                or (value_parts and v.shape[1] != value_parts[0].shape[1])):
-            raise ValueError(f"records[{i}]: expected times, values and tasks of one length "
-                             f"(values (s,) or (s, J), J alike in all records), got shapes "
-                             f"{t.shape}, {v.shape} and {k.shape}")
-        if k.size and (k.dtype.kind not in "iu" or k.min() < 0 or k.max() >= n_tasks):
-            raise ValueError(f"records[{i}]: expected task indices in [0, {n_tasks}), got "
-                             f"{k.tolist()[:10]}")
-        if end_prob is not None:
-            if not ended or np.shape(ended[0]) != t.shape:
-                raise ValueError(f"records[{i}]: expected each update's ended probability "
-                                 f"(a fourth entry, shape {t.shape}) to gate on, got "
-                                 f"{np.shape(ended[0]) if ended else 'none'}")
-            v[~ongoing(ended[0], end_prob)] = np.nan       # past the estimated end
-        ok = np.isfinite(v[:, 0]) & np.isfinite(t)
-        time_parts.append(t[ok])
-        value_parts.append(np.where(np.isfinite(v[ok]), v[ok], 0.0))   # later NaN: no evidence
-        tasks.append(k[ok].astype(np.int64))
-        owner.append(np.full(int(ok.sum()), i))
-    times, values = np.concatenate(time_parts), np.concatenate(value_parts)
-    if times.size == 0:
-        raise ValueError("records: expected finite statistics, got none")
-    return times, values, np.concatenate(tasks), np.concatenate(owner)
-
-
-def _populated(edges: FloatArray, times: FloatArray) -> FloatArray:
-    """Edges from 0 with at least one time in every bin (an empty bin joins the next
-    populated one, or the one before at the end)."""
-    edges = np.concatenate([[0.0], edges[edges > 0]])
-    bins = np.searchsorted(edges, times, side="right") - 1
-    kept = edges[np.bincount(bins, minlength=edges.size) > 0]
-    kept[0] = 0.0
-    return kept

@@ -3,10 +3,9 @@
 Layout of the file (a numpy ``.npz`` archive, written atomically; any reader of
 ``.npz`` can open it with ``allow_pickle=False``):
 
-* ``metadata``: a 0-d unicode array holding JSON with ``format`` (=
-  :data:`FORMAT`), ``format_version`` (= :data:`FORMAT_VERSION`), the basis,
-  the hyperparameters, the modalities (name, dims, kind, units), names of the
-  robot dims, per-task durations and priors;
+* ``metadata``: a 0-d unicode array holding JSON with ``format`` (= :data:`FORMAT`),
+  ``format_version`` (= :data:`FORMAT_VERSION`), the basis, the hyperparameters, the
+  modalities (name, dims, kind, units), names of the robot dims, per-task durations and priors;
 * ``noise``: :math:`\\sigma_p^2` (normalised units), shape (P,);
 * ``scale``: the scale of every human dim (signal normaliser; 1 for positions), shape (P,);
 * for task i: ``task{i}_mean`` (D*N,), ``task{i}_factor`` (D*N, r), ``task{i}_reg`` (D,).
@@ -18,7 +17,8 @@ the Mahalanobis term is ranked, ``end_prob`` when gated to the ongoing motion) a
 ``familiarity_edges`` (B,), ``familiarity_quantiles`` (K, B, L), ``familiarity_counts``
 (K, B), and ``familiarity_extra`` (J - 1, K, B, L) with ``components``; without
 ``components`` (before the timing evidence), a calibration of the Mahalanobis term; without
-``end_prob``, one of every update.
+``end_prob``, one of every update; ``motion`` (2, n), the calibration motions' lowest answer
+to each question (:mod:`sandbox.core.questions`; without it, compared as they are).
 
 Optional: a ``session`` object in the metadata, what a recording session taught besides
 the model (e.g. the meeting geometry, :mod:`sandbox.data.geometry`), kept as
@@ -26,10 +26,9 @@ the model (e.g. the meeting geometry, :mod:`sandbox.data.geometry`), kept as
 
 Version history: 1 (package 0.1.0) had the hand only (``human_names``, no modalities, no
 scale); such files still load, as one position modality ``"hand"``. Version 2 adds the
-modalities, the scale and the floors. The familiarity section is optional within
-version 2: files without it load with ``calibration = None`` (the predictors' familiarity
-is then None, never computed lazily: calibrating needs the training streams), and readers
-that predate it ignore it.
+modalities, the scale and the floors. The familiarity section is optional within version 2:
+files without it load with ``calibration = None`` (the predictors' familiarity is then None,
+never computed lazily), and readers that predate it ignore it.
 
 Loading trusts nothing in the file (:mod:`sandbox.core.archive`): the file's size and
 number of members are checked first; the metadata is read and checked
@@ -40,12 +39,11 @@ declared the dtype and shape the metadata implies, within the limits; every arra
 finite, within :data:`~sandbox.core.limits.MAX_MODEL_VALUE`, each task's covariance factor
 of rank 1 to n_demos - 1, the human regularisers at most
 :data:`~sandbox.core.limits.MAX_KAPPA` times the noise, the noise, scale and regularisers
-positive (so every weight covariance
-:math:`UU^T + \\Lambda` is symmetric positive definite; the robot's regulariser
-at least half :data:`~sandbox.core.limits.MIN_REGULARIZER` of its weights'
-variance, so it stays so in floating point). A corrupt, truncated,
-tampered or foreign file, or one from another format version, is refused with
-one ``ValueError`` that says which file and why, and never suggests pickle.
+positive (so every weight covariance :math:`UU^T + \\Lambda` is symmetric positive definite;
+the robot's regulariser at least half :data:`~sandbox.core.limits.MIN_REGULARIZER` of its
+weights' variance, so it stays so in floating point). A corrupt, truncated, tampered or
+foreign file, or one from another format version, is refused with one ``ValueError`` that
+says which file and why, and never suggests pickle.
 """
 
 from __future__ import annotations
@@ -175,6 +173,8 @@ def _put_calibration(cal, meta: dict, arrays: dict) -> None:
         arrays["familiarity_extra"] = cal.extra
     if cal.end_prob is not None:
         meta["familiarity"]["end_prob"] = cal.end_prob
+    if cal.motion is not None:
+        meta["familiarity"]["motion"] = np.asarray(cal.motion, dtype=float).tolist()
 
 
 def _output_path(path) -> Path:
@@ -280,7 +280,7 @@ def _calibration(archive, entry, n_tasks: int):
     if entry is None:
         return None
     keys = {"threshold", "alpha", "likelihood", "subsample", "dow_t", "n_motions"}
-    if not isinstance(entry, dict) or set(entry) - {"components", "end_prob"} != keys:
+    if not isinstance(entry, dict) or set(entry) - {"components", "end_prob", "motion"} != keys:
         got = sorted(map(str, entry)) if isinstance(entry, dict) else entry
         raise ValueError(f"metadata familiarity: expected the keys {sorted(keys)}, got {got!r}")
     edges = _read(archive, "familiarity_edges", (None,))

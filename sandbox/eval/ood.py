@@ -121,7 +121,7 @@ def rank(records: list[dict], edges=None, score: str = "timing",
     (:func:`~sandbox.core.conformal.ongoing` at that level of the records'
     ``ended``; the others' familiarity is NaN), None: all.
     """
-    from sandbox.core.calibration import ongoing
+    from sandbox.core.conformal import ongoing
     from sandbox.core.familiarity import COMPONENTS, EDGES, SCORE_NAMES, SCORES
 
     names = SCORE_NAMES[check_choice(score, "score", SCORES[:-1])]

@@ -3,6 +3,8 @@ Fisher's combination and the ranking, by known answers and properties on i.i.d. 
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from scipy import stats
@@ -17,6 +19,7 @@ from sandbox.core.calibration import (
     ongoing,
     rank,
 )
+from sandbox.core.questions import motion_rank
 
 
 def fresh_rate(draw, n: int, alpha: float, reps: int = 2000, fresh: int = 50,
@@ -114,48 +117,90 @@ def test_several_statistics_calibrate_and_a_new_record_fires_at_about_alpha(name
 
 def test_a_calibration_before_the_goal_ranks_its_own_four_of_all_statistics():
     """Older calibrations (four statistics) take theirs from a full vector, the goal
-    ignored. A full one takes the lower of the four's combination and the goal's
-    exp(-s), as 1 - (1 - min)^2."""
+    ignored. A full one makes each question's answer (the four's combination, the goal's
+    exp(-s)) a per-motion p-value against the calibration motions' lowest answers, and
+    takes the lower, doubled; without those (files before them) the answers themselves,
+    as 1 - (1 - min)^2."""
     rng = np.random.default_rng(6)
     five = records(rng, 30, 5)
     old = Calibration.from_records([(t, v[:, :4], k) for t, v, k in five], 2, edges=[0.0])
-    new = Calibration.from_records(five, 2, edges=[0.0])
+    new = Calibration.from_records(five, 2, edges=[0.0], per_motion=True)
     v = np.array([1.0, 0.5, 2.0, 1.5, 0.0])
     f4 = old.familiarity(0.5, v[:4], 1)
-    assert old.familiarity(0.5, v, 1) == f4
+    assert old.familiarity(0.5, v, 1) == f4 and old.motion is None
     assert old.familiarity(0.5, v + [0, 0, 0, 0, 30.0], 1) == f4
-    assert new.familiarity(0.5, v, 1) == pytest.approx(f4 * (2.0 - f4), rel=1e-12)
-    far = new.familiarity(0.5, v + [0, 0, 0, 0, 30.0], 1)
+    assert new.motion.shape == (2, 30) and np.all(np.diff(new.motion, axis=1) >= 0)
+    assert new.answers(0.5, v, 1) == pytest.approx([f4, 1.0], rel=1e-12)
+    assert Calibration.from_records(five, 2, edges=[0.0]).motion is None     # the default
+    pi = motion_rank(new.motion[0], f4)
+    assert new.familiarity(0.5, v, 1) == pytest.approx(min(1.0, 2.0 * pi), rel=1e-12)
+    far = new.familiarity(0.5, v + [0, 0, 0, 0, 30.0], 1)   # below every motion's goal
+    assert far == pytest.approx(2.0 * new.motion[1, -1] / 30.0 / 31, rel=1e-9)
+    legacy = replace(new, motion=None)
+    assert legacy.familiarity(0.5, v, 1) == pytest.approx(f4 * (2.0 - f4), rel=1e-12)
+    far = legacy.familiarity(0.5, v + [0, 0, 0, 0, 30.0], 1)
     assert far == pytest.approx(2.0 * np.exp(-30.0), rel=1e-9)
     with pytest.raises(ValueError, match="expected 1 or 4 or 5 or 6 statistics"):
         Calibration.from_records(records(rng, 5, 3), 2, edges=[0.0])
     with pytest.raises(ValueError, match="expected 1 or 4 or 5 or 6 statistics"):
         Calibration.from_records(five, 2, edges=[0.0], components=COMPONENTS)
+    with pytest.raises(ValueError, match="motion quantiles"):
+        replace(new, motion=new.motion[:, ::-1])
 
 
 def test_the_goal_and_the_position_are_combined_apart_from_the_fit():
-    """With both, the familiarity is the lower of the four's Fisher combination and the
-    Fisher combination of the goal's exp(-s) and the position's rank, as 1 - (1 - min)^2;
-    a position calibration takes its five of a full vector of six (the goal ignored)."""
+    """With both, the where-question's answer is the Fisher combination of the goal's
+    exp(-s) and the position's rank; the position is ranked against all of the task's
+    updates (one quantile row in every time bin); a position calibration takes its five
+    of a full vector of six (the goal ignored)."""
     rng = np.random.default_rng(7)
     six = records(rng, 30, 6)
-    four = Calibration.from_records([(t, v[:, :4], k) for t, v, k in six], 2, edges=[0.0])
+    four = Calibration.from_records([(t, v[:, :4], k) for t, v, k in six], 2,
+                                    edges=[0.0, 0.6])
     pos = Calibration.from_records([(t, v[:, [0, 1, 2, 3, 5]], k) for t, v, k in six], 2,
-                                   edges=[0.0], components=NAMES[3])
+                                   edges=[0.0, 0.6], components=NAMES[3])
     both = Calibration.from_records(six, 2, edges=[0.0], components=COMPONENTS)
     assert pos.components == NAMES[3] and both.components == COMPONENTS
+    assert np.array_equal(pos.extra[-1, :, 0], pos.extra[-1, :, 1])          # binless
+    assert not np.array_equal(pos.quantiles[:, 0], pos.quantiles[:, 1])     # binned
     v = np.array([1.0, 0.5, 2.0, 1.5, 0.0, 1.0])
-    f4, fp = four.familiarity(0.5, v, 1), pos.familiarity(0.5, v, 1)
+    f4 = four.familiarity(0.5, v, 1)
     p_x = rank(pos.extra[-1, 1, 0], 1.0, 0.1)
-    assert fp == pytest.approx(1.0 - (1.0 - min(f4, p_x)) ** 2, rel=1e-12)
-    assert pos.familiarity(0.5, v + [0, 0, 0, 0, 30.0, 0], 1) == fp
-    where = fisher(np.array([1.0, p_x]))
-    assert both.familiarity(0.5, v, 1) == pytest.approx(1.0 - (1.0 - min(f4, where)) ** 2,
-                                                        rel=1e-12)
-    far = fisher(np.array([np.exp(-30.0), p_x]))
-    assert both.familiarity(0.5, v + [0, 0, 0, 0, 30.0, 0], 1) == pytest.approx(
-        far * (2.0 - far), rel=1e-9)
-    assert far < 1e-11
+    assert pos.answers(0.5, v, 1) == pytest.approx([f4, p_x], rel=1e-12)
+    assert pos.familiarity(0.5, v + [0, 0, 0, 0, 30.0, 0], 1) == pos.familiarity(0.5, v, 1)
+    assert both.answers(0.5, v + [0, 0, 0, 0, 30.0, 0], 1)[1] == pytest.approx(
+        fisher(np.array([np.exp(-30.0), rank(both.extra[-1, 1, 0], 1.0, 0.1)])), rel=1e-9)
+
+
+def test_a_question_whose_calibration_motions_reach_tiny_answers_keeps_the_other_its_alpha():
+    """Calibration motions whose goal is at one update huge (a tail after the handover):
+    compared as they are, the goal's tiny answers set the threshold and new motions that
+    only the fit sees (its statistics tripled) are missed; each made a per-motion p-value
+    first, the fit keeps about half of alpha and catches them. Fresh motions fire at
+    about alpha either way (99.9 % bounds: one calibration of 100 at alpha 0.1, Beta sd
+    0.03, and 300 fresh, binomial 0.017)."""
+    rng = np.random.default_rng(8)
+
+    def tailed(n, shift=0.0):
+        out = []
+        for t, v, k in records(rng, n, 5):
+            v[:, :4] *= np.exp(shift)
+            v[-1, 4] = rng.exponential(40.0)         # the goal's p-value e^-s: tiny
+            out.append((t, v, k))
+        return out
+
+    def lowest(c, recs):
+        return np.array([min(c.familiarity(t, v, k) for t, v, k in zip(*r)) for r in recs])
+
+    cal = Calibration.from_records(tailed(100), 2, alpha=0.1, edges=[0.0, 0.6, 1.2],
+                                   per_motion=True)
+    legacy = replace(cal, motion=None)                 # split-conformal on 100 others
+    legacy = replace(legacy, threshold=conformal_threshold(lowest(legacy, tailed(100)), 0.1))
+    fresh, shifted = tailed(300), tailed(100, shift=np.log(3.0))
+    for c in (cal, legacy):
+        assert 0.02 < np.mean(lowest(c, fresh) < c.threshold) < 0.22
+    assert np.mean(lowest(cal, shifted) < cal.threshold) > 0.8
+    assert np.mean(lowest(legacy, shifted) < legacy.threshold) < 0.3
 
 
 def test_the_statistics_vector_must_match_the_components():

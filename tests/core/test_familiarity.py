@@ -4,6 +4,7 @@ calibration honesty, and the model file round trip."""
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -308,6 +309,11 @@ def test_a_goal_or_position_calibration_ranks_its_statistics_and_round_trips(sco
     bare.save(tmp_path / "m.npz")
     loaded = IProMP.load(tmp_path / "m.npz")
     assert loaded.calibration.components == names
+    assert cal.motion is None and loaded.calibration.motion is None
+    motion = np.array([[0.5, 1.0, 2.0], [0.1, 3.0, 4.0]])    # per_motion=True keeps these
+    bare.calibration = replace(cal, motion=motion)
+    bare.save(tmp_path / "p.npz")
+    np.testing.assert_array_equal(IProMP.load(tmp_path / "p.npz").calibration.motion, motion)
     demo = unseen(1, seed=11)
     times, stats, tasks = stream_record(loaded, demo.times, demo.human, **OPTIONS)
     assert stats.shape == (times.size, len(COMPONENTS))
