@@ -75,15 +75,7 @@ class Prediction:
 
     def trajectory(self, basis, times) -> tuple[FloatArray, FloatArray]:
         """Robot mean (T, Q) and covariance (T, Q, Q) at ``times`` (s); holds after the end."""
-        z = np.clip(np.asarray(times, dtype=np.float64) / self.duration, 0.0, 1.0)
-        held = int(np.count_nonzero(z >= 1.0))
-        if held < 2 or not np.all(z[z.size - held:] >= 1.0):
-            return trajectory_distribution(self.robot, basis, z)
-        # After the end the motion holds (z = 1): one step of it, repeated
-        mean, cov = trajectory_distribution(self.robot, basis, z[:z.size - held + 1])
-        rest = held - 1
-        return (np.concatenate([mean, np.repeat(mean[-1:], rest, axis=0)]),
-                np.concatenate([cov, np.repeat(cov[-1:], rest, axis=0)]))
+        return held_trajectory(self.robot, self.duration, basis, times)
 
     def for_task(self, model: IProMP, k: int, posterior: FloatArray | None = None, *,
                  scorer: Scorer | None = None) -> Prediction:
@@ -156,11 +148,37 @@ def predict(model: IProMP, scorer: Scorer, times: FloatArray, values: FloatArray
     T = float(est.durations[k]) if duration is None else float(duration)
     cond = scorer.conditioner     # shrinkage="robot" or condition_floor: another scorer
     if cond is scorer and duration is None and est.factors is not None:
-        factor = est.factors[k]
+        robot = condition_robot(cond.weights[k], est.factors[k], model.n_human, cond.rank[k])
     else:
-        factor = cond.joint_pairs(times, values, np.array([T]), np.array([k]))[1][0]
-    robot = condition_robot(cond.weights[k], factor, model.n_human, cond.rank[k])
+        robot = conditioned_robot(model, scorer, times, values, k, T)
     observations = None if cond is scorer else (times, values)
     return Prediction(k, post, est.alphas, est.durations, est.log_likelihood, robot, T,
                       est.factors, est.grid, int(np.isfinite(values).sum()), p_motion,
                       observations)
+
+
+def conditioned_robot(model: IProMP, scorer: Scorer, times: FloatArray, values: FloatArray,
+                      k: int, duration: float) -> WeightDistribution:
+    """The robot weights of task ``k`` at ``duration`` (s) conditioned on the observations
+    (eq. 8), by the robot's own scorer when it has one (``shrinkage="robot"``,
+    ``condition_floor``): :func:`predict`'s robot with ``task=k, duration=duration``,
+    without its phase estimate (the evaluation's oracle)."""
+    cond = scorer.conditioner
+    factor = cond.joint_pairs(times, values, np.array([float(duration)]),
+                              np.array([int(k)]))[1][0]
+    return condition_robot(cond.weights[k], factor, model.n_human, cond.rank[k])
+
+
+def held_trajectory(robot: WeightDistribution, duration: float, basis,
+                    times) -> tuple[FloatArray, FloatArray]:
+    """Robot mean (T, Q) and covariance (T, Q, Q) at ``times`` (s) of ``robot`` played over
+    ``duration`` (s), held after its end (:meth:`Prediction.trajectory`)."""
+    z = np.clip(np.asarray(times, dtype=np.float64) / duration, 0.0, 1.0)
+    held = int(np.count_nonzero(z >= 1.0))
+    if held < 2 or not np.all(z[z.size - held:] >= 1.0):
+        return trajectory_distribution(robot, basis, z)
+    # After the end the motion holds (z = 1): one step of it, repeated
+    mean, cov = trajectory_distribution(robot, basis, z[:z.size - held + 1])
+    rest = held - 1
+    return (np.concatenate([mean, np.repeat(mean[-1:], rest, axis=0)]),
+            np.concatenate([cov, np.repeat(cov[-1:], rest, axis=0)]))

@@ -59,7 +59,7 @@ def _folder_pair(data, kw: dict) -> tuple[list, list, list[str]]:
 
     kw = {**kw, "on_trial": None}
     try:
-            versions = map_trials(_one_version, 2, _RAW.__setitem__, ("folder", (data, kw)),
+        versions = map_trials(_one_version, 2, _RAW.__setitem__, ("folder", (data, kw)),
                               workers=2, meanwhile=lambda: _kernels.factor_kernel(1))
     finally:
         _RAW.clear()

@@ -30,13 +30,13 @@ from multiprocessing import get_context
 import numpy as np
 
 from sandbox.core import DynamicPredictor, IProMP, _kernels, familiarity, predict
+from sandbox.core.inference import conditioned_robot, held_trajectory
 from sandbox.core.jitter import JITTER_FACTOR
 from sandbox.core.model import SIGNAL_FLOOR
 from sandbox.core.phase import Lattice
 from sandbox.core.statistics import StreamStatistics
 from sandbox.core.stream import ObservationStream
 from sandbox.eval import metrics
-from sandbox.eval.oracle import held_trajectory, oracle_robot
 from sandbox.eval.progress import bar
 
 RATIOS = tuple(round(0.1 * i, 1) for i in range(1, 10))
@@ -145,7 +145,7 @@ def evaluate_trial(model: IProMP, test, config: EvalConfig, fk, truth=None) -> d
     t_obs, y_obs = kept_observations(model, t, test.human, config.subsample)
     opts = dict(likelihood=config.likelihood, n_candidates=config.n_candidates,
                 refine_steps=config.refine_steps)
-    oracle = oracle_robot(model, scorer, t_obs, y_obs, k, T)
+    oracle = conditioned_robot(model, scorer, t_obs, y_obs, k, T)   # no phase estimate
     windows = {w: update_times(t, t_obs, w) for w in config.windows}
     cuts = {f: f * T for f in config.ratios}
     shared = set(cuts.values())

@@ -144,8 +144,8 @@ def test_oracle_is_the_robot_predict_conditions_at_the_true_task_and_duration(se
     """The oracle skips predict's phase estimate: the same robot and trajectory, bit for bit,
     also when the robot has a scorer of its own (shrinkage, condition floor)."""
     from sandbox.core import predict
+    from sandbox.core.inference import conditioned_robot, held_trajectory
     from sandbox.core.likelihood import Scorer
-    from sandbox.eval.oracle import held_trajectory, oracle_robot
 
     _, demos = setup
     model = IProMP(n_basis=15, **options).fit(demos[1:])
@@ -154,7 +154,7 @@ def test_oracle_is_the_robot_predict_conditions_at_the_true_task_and_duration(se
     t_obs, y_obs = kept_observations(model, t, test.human, 2)
     scorer, k = Scorer(model), model.task_index(test.task)
     for T in (0.8 * t[-1], 1.3 * t[-1]):      # the hold after the end, and none
-        robot = oracle_robot(model, scorer, t_obs, y_obs, k, T)
+        robot = conditioned_robot(model, scorer, t_obs, y_obs, k, T)
         expected = predict(model, scorer, t_obs, y_obs, task=k, duration=T)
         np.testing.assert_array_equal(robot.mean, expected.robot.mean)
         np.testing.assert_array_equal(robot.factor, expected.robot.factor)
