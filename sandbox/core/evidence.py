@@ -250,25 +250,9 @@ def position_frame(model: IProMP, k: int) -> tuple[FloatArray, FloatArray, Float
 
 def position(model: IProMP, prediction: Prediction, k: int, times: FloatArray,
              values: FloatArray, window: float = POSITION_WINDOW) -> float:
-    """:math:`s_X = \\min_j s_{X,j} \\ge 0` (module docstring): the window's rows against the
-    *nearest* task's tube, each task :math:`j` at its own MAP duration
-    (:func:`task_position`; task ``k``, the chosen one, first). ``times`` (s,) in s and
-    ``values`` (s, P) (normalised units, NaN where unobserved); 0 without an observed value in
-    the last ``window`` seconds."""
-    best = task_position(model, prediction, k, times, values, window)
-    for j in range(len(model.task_models)):
-        if best <= 0.0:
-            break
-        if j != k:
-            best = min(best, task_position(model, prediction, j, times, values, window))
-    return best
-
-
-def task_position(model: IProMP, prediction: Prediction, k: int, times: FloatArray,
-                  values: FloatArray, window: float = POSITION_WINDOW) -> float:
-    """:math:`s_{X,k} \\ge 0` of task ``k`` at its MAP duration (module docstring) from kept
-    ``times`` (s,) in s and ``values`` (s, P) (normalised units, NaN where unobserved): the
-    median over the rows of the last ``window`` seconds; 0 without an observed value there."""
+    """:math:`s_X \\ge 0` of task ``k`` (module docstring) from kept ``times`` (s,) in s and
+    ``values`` (s, P) (normalised units, NaN where unobserved): the median over the rows of
+    the last ``window`` seconds; 0 without an observed value there."""
     if times.size == 0:
         return 0.0
     rows = times >= times[-1] - window - 1e-9
