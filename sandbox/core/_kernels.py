@@ -86,6 +86,8 @@ def _compile():
                 np.zeros((1, 2)), np.zeros(1), np.zeros(1))   # every kernel loaded now
     _product(np.ones((1, 1)), np.ones((1, 1, 1)), np.ones(1), np.ones((1, 1)),
              np.ones((1, 1, 1)), np.ones(1), np.empty((1, 1)), np.empty((1, 1, 1)))
+    from sandbox.core import _updates  # the stream's factor updates
+    _updates.compile_with(jit)
     return kernel
 
 
