@@ -94,6 +94,8 @@ class StreamStatistics:
         self._counts = np.ascontiguousarray(spans[:, 1] - spans[:, 0], dtype=np.int64)
         self._cuts = np.concatenate([[0], np.cumsum(self._counts)])     # packed, per task
         self._at = _updates.layout(self._rank, self._counts)            # the factors' store
+        #: Task k's rows in the padded layout: its r_k directions and the augmented one.
+        self._active = [np.r_[np.arange(r), scorer.R] for r in self._rank]
         self._members = [np.ascontiguousarray(g.member, dtype=np.float64) for g in scorer.groups]
         self.reset()
 
@@ -165,15 +167,11 @@ class StreamStatistics:
         else:                                             # and back, task by task
             aug, self._held = self._held, np.zeros(self._at[-1])
             for k, U in enumerate(self._blocks()):
-                act = self._active(k)
+                act = self._active[k]
                 part = aug[self._cuts[k]:self._cuts[k + 1]][:, act[:, None], act]
                 U[...] = _cholesky(part).transpose(2, 1, 0)
         self._factored = kernels is not None
         return kernels
-
-    def _active(self, k: int) -> np.ndarray:
-        """Task k's rows in the padded layout: its r_k directions and the augmented one."""
-        return np.r_[np.arange(self._rank[k]), self.scorer.R]
 
     def _blocks(self) -> list[np.ndarray]:
         """Views of each task's block of factors (r_k+1, r_k+1, C_k) in the store."""
@@ -188,9 +186,9 @@ class StreamStatistics:
         out[:, np.arange(R), np.arange(R)] = 1.0
         blocks = self._blocks()
         task = self.pairs[0][index]
-        for k in np.unique(task):
+        for k in set(task.tolist()):
             at = np.flatnonzero(task == k)
-            act = self._active(k)
+            act = self._active[k]
             lanes = index[at] - self._cuts[k]
             out[at[:, None, None], act[:, None], act] = \
                 blocks[k][:, :, lanes].transpose(2, 1, 0)
