@@ -29,6 +29,8 @@ import numpy as np
 
 from sandbox.core import _kernels
 
+_COMPILED: list = []      # [True] once compiled (or loaded from numba's on-disk cache)
+
 
 def update_kernels(size: int):
     """``(update, loglik)``: the compiled :func:`_update_py` and :func:`_loglik_py` for
@@ -36,6 +38,9 @@ def update_kernels(size: int):
     has no kernel for that size (the numpy path)."""
     if _kernels.factor_kernel(size) is None:
         return None
+    if not _COMPILED:                     # numba imports: factor_kernel found it
+        compile_with(_kernels.compiler())
+        _COMPILED.append(True)
     return _update, _loglik
 
 
@@ -47,7 +52,8 @@ def layout(ranks: np.ndarray, counts: np.ndarray) -> np.ndarray:
 
 def compile_with(jit) -> None:
     """Replace the kernels by their versions compiled by ``jit`` and load them now (the
-    first update should not pay it): called by :func:`sandbox.core._kernels.factor_kernel`."""
+    first update should not pay it): called by :func:`update_kernels` the first time, when
+    a stream's statistics are made."""
     global _update, _loglik, _fold
     _fold = jit(_fold_py)                 # _update_py calls it by its global name
     _update, _loglik = jit(_update_py), jit(_loglik_py)
