@@ -68,6 +68,7 @@ def _compile():
     except ImportError:
         return None
     jit = numba.njit(cache=True, nogil=True)
+    globals()["njit"] = jit        # hook: for other core modules' kernels (blendkernel)
     # _scores calls the helpers by their global names: numba resolves them when compiling.
     globals()["_factor_block"] = jit(_factor_block_py)
     globals()["_active_rows"] = jit(_active_rows_py)
@@ -383,6 +384,7 @@ def _product_py(m1, S1, a1, m2, S2, a2, mean, cov) -> bool:
     return True
 
 
+njit = None                      # numba.njit(cache=True, nogil=True) once _compile has run
 _product = _product_py
 _group_part = _group_part_py
 _pair_stats = _pair_stats_py
