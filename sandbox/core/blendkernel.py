@@ -64,10 +64,13 @@ def blend_knots(kernel, old: tuple[FloatArray, FloatArray, FloatArray], t: float
     fall, rise = np.empty(m), np.empty(m)
     om, oc = np.empty((m, Q)), np.empty((m, Q, Q))
     nm, nc = np.empty((m, Q)), np.empty((m, Q, Q))
-    n = kernel(*old, float(t), new_t, t + how.delay, how.rate, how.blend,
-               robot.mean.reshape(Q, N), robot.factor.reshape(Q, N, -1), robot.reg,
-               basis._centers, basis._neg_half_h, basis.normalized, held.duration,
-               out[0], out[1], fall, rise, om, oc, nm, nc)
+    # writable C-ordered copies of the (read-only) distribution: one compiled signature
+    mu, F, reg = (np.array(x, dtype=np.float64, order="C") for x in
+                  (robot.mean.reshape(Q, N), robot.factor.reshape(Q, N, -1), robot.reg))
+    n = kernel(*(np.ascontiguousarray(x, dtype=np.float64) for x in old), float(t), new_t,
+               float(t + how.delay), float(how.rate), bool(how.blend), mu, F, reg,
+               basis._centers, float(basis._neg_half_h), bool(basis.normalized),
+               float(held.duration), out[0], out[1], fall, rise, om, oc, nm, nc)
     if n:                                                          # eq. 16-17
         blend_pair_into(om[:n], oc[:n], fall[:n], nm[:n], nc[:n], rise[:n],
                         out[0][1:n + 1], out[1][1:n + 1])
