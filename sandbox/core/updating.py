@@ -395,6 +395,4 @@ class PredictorBase:
         raise NotImplementedError
 
     def _window(self, t: float) -> tuple[FloatArray, FloatArray]:
-        times, values = self.observations()
-        keep = times <= t
-        return times[keep], values[keep]
+        return self.stream.until(t)
