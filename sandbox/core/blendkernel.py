@@ -8,17 +8,22 @@ an update blends) and the optional compiled kernels are in use
 (``sandbox/core/_kernels.py``: numba installed, ``SANDBOX_KERNEL`` not ``numpy``),
 :func:`blend_knots` does it knot by knot in one compiled call: the activations (eq. 18),
 the old plan interpolated at the update and the blended knots, the new distribution at
-every new knot (eq. 4, computed up to its end and then held), the new one divided by its
-activation past the blend; the product of the two (eq. 16-17) is the blend's compiled
-kernel (:func:`~sandbox.core.blending.blend_pair_into`). The same formulas as the numpy
-path in another order of floating-point operations: the plans agree within 1e-12 of their
-largest entry (``tests/core/test_blendkernel.py``).
+every new knot (eq. 4, computed up to its end and then held), their product at the
+knots blended (eq. 16-17) and the new one divided by its activation past them. The
+product solves :math:`M = a_2\\Sigma_1 + a_1\\Sigma_2` by its Cholesky factor (it is
+positive definite; the numpy path takes LAPACK's LU, and a knot whose M is not positive
+definite in floating point sends the blend back to it). The same formulas as the numpy path
+in another order of floating-point operations: what it computes before the product agrees
+within 1e-12 of the largest entry; the product, as any solve, scales that round-off by
+M's condition (1e4-1e5 where the old plan's activation is tiny): the bench's plans agree
+within 1e-13 of their largest entry, a synthetic test's within 1e-11
+(``tests/core/test_blendkernel.py``).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from math import exp
+from math import exp, sqrt
 from typing import cast
 
 import numpy as np
@@ -41,6 +46,7 @@ def knots_kernel():
         # _knots calls the helpers by their global names: numba resolves them when compiling.
         globals()["_interp"] = jit(_interp_py)
         globals()["_held_row"] = jit(_held_row_py)
+        globals()["_product_knot"] = jit(_product_knot_py)
         kernel = jit(_knots_py)
         one, zero = np.ones(1), np.zeros(1)
         kernel(one, np.ones((1, 1)), np.ones((1, 1, 1)), 0.0, one, 0.0, 1.0, True,
@@ -67,13 +73,13 @@ def blend_knots(kernel, old: tuple[FloatArray, FloatArray, FloatArray], t: float
     # writable C-ordered copies of the (read-only) distribution: one compiled signature
     mu, F, reg = (np.array(x, dtype=np.float64, order="C") for x in
                   (robot.mean.reshape(Q, N), robot.factor.reshape(Q, N, -1), robot.reg))
-    n = kernel(*(np.ascontiguousarray(x, dtype=np.float64) for x in old), float(t), new_t,
-               float(t + how.delay), float(how.rate), bool(how.blend), mu, F, reg,
-               basis._centers, float(basis._neg_half_h), bool(basis.normalized),
-               float(held.duration), out[0], out[1], fall, rise, om, oc, nm, nc)
-    if n:                                                          # eq. 16-17
+    n, ok = kernel(*(np.ascontiguousarray(x, dtype=np.float64) for x in old), float(t), new_t,
+                   float(t + how.delay), float(how.rate), bool(how.blend), mu, F, reg,
+                   basis._centers, float(basis._neg_half_h), bool(basis.normalized),
+                   float(held.duration), out[0], out[1], fall, rise, om, oc, nm, nc)
+    if not ok:             # an M not positive definite in floating point: as the numpy path
         blend_pair_into(om[:n], oc[:n], fall[:n], nm[:n], nc[:n], rise[:n],
-                        out[0][1:n + 1], out[1][1:n + 1])
+                        out[0][1:n + 1], out[1][1:n + 1])                   # eq. 16-17
     if not m:
         return 0.0
     d = out[0][1] - om[0]
@@ -143,8 +149,10 @@ def _knots_py(pt, pm, pc, t: float, new_t, center: float, rate: float, blend: bo
     """:func:`blend_knots`' loop: activations into ``fall``, ``rise`` (m,); the old plan at
     ``t`` into row 0 of ``out_m``, ``out_c`` and at the knots blended into ``om``, ``oc``;
     the new distribution at every knot into ``nm``, ``nc`` (and, past the blend, divided
-    by its activation into rows 1.. of the outputs). Returns the knots blended, n (0
-    without ``blend``): their product is the caller's."""
+    by its activation into rows 1.. of the outputs), and the product of the two at the
+    first n knots, those blended (0 without ``blend``), into rows 1..n
+    (:func:`_product_knot_py`). Returns ``(n, ok)``: ``ok`` False when a product could not
+    be made (the caller then makes them all from the other outputs)."""
     m, Q = new_t.size, mu.shape[0]
     n = 0
     for j in range(m):                                                # eq. 18
@@ -174,8 +182,57 @@ def _knots_py(pt, pm, pc, t: float, new_t, center: float, rate: float, blend: bo
                 out_m[1 + j, a] = nm[j, a]
                 for b in range(Q):
                     out_c[1 + j, a, b] = nc[j, a, b] / rise[j] if blend else nc[j, a, b]
-    return n
+    L, Y, Z = np.empty((Q, Q)), np.empty((Q, Q + 1)), np.empty((Q, Q + 1))
+    for j in range(n):                                                # eq. 16-17
+        if not _product_knot(om[j], oc[j], fall[j], nm[j], nc[j], rise[j], L, Y, Z,
+                             out_m[1 + j], out_c[1 + j]):
+            return n, False
+    return n, True
+
+
+def _product_knot_py(m1, S1, a1: float, m2, S2, a2: float, L, Y, Z, mean, cov) -> bool:
+    """The product of (m1, S1)^a1 and (m2, S2)^a2 at one knot (activations > 0) into ``mean``
+    (Q,), ``cov`` (Q, Q) by the symmetric form of :mod:`sandbox.core.blending` through the
+    Cholesky factor of :math:`M = a_2\\Sigma_1 + a_1\\Sigma_2 = LL^T` (positive definite):
+    :math:`Y = L^{-1}[\\Sigma_1, \\mu_2]`, :math:`Z = L^{-1}[\\Sigma_2, \\mu_1]`,
+    :math:`\\Sigma^* = Z^TY` (its symmetric part) and
+    :math:`\\mu^* = a_1 Z^T L^{-1}\\mu_1 + a_2 Y^T L^{-1}\\mu_2`. ``L`` (Q, Q), ``Y`` and
+    ``Z`` (Q, Q+1) are scratch. False, the outputs unfinished, when a pivot is not positive."""
+    Q = m1.size
+    for c in range(Q):
+        for r in range(c, Q):
+            acc = a2 * S1[r, c] + a1 * S2[r, c]
+            for k in range(c):
+                acc -= L[r, k] * L[c, k]
+            if r == c:
+                if not acc > 0.0:
+                    return False
+                L[c, c] = sqrt(acc)
+            else:
+                L[r, c] = acc / L[c, c]
+    for r in range(Q):                               # forward substitution, every column
+        for c in range(Q + 1):
+            y = S1[r, c] if c < Q else m2[r]
+            z = S2[r, c] if c < Q else m1[r]
+            for k in range(r):
+                y -= L[r, k] * Y[k, c]
+                z -= L[r, k] * Z[k, c]
+            Y[r, c] = y / L[r, r]
+            Z[r, c] = z / L[r, r]
+    for a in range(Q):
+        u, v = 0.0, 0.0
+        for k in range(Q):
+            u += Z[k, a] * Z[k, Q]               # (S2 M^-1 m1)_a
+            v += Y[k, a] * Y[k, Q]               # (S1 M^-1 m2)_a
+        mean[a] = a1 * u + a2 * v
+        for b in range(a + 1):
+            acc = 0.0
+            for k in range(Q):
+                acc += Z[k, a] * Y[k, b] + Y[k, a] * Z[k, b]
+            cov[a, b] = cov[b, a] = 0.5 * acc
+    return True
 
 
 _interp = _interp_py
-_held_row = _held_row_py      # replaced by their compiled versions in knots_kernel
+_held_row = _held_row_py
+_product_knot = _product_knot_py     # replaced by their compiled versions in knots_kernel

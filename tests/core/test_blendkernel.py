@@ -40,11 +40,12 @@ def _knots(plan, t, held, how):
     out = np.empty((m + 1, Q)), np.empty((m + 1, Q, Q))
     parts = [np.empty(m), np.empty(m), np.empty((m, Q)), np.empty((m, Q, Q)),
              np.empty((m, Q)), np.empty((m, Q, Q))]
-    n = blendkernel.knots_kernel()(
+    n, ok = blendkernel.knots_kernel()(
         plan.times, plan.mean, plan.cov, t, new_t, t + how.delay, how.rate, how.blend,
         held.robot.mean.reshape(Q, N), held.robot.factor.reshape(Q, N, -1), held.robot.reg,
         held.basis._centers, held.basis._neg_half_h, held.basis.normalized, held.duration,
         *out, *parts)
+    assert ok
     return new_t, n, out, parts
 
 
@@ -68,6 +69,34 @@ def test_kernel_matches_the_numpy_steps_it_replaces(monkeypatch, fitted, t, how)
     _close(held(new_t), (nm, nc))                               # eq. 4, held after its end
     scale = rise[n:, None, None] if how.blend else 1.0       # past the blend: new / rise
     _close((nm[n:], nc[n:] / scale), (mean[1 + n:], cov[1 + n:]))
+    if n:              # the product (Cholesky) against the numpy path's (LU) of the same knots
+        monkeypatch.setenv(_kernels.ENV, "numpy")
+        want = blend_pair(om[:n], oc[:n], fall[:n], nm[:n], nc[:n], rise[:n])
+        for a, b in zip((mean[1:n + 1], cov[1:n + 1]), want):
+            np.testing.assert_allclose(a, b, rtol=0, atol=1e-11 * np.abs(b).max())
+
+
+def test_a_product_that_is_not_positive_definite_goes_to_the_numpy_path(monkeypatch, fitted):
+    """A knot whose M has no Cholesky factor in floating point: the kernel says so and the
+    blend makes every product as the numpy path does (its pseudo-inverse where singular)."""
+    pytest.importorskip("numba")
+    monkeypatch.setenv(_kernels.ENV, "numba")
+    model, pred = fitted
+    how = Blending(0.01, 50.0, 0.1, True, 2.0)
+    held = Held(pred.robot, pred.duration, model.basis)
+    prior = Plan.prior(model, 0.01)
+    cov = prior.cov.copy()
+    cov[130:] *= -1e3               # from 1.3 s: a2 S1 + a1 S2 negative definite, not singular
+    plan = Plan(prior.times, prior.mean, cov)
+    calls = []
+    monkeypatch.setattr(blendkernel, "blend_pair_into",
+                        lambda *args: calls.append(blend_pair_into(*args)))
+    got = plan.blended(1.2, held, held.duration, how)
+    assert len(calls) == 1                           # the kernel gave its products up
+    ref = plan.blended(1.2, lambda ts: held(ts), held.duration, how)
+    for a, b in zip((got[0].times, got[0].mean, got[0].cov), (ref[0].times, ref[0].mean,
+                                                              ref[0].cov)):
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-10 * np.abs(b).max())
 
 
 @pytest.mark.parametrize("how", [Blending(0.01, 50.0, 0.1, True, 2.0),
