@@ -145,7 +145,7 @@ def _held_row_py(mu, F, reg, centers, neg_half_h: float, normalized: bool, z: fl
 
 def _knots_py(pt, pm, pc, t: float, new_t, center: float, rate: float, blend: bool, mu, F,
               reg, centers, neg_half_h: float, normalized: bool, duration: float,
-              out_m, out_c, fall, rise, om, oc, nm, nc) -> int:
+              out_m, out_c, fall, rise, om, oc, nm, nc) -> tuple[int, bool]:
     """:func:`blend_knots`' loop: activations into ``fall``, ``rise`` (m,); the old plan at
     ``t`` into row 0 of ``out_m``, ``out_c`` and at the knots blended into ``om``, ``oc``;
     the new distribution at every knot into ``nm``, ``nc`` (and, past the blend, divided
