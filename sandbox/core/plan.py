@@ -194,7 +194,7 @@ class Plan:
         out_mean[:i], out_cov[:i] = self.mean[:i], self.cov[:i]
         out_mean[i], out_cov[i] = old_mean[0], old_cov[0]
         if how.blend:
-            _blend_into((old_mean[1:], old_cov[1:]), (mean, cov), fall, rise, n,
+            _blend((old_mean[1:], old_cov[1:]), (mean, cov), fall, rise, n,
                         (out_mean[i + 1:], out_cov[i + 1:]))
         else:
             out_mean[i + 1:], out_cov[i + 1:] = mean, cov
@@ -228,7 +228,7 @@ def _activations(times: FloatArray, center: float, rate: float):
     return fall, rise, n
 
 
-def _blend_into(old: tuple[FloatArray, FloatArray], new: tuple[FloatArray, FloatArray],
+def _blend(old: tuple[FloatArray, FloatArray], new: tuple[FloatArray, FloatArray],
                 fall: FloatArray, rise: FloatArray, n: int,
                 out: tuple[FloatArray, FloatArray]) -> None:
     """Product of the old (falling) and new (rising) distributions at the knots (eq. 16-18)
