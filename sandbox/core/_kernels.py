@@ -1,5 +1,5 @@
-"""Optional compiled kernels of the phase stage: :func:`~sandbox.core.factor.factor_scores`
-and the statistics of the refinement's pairs (:mod:`sandbox.core.pairstats`).
+"""Optional compiled kernels of the phase stage: :func:`~sandbox.core.factor.factor_scores`,
+the refinement's pairs' statistics (:mod:`~sandbox.core.pairstats`), :func:`compiler`.
 
 The likelihood of every (candidate, task) pair ends in one Cholesky factorisation of a
 small augmented matrix (step 3 of :mod:`sandbox.core.likelihood`). numpy factors a
@@ -63,12 +63,9 @@ def factor_kernel(size: int):
 
 def _compile():
     """The kernel, compiled (or loaded from numba's on-disk cache); None without numba."""
-    try:
-        import numba
-    except ImportError:
+    jit = compiler()
+    if jit is None:
         return None
-    jit = numba.njit(cache=True, nogil=True)
-    globals()["njit"] = jit        # hook: for other core modules' kernels (blendkernel)
     # _scores calls the helpers by their global names: numba resolves them when compiling.
     globals()["_factor_block"] = jit(_factor_block_py)
     globals()["_active_rows"] = jit(_active_rows_py)
@@ -88,6 +85,15 @@ def _compile():
     _product(np.ones((1, 1)), np.ones((1, 1, 1)), np.ones(1), np.ones((1, 1)),
              np.ones((1, 1, 1)), np.ones(1), np.empty((1, 1)), np.empty((1, 1, 1)))
     return kernel
+
+
+def compiler():
+    """numba's ``njit`` as every kernel is compiled (None without numba: the core's import)."""
+    try:
+        import numba
+    except ImportError:
+        return None
+    return numba.njit(cache=True, nogil=True)
 
 
 def product_kernel():
@@ -384,7 +390,6 @@ def _product_py(m1, S1, a1, m2, S2, a2, mean, cov) -> bool:
     return True
 
 
-njit = None                      # numba.njit(cache=True, nogil=True) once _compile has run
 _product = _product_py
 _group_part = _group_part_py
 _pair_stats = _pair_stats_py

@@ -42,7 +42,7 @@ def knots_kernel():
     if _kernels.product_kernel() is None:
         return None
     if not _COMPILED:
-        jit = cast(Callable, _kernels.njit)       # numba.njit(cache=True, nogil=True)
+        jit = cast(Callable, _kernels.compiler())     # numba.njit(cache=True, nogil=True)
         # _knots calls the helpers by their global names: numba resolves them when compiling.
         globals()["_interp"] = jit(_interp_py)
         globals()["_held_row"] = jit(_held_row_py)

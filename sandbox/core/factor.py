@@ -136,6 +136,28 @@ def _numpy_scores(Kt, eps, gamma_term, offset, work):
     return -0.5 * (offset + logdet_k + diag[:, R] ** 2), L
 
 
+def augmented_scores(aug: FloatArray, offset: FloatArray, *,
+                     work: FloatArray | None = None) -> tuple[FloatArray, FloatArray]:
+    """Log-likelihoods (M,) and factors (M, R+1, R+1) of augmented matrices themselves.
+
+    ``aug`` (M, R+1, R+1) holds each pair's
+    :math:`\\begin{bmatrix} K & e \\\\ e^T & d^T B^{-1} d\\end{bmatrix}` (the matrix
+    :func:`factor_scores` assembles from the statistics; a stream keeps it,
+    :mod:`sandbox.core.statistics`), ``offset`` (M,) :math:`sP\\log 2\\pi + \\log|B|`.
+    ``aug`` is left unchanged (factored in ``work`` when given, else in a copy); a lost
+    last pivot is clamped as in :func:`factor_scores`.
+    """
+    if work is None:
+        work = aug.copy()
+    else:
+        np.copyto(work, aug)
+    R = aug.shape[1] - 1
+    L = _cholesky(work)
+    diag = np.diagonal(L, axis1=1, axis2=2)
+    logdet_k = 2.0 * np.log(diag[:, :R]).sum(axis=1)
+    return -0.5 * (offset + logdet_k + diag[:, R] ** 2), L
+
+
 def _cholesky(aug: FloatArray) -> FloatArray:
     try:
         return np.asarray(np.linalg.cholesky(aug), dtype=np.float64)

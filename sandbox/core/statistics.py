@@ -27,21 +27,26 @@ regulariser; Sherman-Morrison),
     \\gamma_p \\leftarrow \\gamma_p + \\nu_p^2/d,
 
 so :math:`\\tilde K` and :math:`\\epsilon` grow by rank-P terms of
-:math:`x_{kp} = \\tilde U_{kp}^T v/(\\sqrt d\\,\\sigma_p)`. A window update then
-only assembles and factors the r x r matrices. The results equal the batch
-computation (:meth:`~sandbox.core.likelihood.Scorer.joint`) to round-off.
-
-:math:`\\tilde K` and :math:`\\epsilon` are kept only for the (candidate, task) pairs
-the lattice scores (each task's span), packed task after task (:attr:`StreamStatistics.pairs`):
-an update factors them all in one batched Cholesky without gathering them first.
+:math:`x_{kp} = \\tilde U_{kp}^T v/(\\sqrt d\\,\\sigma_p)`, and
+:math:`y^T B^{-1} y` by :math:`c_p^2`, :math:`c_p = \\nu_p/(\\sqrt d\\,\\sigma_p)`. What a
+pair's likelihood factors (step 3 of :mod:`sandbox.core.likelihood`) is the augmented matrix
+:math:`\\begin{bmatrix} I + \\tilde K_{UU} & \\epsilon_U - \\tilde K_{UR} \\\\ \\cdot &
+y^T B^{-1} y - 2\\epsilon_R + \\tilde K_{RR}\\end{bmatrix}`, which therefore grows by
+:math:`z z^T` per observed dim, :math:`z = [x_{kp,U}, \\; c_p - x_{kp,R}]`. The statistics
+keep that matrix of every (candidate, task) pair the lattice scores (each task's span),
+packed task after task (:attr:`StreamStatistics.pairs`): on the numpy path the matrix
+itself, factored at every update in one batched Cholesky; with the compiled kernels
+(:mod:`sandbox.core._updates`) its Cholesky factor, brought up to date by rank-1 updates
+as the rows arrive, so that an update factors nothing. Either way the results equal the
+batch computation (:meth:`~sandbox.core.likelihood.Scorer.joint`) to round-off.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from sandbox.core import _kernels
-from sandbox.core.factor import factor_loglik, factor_scores
+from sandbox.core import _updates
+from sandbox.core.factor import _cholesky, augmented_scores
 from sandbox.core.interaction import LOG_2PI
 from sandbox.core.likelihood import Scorer, Scores
 from sandbox.core.phase import GridLayout, Lattice
@@ -84,20 +89,36 @@ class StreamStatistics:
                               dtype=np.int64).reshape(-1, 2).T
         self.cuts = np.cumsum(spans[:, 1] - spans[:, 0])[:-1]
         self._layout: tuple[object, GridLayout] | None = None
+        self._rank = np.asarray(scorer.rank, dtype=np.int64)
+        self._starts = np.ascontiguousarray(spans[:, 0], dtype=np.int64)
+        self._counts = np.ascontiguousarray(spans[:, 1] - spans[:, 0], dtype=np.int64)
+        self._cuts = np.concatenate([[0], np.cumsum(self._counts)])     # packed, per task
+        self._at = _updates.layout(self._rank, self._counts)            # the factors' store
+        #: Task k's rows in the padded layout: its r_k directions and the augmented one.
+        self._active = [np.r_[np.arange(r), scorer.R] for r in self._rank]
+        self._members = [np.ascontiguousarray(g.member, dtype=np.float64) for g in scorer.groups]
         self.reset()
 
     def reset(self) -> None:
         """Forget every observation."""
         sc, C = self.scorer, self.durations.size
         self.groups = [_GroupStats(C, sc.N, g.dims.size) for g in sc.groups]
-        M = self.pairs.shape[1]
-        self.Kt = np.zeros((M, sc.R + 1, sc.R + 1))     # packed pairs (module docstring)
-        self.eps = np.zeros((M, sc.R + 1))
-        self._work = np.empty_like(self.Kt)     # factor_scores' numpy path builds in it
+        M, n = self.pairs.shape[1], sc.R + 1
+        self._factored = _updates.update_kernels(n) is not None
+        if self._factored:       # each task's block of factors of [[I, 0], [0, 0]]
+            self._held = np.zeros(self._at[-1])
+            for k, U in enumerate(self._blocks()):
+                U[np.arange(self._rank[k]), np.arange(self._rank[k])] = 1.0
+        else:                    # the augmented matrices of no observation, padded
+            self._held = np.zeros((M, n, n))
+            self._held[:, np.arange(sc.R), np.arange(sc.R)] = 1.0
+        self._work: np.ndarray | None = None    # the numpy path factors in it (kept)
+        self._scratch = np.empty(0)             # the kernel's (rows grow it)
         self.count = 0
-        self._terms: tuple[int, np.ndarray, np.ndarray] | None = None
+        self._terms: tuple[int, np.ndarray] | None = None
         self._x: list[np.ndarray] = []
         self._coef: list[np.ndarray] = []
+        self._member: list[np.ndarray] = []
 
     def add(self, t: float, y: np.ndarray) -> None:
         """Add one observation: time ``t`` (s) and human values ``y`` (P,).
@@ -107,9 +128,10 @@ class StreamStatistics:
         sc = self.scorer
         psi = sc.basis.evaluate(np.minimum(t / self.durations, 1.0))      # (C, N)
         present = sc.present(y[None, :])[:, 0]
-        for g, st in zip(sc.groups, self.groups):
+        for g, st, member in zip(sc.groups, self.groups, self._members):
             if present[g.modality]:
                 self._add_group(g, st, psi, y[g.dims])
+                self._member.append(member)
         self.count += 1
         if len(self._x) >= self.flush_every:
             self._flush()
@@ -132,17 +154,69 @@ class StreamStatistics:
         self._x.append(x.reshape(C, K, g.dims.size, -1))                   # (C, K, Pg, R+1)
         self._coef.append(nu / (sqrt_d[:, None] * np.sqrt(self.scorer.sigma2[g.dims])))
 
+    def _sync(self):
+        """The compiled kernels (None: the numpy path), the kept matrices turned into the
+        form they take (factors with the kernels, else the matrices): the choice can change
+        between updates (``SANDBOX_KERNEL``)."""
+        kernels = _updates.update_kernels(self.scorer.R + 1)
+        if (kernels is not None) == self._factored:
+            return kernels
+        if kernels is None:                               # factors -> augmented matrices
+            L = self._factors(np.arange(self.pairs.shape[1]))
+            self._held = L @ L.transpose(0, 2, 1)
+        else:                                             # and back, task by task
+            aug, self._held = self._held, np.zeros(self._at[-1])
+            for k, U in enumerate(self._blocks()):
+                act = self._active[k]
+                part = aug[self._cuts[k]:self._cuts[k + 1]][:, act[:, None], act]
+                U[...] = _cholesky(part).transpose(2, 1, 0)
+        self._factored = kernels is not None
+        return kernels
+
+    def _blocks(self) -> list[np.ndarray]:
+        """Views of each task's block of factors (r_k+1, r_k+1, C_k) in the store."""
+        return [self._held[a:b].reshape(r + 1, r + 1, n) for a, b, r, n in
+                zip(self._at[:-1], self._at[1:], self._rank, self._counts)]
+
+    def _factors(self, index: np.ndarray) -> np.ndarray:
+        """Lower factors (n, R+1, R+1) of the packed pairs ``index`` from the store, padded
+        (the identity on a task's padding rows, the augmented row at R)."""
+        R = self.scorer.R
+        out = np.zeros((index.size, R + 1, R + 1))
+        out[:, np.arange(R), np.arange(R)] = 1.0
+        blocks = self._blocks()
+        task = self.pairs[0][index]
+        for k in set(task.tolist()):
+            at = np.flatnonzero(task == k)
+            act = self._active[k]
+            lanes = index[at] - self._cuts[k]
+            out[at[:, None, None], act[:, None], act] = \
+                blocks[k][:, :, lanes].transpose(2, 1, 0)
+        return out
+
     def _flush(self) -> None:
+        """The pending rows into every pair's augmented matrix or factor (module docstring)."""
+        kernels = self._sync()
         if not self._x:
             return
         pk, pc = self.pairs
-        x = np.concatenate(self._x, axis=2)[pc, pk]                      # (M, rows, R+1)
-        coef = np.concatenate(self._coef, axis=1)[pc]                     # (M, rows)
-        xt = x.transpose(0, 2, 1)
-        self.Kt += xt @ x
-        self.eps += (xt @ coef[:, :, None])[..., 0]
+        x = np.concatenate(self._x, axis=2)                              # (C, K, rows, R+1)
+        coef = np.concatenate(self._coef, axis=1)                        # (C, rows)
+        member = np.concatenate(self._member, axis=1)                    # (K, rows)
+        if kernels is not None:
+            need = (x.shape[2] + 1) * (self.scorer.R + 2) * self._counts.max() \
+                + 5 * self._counts.max()
+            if self._scratch.size < need:
+                self._scratch = np.empty(need)
+            kernels[0](self._held, self._at, self._rank, self._starts, self._counts, x,
+                       coef, member, self._scratch)
+        else:
+            z = x[pc, pk]                                                # (M, rows, R+1)
+            z[..., -1] = member[pk] * coef[pc] - z[..., -1]
+            self._held += z.transpose(0, 2, 1) @ z
         self._x.clear()
         self._coef.clear()
+        self._member.clear()
 
     def packed_scores(self) -> tuple[np.ndarray, np.ndarray]:
         """Joint log-likelihoods (M,) and augmented factors (M, R+1, R+1) of every pair.
@@ -150,28 +224,34 @@ class StreamStatistics:
         Pairs are packed task after task (:attr:`pairs`); :meth:`scores` splits them.
         """
         self._flush()
+        if self._factored:
+            return self.packed_loglik(), self._factors(np.arange(self.pairs.shape[1]))
         self._terms = None                  # computed afresh: an update's cost, every update
-        gamma_term, const = self._pair_terms()
-        return factor_scores(self.Kt, self.eps, gamma_term, const, work=self._work)
+        if self._work is None:
+            self._work = np.empty_like(self._held)
+        return augmented_scores(self._held, self._offset(), work=self._work)
 
     def packed_loglik(self) -> np.ndarray:
-        """The log-likelihoods (M,) of :meth:`packed_scores` alone (the compiled kernel
-        writes no factors): the phase grid takes the few it needs from :meth:`pair_factors`."""
+        """The log-likelihoods (M,) of :meth:`packed_scores` alone: with the compiled
+        kernels, from the kept factors (the phase grid takes the few factors it needs from
+        :meth:`pair_factors`)."""
         self._flush()
+        if not self._factored:
+            return self.packed_scores()[0]
         self._terms = None
-        gamma_term, const = self._pair_terms()
-        return factor_loglik(self.Kt, self.eps, gamma_term, const, work=self._work)
+        loglik = np.empty(self.pairs.shape[1])
+        _updates.update_kernels(self.scorer.R + 1)[1](self._held, self._at, self._rank,
+                                                       self._counts, self._offset(), loglik)
+        return loglik
 
     def grid(self):
         """Log-likelihoods (M,) of every pair and ``index -> factors`` (n, R+1, R+1) of a few.
 
-        With the compiled kernel only the log-likelihoods are made, and the few factors
-        asked for afterwards (:meth:`pair_factors`): writing every pair's factor would take
-        a fresh array of M (R+1)^2 floats per update (15 MB for 160 demos per task, whose
-        page faults cost more than the factorisations' writes). The numpy path makes the
-        factors anyway and returns them. The same numbers either way.
+        With the compiled kernels the factors are kept: only the log-likelihoods are made,
+        and the few factors asked for are copied (:meth:`pair_factors`). The numpy path
+        factors every pair anyway and returns them. The same numbers either way.
         """
-        if _kernels.factor_kernel(self.Kt.shape[1]) is not None:
+        if self._sync() is not None:
             return self.packed_loglik(), self.pair_factors
         ll, L = self.packed_scores()
         return ll, lambda index: L[index]
@@ -188,27 +268,24 @@ class StreamStatistics:
         """Augmented factors (n, R+1, R+1) of the packed pairs ``index`` (n,): the same
         matrices as :meth:`packed_scores` returns for them (each is factored alone)."""
         self._flush()
-        gamma_term, const = self._pair_terms()
-        return factor_scores(self.Kt[index], self.eps[index], gamma_term[index],
-                             const[index])[1]
+        if self._factored:
+            return self._factors(np.asarray(index))
+        return augmented_scores(self._held[index], self._offset()[index])[1]
 
-    def _pair_terms(self) -> tuple[np.ndarray, np.ndarray]:
-        """:math:`y^T B^{-1} y` and :math:`sP\\log 2\\pi + \\log|B|` of every packed pair
-        (kept for :meth:`pair_factors` until the next observation or :meth:`packed_scores`)."""
+    def _offset(self) -> np.ndarray:
+        """:math:`sP\\log 2\\pi + \\log|B|` of every packed pair (kept for
+        :meth:`pair_factors` until the next observation or :meth:`packed_scores`)."""
         if self._terms is not None and self._terms[0] == self.count:
-            return self._terms[1], self._terms[2]
+            return self._terms[1]
         sc = self.scorer
-        C = self.durations.size
-        const = np.zeros((sc.K, C))
-        gamma_term = np.zeros((sc.K, C))
+        const = np.zeros((sc.K, self.durations.size))
         for g, st in zip(sc.groups, self.groups):
             per_dim = st.count * (LOG_2PI + sc.log_sigma2[g.dims])                # (Pg,)
             member = g.member                                                     # (K, Pg)
             const += (member @ per_dim)[:, None] + member.sum(axis=1)[:, None] * st.logdet_a
-            gamma_term += member @ (st.gamma / sc.sigma2[g.dims]).T
         pk, pc = self.pairs
-        self._terms = (self.count, gamma_term[pk, pc], const[pk, pc])
-        return self._terms[1], self._terms[2]
+        self._terms = (self.count, const[pk, pc])
+        return self._terms[1]
 
     def scores(self, spans: np.ndarray | None = None) -> Scores:
         """Joint log-likelihoods for every task's candidates (as :meth:`Scorer.joint`).

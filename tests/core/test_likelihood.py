@@ -96,8 +96,14 @@ def test_stream_statistics_equal_the_batch_computation(fitted):
         np.testing.assert_allclose(streamed.loglik[k], batch.loglik[k], rtol=1e-10)
         np.testing.assert_allclose(streamed.factors[k][:, -1, -1], batch.factors[k][:, -1, -1],
                                    rtol=1e-6)
-    stats.reset()
-    assert stats.count == 0 and not stats.Kt.any()
+    stats.reset()                       # forgets everything: the same stream, the same numbers
+    assert stats.count == 0
+    for ti, yi in zip(t, y):
+        stats.add(ti, yi)
+    again = stats.scores(spans)
+    for k in range(2):
+        np.testing.assert_array_equal(again.loglik[k], streamed.loglik[k])
+        np.testing.assert_array_equal(again.factors[k], streamed.factors[k])
 
 
 def test_past_the_end_the_motion_holds_its_final_state(fitted):
