@@ -34,6 +34,7 @@ import numpy as np
 
 from sandbox.core.factor import condition_robot
 from sandbox.core.phase import estimate_phase
+from sandbox.core.plan import Held
 from sandbox.core.recognition import task_posterior
 from sandbox.core.rest import motion_probability, rest_log_likelihood
 
@@ -165,7 +166,8 @@ def _stage_runs(pred, t: float) -> dict:
         "recognition": recognition,
         "conditioning": lambda: condition_robot(model.task_models[k].weights, est.factors[k],
                                                 model.n_human, sc.rank[k]),
-        "blending": lambda: before.blended(t, lambda ts: prediction.trajectory(model.basis, ts),
+        "blending": lambda: before.blended(t, Held(prediction.robot, prediction.duration,
+                                                   model.basis),   # as an update: fused
                                            prediction.duration, pred._blending),
     }
 

@@ -87,6 +87,19 @@ def blend_pair(m1, S1, a1, m2, S2, a2):
     return mean, cov
 
 
+def blend_pair_into(m1, S1, a1, m2, S2, a2, mean, cov) -> None:
+    """:func:`blend_pair` written into ``mean`` (T, Q) and ``cov`` (T, Q, Q) (C-contiguous,
+    e.g. a range of knots of the plan being built): the same numbers, no intermediate arrays."""
+    if not a1.size:
+        return
+    if a1.min() > 0 and a2.min() > 0:             # the usual case (as blend_pair)
+        kernel = _kernels.product_kernel()
+        if kernel is not None and kernel(*[np.ascontiguousarray(x, dtype=np.float64)
+                                           for x in (m1, S1, a1, m2, S2, a2)], mean, cov):
+            return
+    mean[...], cov[...] = blend_pair(m1, S1, a1, m2, S2, a2)
+
+
 def _pair(m1, S1, a1, m2, S2, a2):
     """Product of (m1, S1)^a1 and (m2, S2)^a2 per step; result has activation 1 (or a1/a2)."""
     both = (a1 > 0) & (a2 > 0)

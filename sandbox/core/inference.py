@@ -18,11 +18,13 @@ import numpy as np
 from sandbox.core.factor import condition_robot
 from sandbox.core.likelihood import Scorer
 from sandbox.core.phase import ended_probability, estimate_phase
-from sandbox.core.promp import WeightDistribution, trajectory_distribution
+from sandbox.core.promp import WeightDistribution, held_trajectory
 from sandbox.core.recognition import posterior_unchecked
 from sandbox.core.rest import chosen_task, motion_probability, rest_log_likelihood, with_rest
 from sandbox.core.statistics import StreamStatistics
 from sandbox.validation import FloatArray
+
+__all__ = ["Prediction", "conditioned_robot", "held_trajectory", "predict"]
 
 if TYPE_CHECKING:
     from sandbox.core.model import IProMP
@@ -167,18 +169,3 @@ def conditioned_robot(model: IProMP, scorer: Scorer, times: FloatArray, values: 
     factor = cond.joint_pairs(times, values, np.array([float(duration)]),
                               np.array([int(k)]))[1][0]
     return condition_robot(cond.weights[k], factor, model.n_human, cond.rank[k])
-
-
-def held_trajectory(robot: WeightDistribution, duration: float, basis,
-                    times) -> tuple[FloatArray, FloatArray]:
-    """Robot mean (T, Q) and covariance (T, Q, Q) at ``times`` (s) of ``robot`` played over
-    ``duration`` (s), held after its end (:meth:`Prediction.trajectory`)."""
-    z = np.clip(np.asarray(times, dtype=np.float64) / duration, 0.0, 1.0)
-    held = int(np.count_nonzero(z >= 1.0))
-    if held < 2 or not np.all(z[z.size - held:] >= 1.0):
-        return trajectory_distribution(robot, basis, z)
-    # After the end the motion holds (z = 1): one step of it, repeated
-    mean, cov = trajectory_distribution(robot, basis, z[:z.size - held + 1])
-    rest = held - 1
-    return (np.concatenate([mean, np.repeat(mean[-1:], rest, axis=0)]),
-            np.concatenate([cov, np.repeat(cov[-1:], rest, axis=0)]))

@@ -17,15 +17,18 @@ knots (:func:`check_steps`).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from sandbox.core.blending import blend_pair, sigmoid_activations
+from sandbox.core.basis import GaussianBasis
+from sandbox.core.blending import blend_pair_into, sigmoid_activations
+from sandbox.core.blendkernel import blend_knots, knots_kernel
 from sandbox.core.limits import MAX_PLAN_STEPS
-from sandbox.core.promp import trajectory_distribution
+from sandbox.core.promp import WeightDistribution, held_trajectory, trajectory_distribution
 from sandbox.validation import FloatArray
 
 if TYPE_CHECKING:
@@ -69,6 +72,30 @@ class Blending:
 
 
 @dataclass(frozen=True, eq=False)
+class Held:
+    """A robot weight distribution played over ``duration`` s and held after its end: what
+    an update blends into the plan (:meth:`Plan.blended` computes it knot by knot in one
+    compiled call when numba is installed, :mod:`sandbox.core.blendkernel`).
+
+    Attributes
+    ----------
+    robot : WeightDistribution
+        Over the Q robot dims.
+    duration : float
+        Its duration (s).
+    basis : GaussianBasis
+    """
+
+    robot: WeightDistribution
+    duration: float
+    basis: GaussianBasis
+
+    def __call__(self, times: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Means (T, Q) and covariances (T, Q, Q) at ``times`` (s): :func:`held_trajectory`."""
+        return held_trajectory(self.robot, self.duration, self.basis, times)
+
+
+@dataclass(frozen=True, eq=False)
 class Plan:
     """Knot times (n,) in s, means (n, Q) in rad and covariances (n, Q, Q); never mutated.
 
@@ -90,6 +117,7 @@ class Plan:
         dt : float
             Knot spacing (s); the plan runs to the longest mean duration.
         """
+        knots_kernel()          # loaded (or compiled) now, with numba, not in an update
         tasks, P, p = model.task_models, model.n_human, model.priors
         end = max(t.mean_duration for t in tasks)
         check_steps(end / dt + 1, f"the prior plan to {end:g} s", dt)
@@ -144,45 +172,70 @@ class Plan:
         jump : float
             Euclidean change (rad) of the command at the first knot after ``t``.
         """
-        keep = self.times < t                          # knot t is added below: no duplicate
-        # At least until the blend has completed (the rising sigmoid within e^-10 of 1):
-        # an update after the predicted end must still take over the plan.
-        settled = t + how.delay + 10.0 / how.rate
-        end = max(duration, self.times[-1], t + how.horizon, settled)
-        first = (np.floor(t / how.dt + 1e-9) + 1.0) * how.dt
-        check_steps(np.count_nonzero(keep) + (end - first) / how.dt + 2,
-                    f"an update at {t:g} s, planning to {end:g} s,", how.dt)
-        new_t = np.arange(first, end + how.dt, how.dt)
-        new_t = new_t[new_t > t + 1e-9]
+        i = int(np.searchsorted(self.times, t))   # knots before t are kept; t is added
+        new_t = _new_knots(t, max(duration, float(self.times[-1])), i, how)
+        kernel = knots_kernel() if isinstance(new, Held) else None
+        if kernel is not None:                   # one compiled call (blendkernel)
+            times = np.concatenate((self.times[:i], [t], new_t))
+            out_mean = np.empty((times.size,) + self.mean.shape[1:])
+            out_cov = np.empty((times.size,) + self.cov.shape[1:])
+            out_mean[:i], out_cov[:i] = self.mean[:i], self.cov[:i]
+            jump = blend_knots(kernel, (self.times, self.mean, self.cov), t, new_t, new, how,
+                               (out_mean[i:], out_cov[i:]))
+            return Plan(times, out_mean, out_cov), jump
         fall, rise, n = _activations(new_t, t + how.delay, how.rate)
         # the old plan matters only where it is blended (the jump reads its first knot)
-        n_old = n if how.blend else 0
-        old_mean, old_cov = self.interpolate(np.concatenate([[t], new_t[:max(n_old, 1)]]))
+        old_mean, old_cov = self.interpolate(np.concatenate(
+            ([t], new_t[:max(n if how.blend else 0, 1)])))
         mean, cov = new(new_t)
+        times = np.concatenate((self.times[:i], [t], new_t))
+        out_mean = np.empty((times.size,) + self.mean.shape[1:])
+        out_cov = np.empty((times.size,) + self.cov.shape[1:])
+        out_mean[:i], out_cov[:i] = self.mean[:i], self.cov[:i]
+        out_mean[i], out_cov[i] = old_mean[0], old_cov[0]
         if how.blend:
-            mean, cov = _blend((old_mean[1:], old_cov[1:]), (mean, cov), fall, rise, n)
-        jump = float(np.linalg.norm(mean[0] - old_mean[1])) if new_t.size else 0.0
-        plan = Plan(np.concatenate([self.times[keep], [t], new_t]),
-                    np.concatenate([self.mean[keep], old_mean[:1], mean]),
-                    np.concatenate([self.cov[keep], old_cov[:1], cov]))
-        return plan, jump
+            _blend((old_mean[1:], old_cov[1:]), (mean, cov), fall, rise, n,
+                        (out_mean[i + 1:], out_cov[i + 1:]))
+        else:
+            out_mean[i + 1:], out_cov[i + 1:] = mean, cov
+        d = out_mean[i + 1] - old_mean[1] if new_t.size else None
+        jump = math.sqrt(d.dot(d)) if d is not None else 0.0        # its Euclidean norm
+        return Plan(times, out_mean, out_cov), jump
+
+
+def _new_knots(t: float, end: float, kept: int, how: Blending) -> FloatArray:
+    """The knots of ``dt`` after ``t`` (s) an update at ``t`` plans, to ``end`` (s) at least,
+    its horizon and the blend's completion (the rising sigmoid within e^-10 of 1: an update
+    after the predicted end must still take over the plan); ``kept`` knots come before."""
+    end = max(end, t + how.horizon, t + how.delay + 10.0 / how.rate)
+    first = (math.floor(t / how.dt + 1e-9) + 1.0) * how.dt
+    check_steps(kept + (end - first) / how.dt + 2,
+                f"an update at {t:g} s, planning to {end:g} s,", how.dt)
+    new_t = np.arange(first, end + how.dt, how.dt)
+    if new_t.size and new_t[0] <= t + 1e-9:       # (increasing) no knot within 1e-9 of t
+        new_t = new_t[int(np.searchsorted(new_t, t + 1e-9, side="right")):]
+    return new_t
 
 
 def _activations(times: FloatArray, center: float, rate: float):
-    """Falling and rising sigmoids at ``times`` (eq. 18) and the number of leading knots
-    blended: past the falling sigmoid's numerically irrelevant tail (< 1e-12; it only
-    falls) the product is the new distribution."""
+    """Falling and rising sigmoids at ``times`` (increasing; eq. 18) and the number of
+    leading knots blended: past the falling sigmoid's numerically irrelevant tail (< 1e-12;
+    it only falls) the product is the new distribution."""
     fall, rise = sigmoid_activations(times, center, rate)                  # eq. 18
-    n = int(np.searchsorted(-fall, -1e-12))
-    rise[rise < 1e-12] = 0.0
+    n = int(np.count_nonzero(fall > 1e-12))        # fall only falls: its leading knots
+    if rise.size and rise[0] < 1e-12:              # (rises: only leading knots can be)
+        rise[rise < 1e-12] = 0.0
     return fall, rise, n
 
 
 def _blend(old: tuple[FloatArray, FloatArray], new: tuple[FloatArray, FloatArray],
-           fall: FloatArray, rise: FloatArray, n: int) -> tuple[FloatArray, FloatArray]:
-    """Product of the old (falling) and new (rising) distributions at the knots (eq. 16-18);
-    ``old`` is needed at the first ``n`` knots only (:func:`_activations`)."""
+                fall: FloatArray, rise: FloatArray, n: int,
+                out: tuple[FloatArray, FloatArray]) -> None:
+    """Product of the old (falling) and new (rising) distributions at the knots (eq. 16-18)
+    into ``out`` (means (T, Q), covariances (T, Q, Q)); ``old`` is needed at the first ``n``
+    knots only (:func:`_activations`), after which the new one is divided by its activation."""
     mean, cov = new
-    head = blend_pair(old[0][:n], old[1][:n], fall[:n], mean[:n], cov[:n], rise[:n])  # eq. 16-17
-    return (np.concatenate([head[0], mean[n:]]),
-            np.concatenate([head[1], cov[n:] / rise[n:, None, None]]))
+    blend_pair_into(old[0][:n], old[1][:n], fall[:n], mean[:n], cov[:n], rise[:n],
+                    out[0][:n], out[1][:n])                                 # eq. 16-17
+    out[0][n:] = mean[n:]
+    np.divide(cov[n:], rise[n:, None, None], out=out[1][n:])

@@ -204,9 +204,29 @@ def trajectory_distribution(
     A = (psi @ dist.factor.reshape(D, N, r).transpose(1, 0, 2).reshape(N, D * r))
     A = A.reshape(-1, D, r)
     cov = A @ A.transpose(0, 2, 1)                         # eq. 4: psi_t^T Sigma psi_t
-    idx = np.arange(D)
-    cov[:, idx, idx] += dist.reg[None, :] * (psi**2).sum(axis=1)[:, None]
+    diagonal = cov.reshape(-1, D * D)[:, ::D + 1]          # a view of every step's diagonal
+    diagonal += dist.reg[None, :] * (psi**2).sum(axis=1)[:, None]
     return mean, cov
+
+
+def held_trajectory(robot: WeightDistribution, duration: float, basis: GaussianBasis,
+                    times) -> tuple[FloatArray, FloatArray]:
+    """Robot mean (T, Q) and covariance (T, Q, Q) at ``times`` (s) of ``robot`` played over
+    ``duration`` (s), held after its end (:meth:`Prediction.trajectory
+    <sandbox.core.inference.Prediction.trajectory>`): eq. 4 at :math:`z = \\min(t / T, 1)`."""
+    z = np.asarray(times, dtype=np.float64) / duration
+    np.minimum(np.maximum(z, 0.0, out=z), 1.0, out=z)           # clip to [0, 1]
+    held = int(np.count_nonzero(z >= 1.0))
+    if held < 2 or not np.all(z[z.size - held:] >= 1.0):
+        return trajectory_distribution(robot, basis, z)
+    # After the end the motion holds (z = 1): one step of it, repeated
+    moving = z.size - held + 1
+    mean, cov = trajectory_distribution(robot, basis, z[:moving])
+    out_mean = np.empty((z.size,) + mean.shape[1:])
+    out_cov = np.empty((z.size,) + cov.shape[1:])
+    out_mean[:moving], out_cov[:moving] = mean, cov
+    out_mean[moving:], out_cov[moving:] = mean[-1], cov[-1]
+    return out_mean, out_cov
 
 
 def check_robot_definite(dist: WeightDistribution, P: int, task: str) -> None:

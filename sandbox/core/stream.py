@@ -117,8 +117,9 @@ class ObservationStream:
 
     def reset(self) -> None:
         """Forget every observation."""
-        self._t: list[float] = []
-        self._y: list[FloatArray] = []
+        self._n = 0                    # kept rows: the first _n of the buffers (append-only)
+        self._t = np.empty(64)
+        self._y = np.empty((64, self.n_human))
         self._valid = np.zeros(len(self.modalities), dtype=int)
         self.n_skipped = 0
         self.n_rejected = 0
@@ -157,8 +158,8 @@ class ObservationStream:
         Raises ``ValueError`` once :data:`~sandbox.core.limits.MAX_OBSERVATIONS`
         rows are kept.
         """
-        if len(self._t) >= MAX_OBSERVATIONS:
-            raise ValueError(f"observations: this predictor keeps {len(self._t)} observations, "
+        if self._n >= MAX_OBSERVATIONS:
+            raise ValueError(f"observations: this predictor keeps {self._n} observations, "
                              f"the most it may (limits.MAX_OBSERVATIONS); reset() it between "
                              f"motions or raise subsample")
         full = self.row(y)
@@ -178,18 +179,29 @@ class ObservationStream:
             return None
         for i in np.flatnonzero(~keep):
             full[self._dims[i]] = np.nan
-        self._t.append(float(t))
-        self._y.append(full)
+        if self._n == self._t.size:        # grown by doubling: new buffers, the old unchanged
+            self._t = np.concatenate([self._t, np.empty(self._n)])
+            self._y = np.concatenate([self._y, np.empty(self._y.shape)])
+        self._t[self._n], self._y[self._n] = t, full
+        self._n += 1
         return full
 
     def observations(self) -> tuple[FloatArray, FloatArray]:
         """Kept observations: times (s,) and values (s, P), normalised, NaN where unobserved."""
-        return np.array(self._t), np.array(self._y).reshape(-1, self.n_human)
+        return self._t[:self._n].copy(), self._y[:self._n].copy()
+
+    def until(self, t: float) -> tuple[FloatArray, FloatArray]:
+        """The kept observations at times <= ``t`` (s), as read-only views (an update's
+        window: no copy; rows once kept are never written again)."""
+        n = int(np.searchsorted(self._t[:self._n], t, side="right"))   # times never decrease
+        times, values = self._t[:n], self._y[:n]
+        times.flags.writeable = values.flags.writeable = False
+        return times, values
 
     @property
     def first_time(self) -> float:
         """Time (s) of the first kept observation; inf before any."""
-        return self._t[0] if self._t else float("inf")
+        return float(self._t[0]) if self._n else float("inf")
 
     def __len__(self) -> int:
-        return len(self._t)
+        return self._n

@@ -23,7 +23,7 @@ from sandbox.core.inference import Prediction, predict
 from sandbox.core.likelihood import Scorer
 from sandbox.core.limits import MAX_CANDIDATES, MAX_LATTICE_FLOATS, MAX_TIME_S, check_time
 from sandbox.core.phase import Lattice
-from sandbox.core.plan import Blending, Plan, check_steps
+from sandbox.core.plan import Blending, Held, Plan, check_steps
 from sandbox.core.statistics import StreamStatistics
 from sandbox.core.stream import ObservationStream
 from sandbox.limits import BOUNDS
@@ -329,9 +329,9 @@ class PredictorBase:
         elif self.until_end and prediction.ended_probability(t) >= self.end_prob:
             ends = True                          # this update decides; later ones hold it
         k = prediction.task_index
-        basis = self.model.basis
-        self._plan, jump = self._plan.blended(t, lambda ts: prediction.trajectory(basis, ts),
-                                              prediction.duration, self._blending)
+        self._plan, jump = self._plan.blended(
+            t, Held(prediction.robot, prediction.duration, self.model.basis),
+            prediction.duration, self._blending)
         self.ended = self.ended or ends
         self._prediction = prediction
         upd = Update(float(t), int(n_observations), self.model.tasks[k],
@@ -395,6 +395,4 @@ class PredictorBase:
         raise NotImplementedError
 
     def _window(self, t: float) -> tuple[FloatArray, FloatArray]:
-        times, values = self.observations()
-        keep = times <= t
-        return times[keep], values[keep]
+        return self.stream.until(t)

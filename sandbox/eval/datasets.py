@@ -54,13 +54,13 @@ def _folder_pair(data, kw: dict) -> tuple[list, list, list[str]]:
     :func:`~sandbox.data.datasets.load_dataset`: the same trials), while this process
     loads numba's kernel, which the leave-one-out's workers then inherit. Returns
     ``(train, test, warnings)``: the workers' warnings (skipped files) as text."""
-    from sandbox.core import _kernels
+    from sandbox.core.blendkernel import knots_kernel
     from sandbox.eval.loocv import map_trials
 
     kw = {**kw, "on_trial": None}
     try:
         versions = map_trials(_one_version, 2, _RAW.__setitem__, ("folder", (data, kw)),
-                              workers=2, meanwhile=lambda: _kernels.factor_kernel(1))
+                              workers=2, meanwhile=knots_kernel)
     finally:
         _RAW.clear()
     (train, warned_train), (test, warned_test) = versions

@@ -29,7 +29,8 @@ from multiprocessing import get_context
 
 import numpy as np
 
-from sandbox.core import DynamicPredictor, IProMP, _kernels, familiarity, predict
+from sandbox.core import DynamicPredictor, IProMP, familiarity, predict
+from sandbox.core.blendkernel import knots_kernel
 from sandbox.core.inference import conditioned_robot, held_trajectory
 from sandbox.core.jitter import JITTER_FACTOR
 from sandbox.core.model import SIGNAL_FLOOR
@@ -371,7 +372,7 @@ def map_trials(run_one, n: int, init, initargs: tuple, *, workers: int = 1,
                 shown.update()
             return results
         if meanwhile is None:
-            _kernels.factor_kernel(1)    # numba's kernel loaded once here, not in every worker
+            knots_kernel()    # numba's kernels (the blend's too) loaded here, not per worker
         order = list(range(n)) if cost is None else sorted(range(n), key=lambda i: -cost[i])
         chunk = max(1, n // (8 * workers)) if cost is None else 1
         with ProcessPoolExecutor(workers, mp_context=get_context("fork"),
