@@ -3,7 +3,9 @@
 One update (:meth:`~sandbox.core.updating.PredictorBase.update`) has four stages:
 
 * ``phase``: the speed candidates of every task (:func:`~sandbox.core.phase.estimate_phase`:
-  the grid's batched Cholesky factors of the augmented r x r matrices, eq. 11-13, and the
+  the grid's log-likelihoods from the augmented r x r factors, eq. 11-13 (with the compiled
+  kernels the stream keeps the factors up to date as observations arrive, so the grid reads
+  their pivots; on the numpy path it factors them), and the
   parabolic refinement, which builds the likelihood's statistics of a few new
   (duration, task) pairs from the observations);
 * ``recognition``: the task posterior (eq. 14-15) and the rest hypothesis
@@ -32,6 +34,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from sandbox.core import _kernels
 from sandbox.core.factor import condition_robot
 from sandbox.core.phase import estimate_phase
 from sandbox.core.plan import Held
@@ -85,7 +88,9 @@ def update_flops(pred, t: float) -> dict:
     ----------
     pred : PredictorBase
         A predictor fed with observations, joint likelihood, incremental statistics
-        (the update's grid reads them; their growth is :meth:`observe`'s work).
+        (the update's grid reads them; their growth is :meth:`observe`'s work). With the
+        compiled kernels the stream keeps every pair's factor, so the grid counts only
+        their log pivots; on the numpy path it counts the factorisations.
     t : float
         Update time (s).
 
@@ -99,7 +104,10 @@ def update_flops(pred, t: float) -> dict:
     s, K, N, R1 = times.size, sc.K, sc.N, sc.R + 1
     spans = pred._lattice.spans()
     M = int((spans[:, 1] - spans[:, 0]).sum())
-    phase = M * (R1**3 / 3 + 4 * R1) + M * 12                    # grid: factor_scores, prior
+    if _kernels.factor_kernel(R1) is None:                       # numpy: the grid factors
+        phase = M * (R1**3 / 3 + 4 * R1) + M * 12                # factor_scores, prior
+    else:                                                        # kept factors: log pivots
+        phase = M * (2 * R1) + M * 12                            # summed, prior
     phase += pred.refine_steps * _pair_flops(sc, values, K, s)   # one new pair per task
     P = values.shape[1]
     recognition = 8 * s * P + 30 * K
