@@ -37,7 +37,7 @@ _COMPILED: list = []      # [kernel or None] once looked for
 
 def knots_kernel():
     """The compiled :func:`_knots_py`, or None on the numpy path (as
-    :func:`~sandbox.core._kernels.product_kernel`). The first call loads (or compiles) it:
+    ``sandbox.core._kernels.product_kernel``). The first call loads (or compiles) it:
     a predictor makes that call when it is built, so that no update pays it."""
     if _kernels.product_kernel() is None:
         return None

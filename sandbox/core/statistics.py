@@ -36,7 +36,7 @@ y^T B^{-1} y - 2\\epsilon_R + \\tilde K_{RR}\\end{bmatrix}`, which therefore gro
 keep that matrix of every (candidate, task) pair the lattice scores (each task's span),
 packed task after task (:attr:`StreamStatistics.pairs`): on the numpy path the matrix
 itself, factored at every update in one batched Cholesky; with the compiled kernels
-(:mod:`sandbox.core._updates`) its Cholesky factor, brought up to date by rank-1 updates
+(``sandbox.core._updates``) its Cholesky factor, brought up to date by rank-1 updates
 as the rows arrive, so that an update factors nothing. Either way the results equal the
 batch computation (:meth:`~sandbox.core.likelihood.Scorer.joint`) to round-off.
 """
