@@ -130,10 +130,7 @@ def _numpy_scores(Kt, eps, gamma_term, offset, work):
     Kt[:, R, :R] = e
     Kt[:, :R, R] = e
     Kt[:, R, R] = dbd
-    L = _cholesky(Kt)
-    diag = np.diagonal(L, axis1=1, axis2=2)
-    logdet_k = 2.0 * np.log(diag[:, :R]).sum(axis=1)
-    return -0.5 * (offset + logdet_k + diag[:, R] ** 2), L
+    return _factored_scores(Kt, offset)
 
 
 def augmented_scores(aug: FloatArray, offset: FloatArray, *,
@@ -151,8 +148,15 @@ def augmented_scores(aug: FloatArray, offset: FloatArray, *,
         work = aug.copy()
     else:
         np.copyto(work, aug)
+    return _factored_scores(work, offset)
+
+
+def _factored_scores(aug: FloatArray, offset: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Log-likelihoods (M,) (eq. 12) and factors of augmented matrices (M, R+1, R+1),
+    from their Cholesky factors: half log|K| from the first R pivots, the Mahalanobis term
+    the last (shared by both numpy paths)."""
     R = aug.shape[1] - 1
-    L = _cholesky(work)
+    L = _cholesky(aug)
     diag = np.diagonal(L, axis1=1, axis2=2)
     logdet_k = 2.0 * np.log(diag[:, :R]).sum(axis=1)
     return -0.5 * (offset + logdet_k + diag[:, R] ** 2), L
