@@ -188,10 +188,15 @@ class StreamStatistics:
         task = self.pairs[0][index]
         for k in set(task.tolist()):
             at = np.flatnonzero(task == k)
-            act = self._active[k]
-            lanes = index[at] - self._cuts[k]
-            out[at[:, None, None], act[:, None], act] = \
-                blocks[k][:, :, lanes].transpose(2, 1, 0)
+            r = self._rank[k]                           # active rows: 0 .. r-1 and R
+            block = blocks[k][:, :, index[at] - self._cuts[k]].transpose(2, 1, 0)
+            if r == R:
+                out[at] = block
+                continue
+            out[at, :r, :r] = block[:, :r, :r]          # slices, not an index per entry
+            out[at, :r, R] = block[:, :r, r]
+            out[at, R, :r] = block[:, r, :r]
+            out[at, R, R] = block[:, r, r]
         return out
 
     def _flush(self) -> None:
