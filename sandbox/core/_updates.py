@@ -54,8 +54,9 @@ def compile_with(jit) -> None:
     """Replace the kernels by their versions compiled by ``jit`` and load them now (the
     first update should not pay it): called by :func:`update_kernels` the first time, when
     a stream's statistics are made."""
-    global _update, _loglik, _fold
+    global _update, _loglik, _fold, copy_factors
     _fold = jit(_fold_py)                 # _update_py calls it by its global name
+    copy_factors = jit(_copy_factors_py)
     _update, _loglik = jit(_update_py), jit(_loglik_py)
     ints = np.zeros(1, dtype=np.int64)
     store, at = np.array([1.0, 0.0, 0.0, 0.0]), np.array([0, 4])
@@ -63,6 +64,8 @@ def compile_with(jit) -> None:
             np.ones((1, 1, 1, 2)), np.ones((1, 1)), np.ones((1, 1)), np.empty(8))
     _loglik(store, at, np.ones(1, dtype=np.int64), np.ones(1, dtype=np.int64),
             np.zeros(1), np.empty(1))
+    copy_factors(store, at, np.ones(1, dtype=np.int64), np.ones(1, dtype=np.int64), ints,
+                 ints, np.zeros((1, 2, 2)))
 
 
 def _update_py(store, at, ranks, starts, counts, x, coef, member, scratch) -> None:
@@ -174,6 +177,24 @@ def _loglik_py(store, at, ranks, counts, offset, loglik) -> None:
             m += 1
 
 
+def _copy_factors_py(store, at, ranks, counts, tasks, lanes, out) -> None:
+    """The kept factors of pairs (``tasks[i]``, candidate ``lanes[i]`` of that task) into
+    ``out`` (n, R+1, R+1), padded: the identity on a task's padding rows, its augmented row
+    and column at R, zeros elsewhere (``out`` comes zeroed). A copy, entry for entry."""
+    R = out.shape[1] - 1
+    for i in range(tasks.size):
+        k, lane = tasks[i], lanes[i]
+        r = ranks[k]
+        U = store[at[k]:at[k + 1]].reshape((r + 1, r + 1, counts[k]))
+        for a in range(r, R):
+            out[i, a, a] = 1.0
+        for a in range(r + 1):
+            ia = a if a < r else R
+            for b in range(r + 1):
+                out[i, ia, b if b < r else R] = U[b, a, lane]
+
+
 _update = _update_py         # replaced by their compiled versions in compile_with
 _loglik = _loglik_py
+copy_factors = _copy_factors_py
 _fold = _fold_py

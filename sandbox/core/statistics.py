@@ -180,23 +180,12 @@ class StreamStatistics:
 
     def _factors(self, index: np.ndarray) -> np.ndarray:
         """Lower factors (n, R+1, R+1) of the packed pairs ``index`` from the store, padded
-        (the identity on a task's padding rows, the augmented row at R)."""
+        (the identity on a task's padding rows, the augmented row at R): one compiled copy."""
         R = self.scorer.R
         out = np.zeros((index.size, R + 1, R + 1))
-        out[:, np.arange(R), np.arange(R)] = 1.0
-        blocks = self._blocks()
         task = self.pairs[0][index]
-        for k in set(task.tolist()):
-            at = np.flatnonzero(task == k)
-            r = self._rank[k]                           # active rows: 0 .. r-1 and R
-            block = blocks[k][:, :, index[at] - self._cuts[k]].transpose(2, 1, 0)
-            if r == R:
-                out[at] = block
-                continue
-            out[at, :r, :r] = block[:, :r, :r]          # slices, not an index per entry
-            out[at, :r, R] = block[:, :r, r]
-            out[at, R, :r] = block[:, r, :r]
-            out[at, R, R] = block[:, r, r]
+        _updates.copy_factors(self._held, self._at, self._rank, self._counts, task,
+                              index - self._cuts[task], out)
         return out
 
     def _flush(self) -> None:
