@@ -23,7 +23,7 @@ both.
 
 from __future__ import annotations
 
-from math import sqrt
+from math import log, sqrt
 
 import numpy as np
 
@@ -54,9 +54,9 @@ def compile_with(jit) -> None:
     """Replace the kernels by their versions compiled by ``jit`` and load them now (the
     first update should not pay it): called by :func:`update_kernels` the first time, when
     a stream's statistics are made."""
-    global _update, _loglik, _fold, _log_pivots
+    global _update, _loglik, _fold, copy_factors
     _fold = jit(_fold_py)                 # _update_py calls it by its global name
-    _log_pivots = jit(_kernels._log_pivots_py)      # and _loglik_py this one
+    copy_factors = jit(_copy_factors_py)
     _update, _loglik = jit(_update_py), jit(_loglik_py)
     ints = np.zeros(1, dtype=np.int64)
     store, at = np.array([1.0, 0.0, 0.0, 0.0]), np.array([0, 4])
@@ -64,6 +64,8 @@ def compile_with(jit) -> None:
             np.ones((1, 1, 1, 2)), np.ones((1, 1)), np.ones((1, 1)), np.empty(8))
     _loglik(store, at, np.ones(1, dtype=np.int64), np.ones(1, dtype=np.int64),
             np.zeros(1), np.empty(1))
+    copy_factors(store, at, np.ones(1, dtype=np.int64), np.ones(1, dtype=np.int64), ints,
+                 ints, np.zeros((1, 2, 2)))
 
 
 def _update_py(store, at, ranks, starts, counts, x, coef, member, scratch) -> None:
@@ -153,18 +155,46 @@ def _loglik_py(store, at, ranks, counts, offset, loglik) -> None:
     """``loglik[m] = -(offset[m] + log|K| + U_m[r, r]^2) / 2`` (eq. 12) of every packed
     pair m (task after task) from its factor: log|K| from the first r pivots as the log
     of their running product, one ``log`` per factor of 1e100 (pivots of K = I + J are 1
-    or more): :func:`~sandbox.core._kernels._log_pivots_py`, the grid's own."""
+    or more), as :func:`~sandbox.core._kernels._log_pivots_py`, the grid's own, computes
+    it for one pair: the same operations in the same order, here every lane of a task at
+    once, pivot after pivot (a pivot's lanes are contiguous in the store; pair after pair,
+    each pivot was a read of its own cache line, out of cache with many tasks)."""
     m = 0
     for k in range(ranks.size):
         r, C = ranks[k], counts[k]
         U = store[at[k]:at[k + 1]].reshape((r + 1, r + 1, C))
+        ld, prod = np.zeros(C), np.ones(C)
+        for j in range(r):
+            d = U[j, j]
+            for lane in range(C):
+                prod[lane] *= d[lane]
+                if prod[lane] > 1e100 or prod[lane] < 1e-100:
+                    ld[lane] += log(prod[lane])
+                    prod[lane] = 1.0
         for lane in range(C):
-            ld = _log_pivots(U, lane, r)
-            loglik[m] = -0.5 * (offset[m] + 2.0 * ld + U[r, r, lane] ** 2)
+            loglik[m] = -0.5 * (offset[m] + 2.0 * (ld[lane] + log(prod[lane]))
+                                + U[r, r, lane] ** 2)
             m += 1
+
+
+def _copy_factors_py(store, at, ranks, counts, tasks, lanes, out) -> None:
+    """The kept factors of pairs (``tasks[i]``, candidate ``lanes[i]`` of that task) into
+    ``out`` (n, R+1, R+1), padded: the identity on a task's padding rows, its augmented row
+    and column at R, zeros elsewhere (``out`` comes zeroed). A copy, entry for entry."""
+    R = out.shape[1] - 1
+    for i in range(tasks.size):
+        k, lane = tasks[i], lanes[i]
+        r = ranks[k]
+        U = store[at[k]:at[k + 1]].reshape((r + 1, r + 1, counts[k]))
+        for a in range(r, R):
+            out[i, a, a] = 1.0
+        for a in range(r + 1):
+            ia = a if a < r else R
+            for b in range(r + 1):
+                out[i, ia, b if b < r else R] = U[b, a, lane]
 
 
 _update = _update_py         # replaced by their compiled versions in compile_with
 _loglik = _loglik_py
-_log_pivots = _kernels._log_pivots_py
+copy_factors = _copy_factors_py
 _fold = _fold_py

@@ -45,7 +45,7 @@ def knots_kernel():
         jit = cast(Callable, _kernels.compiler())     # numba.njit(cache=True, nogil=True)
         # _knots calls the helpers by their global names: numba resolves them when compiling.
         globals()["_interp"] = jit(_interp_py)
-        globals()["_held_row"] = jit(_held_row_py)
+        globals()["_held_rows"] = jit(_held_rows_py)
         globals()["_product_knot"] = jit(_product_knot_py)
         kernel = jit(_knots_py)
         one, zero = np.ones(1), np.zeros(1)
@@ -106,41 +106,56 @@ def _interp_py(pt, pm, pc, x: float, mean, cov, j: int) -> None:
             cov[j, a, b] = (1 - w) * pc[i - 1, a, b] + w * pc[i, a, b]
 
 
-def _held_row_py(mu, F, reg, centers, neg_half_h: float, normalized: bool, z: float,
-                 mean, cov, j: int) -> None:
-    """The robot's distribution at phase ``z`` (eq. 4, :func:`~sandbox.core.promp.
-    trajectory_distribution`) into row ``j``: means ``mu`` (Q, N), factor ``F`` (Q, N, r)."""
+def _held_rows_py(mu, F, reg, centers, neg_half_h: float, normalized: bool, z, mean,
+                  cov) -> None:
+    """The robot's distribution at the phases ``z`` (mk,) (eq. 4,
+    :func:`~sandbox.core.promp.trajectory_distribution`) into rows ``0 .. mk-1`` of ``mean``
+    (., Q) and ``cov`` (., Q, Q): means ``mu`` (Q, N), factor ``F`` (Q, N, r). The basis at
+    every phase first, then each dim's factor rows at all of them in one matrix product
+    (BLAS: with many demos r is large and this product is most of the blend)."""
     Q, N, r = F.shape
-    psi = np.empty(N)
-    top = -np.inf
-    for c in range(N):
-        d = z - centers[c]
-        psi[c] = d * d * neg_half_h
-        top = max(top, psi[c])
-    total, sq = 0.0, 0.0
-    for c in range(N):
-        psi[c] = exp(psi[c] - top) if normalized else exp(psi[c])
-        total += psi[c]
-    for c in range(N):
-        if normalized:
-            psi[c] /= total
-        sq += psi[c] * psi[c]
-    A = np.zeros((Q, r))
-    for a in range(Q):
-        acc = 0.0
+    mk = z.size
+    psi = np.empty((mk, N))
+    sq = np.zeros(mk)
+    for j in range(mk):
+        top = -np.inf
         for c in range(N):
-            acc += psi[c] * mu[a, c]
-            for k in range(r):
-                A[a, k] += psi[c] * F[a, c, k]
-        mean[j, a] = acc
-    for a in range(Q):
-        for b in range(a + 1):
+            d = z[j] - centers[c]
+            psi[j, c] = d * d * neg_half_h
+            top = max(top, psi[j, c])
+        total = 0.0
+        for c in range(N):
+            psi[j, c] = exp(psi[j, c] - top) if normalized else exp(psi[j, c])
+            total += psi[j, c]
+        for c in range(N):
+            if normalized:
+                psi[j, c] /= total
+            sq[j] += psi[j, c] * psi[j, c]
+        for a in range(Q):
             acc = 0.0
-            for k in range(r):
-                acc += A[a, k] * A[b, k]
-            cov[j, a, b] = acc
-            cov[j, b, a] = acc
-        cov[j, a, a] += reg[a] * sq
+            for c in range(N):
+                acc += psi[j, c] * mu[a, c]
+            mean[j, a] = acc
+    A = np.zeros((Q, mk, r))
+    if mk and r:
+        for a in range(Q):
+            A[a] = np.dot(psi, F[a])                              # (mk, r)
+    four = r - r % 4
+    for j in range(mk):
+        for a in range(Q):
+            for b in range(a + 1):
+                u, v, w, x = 0.0, 0.0, 0.0, 0.0       # four sums: independent chains
+                for k in range(0, four, 4):
+                    u += A[a, j, k] * A[b, j, k]
+                    v += A[a, j, k + 1] * A[b, j, k + 1]
+                    w += A[a, j, k + 2] * A[b, j, k + 2]
+                    x += A[a, j, k + 3] * A[b, j, k + 3]
+                for k in range(four, r):
+                    u += A[a, j, k] * A[b, j, k]
+                acc = (u + v) + (w + x)
+                cov[j, a, b] = acc
+                cov[j, b, a] = acc
+            cov[j, a, a] += reg[a] * sq[j]
 
 
 def _knots_py(pt, pm, pc, t: float, new_t, center: float, rate: float, blend: bool, mu, F,
@@ -168,15 +183,21 @@ def _knots_py(pt, pm, pc, t: float, new_t, center: float, rate: float, blend: bo
     _interp(pt, pm, pc, t, out_m, out_c, 0)
     for j in range(max(n, 1) if m else 0):
         _interp(pt, pm, pc, new_t[j], om, oc, j)
+    mk = 0                               # knots up to the first past the end: computed
     for j in range(m):
-        z = min(max(new_t[j] / duration, 0.0), 1.0)
-        if j and z >= 1.0 and min(max(new_t[j - 1] / duration, 0.0), 1.0) >= 1.0:
+        mk = j + 1
+        if min(max(new_t[j] / duration, 0.0), 1.0) >= 1.0:
+            break
+    z = np.empty(mk)
+    for j in range(mk):
+        z[j] = min(max(new_t[j] / duration, 0.0), 1.0)
+    _held_rows(mu, F, reg, centers, neg_half_h, normalized, z, nm, nc)
+    for j in range(m):
+        if j >= mk:
             for a in range(Q):                                # held after the end
                 nm[j, a] = nm[j - 1, a]
                 for b in range(Q):
                     nc[j, a, b] = nc[j - 1, a, b]
-        else:
-            _held_row(mu, F, reg, centers, neg_half_h, normalized, z, nm, nc, j)
         if j >= n:
             for a in range(Q):
                 out_m[1 + j, a] = nm[j, a]
@@ -234,5 +255,5 @@ def _product_knot_py(m1, S1, a1: float, m2, S2, a2: float, L, Y, Z, mean, cov) -
 
 
 _interp = _interp_py
-_held_row = _held_row_py
+_held_rows = _held_rows_py
 _product_knot = _product_knot_py     # replaced by their compiled versions in knots_kernel

@@ -101,13 +101,26 @@ def factor_loglik(Kt: FloatArray, eps: FloatArray, gamma_term: FloatArray,
     return (done if done is not None else _numpy_scores(Kt, eps, gamma_term, offset, work))[0]
 
 
+#: Matrices larger than this (rows) go to LAPACK when fewer than :data:`FEW_LANES` of them
+#: come together: the compiled kernel lays a batch's matrices side by side, and a few lanes
+#: of large matrices run slower than LAPACK's one matrix at a time (the refinement's 4
+#: pairs of 94 rows, 160 demos per task: 0.60 ms against 0.20 ms; of 40 rows 0.05 against
+#: 0.07 ms; measured at load 8-11).
+LARGE_ROWS = 48
+#: See :data:`LARGE_ROWS`.
+FEW_LANES = 16
+
+
 def _compiled(Kt, eps, gamma_term, offset, factors: bool):
     """(loglik, factors) from the compiled kernel (``factors``: written, else an empty
-    array); None when there is no kernel for this size or a block failed (numpy's turn)."""
-    kernel = _kernels.factor_kernel(Kt.shape[1])
-    if kernel is None or not Kt.shape[0]:
-        return None
+    array); None when there is no kernel for this size, a few large matrices
+    (:data:`LARGE_ROWS`) or a block failed (numpy's turn)."""
     M, n = Kt.shape[:2]
+    if n > LARGE_ROWS and M < FEW_LANES:
+        return None
+    kernel = _kernels.factor_kernel(n)
+    if kernel is None or not M:
+        return None
     loglik, L = np.empty(M), np.empty((M if factors else 0, n, n))
     if kernel(np.ascontiguousarray(Kt, dtype=np.float64), np.ascontiguousarray(eps),
               np.ascontiguousarray(gamma_term, dtype=np.float64),

@@ -180,18 +180,12 @@ class StreamStatistics:
 
     def _factors(self, index: np.ndarray) -> np.ndarray:
         """Lower factors (n, R+1, R+1) of the packed pairs ``index`` from the store, padded
-        (the identity on a task's padding rows, the augmented row at R)."""
+        (the identity on a task's padding rows, the augmented row at R): one compiled copy."""
         R = self.scorer.R
         out = np.zeros((index.size, R + 1, R + 1))
-        out[:, np.arange(R), np.arange(R)] = 1.0
-        blocks = self._blocks()
         task = self.pairs[0][index]
-        for k in set(task.tolist()):
-            at = np.flatnonzero(task == k)
-            act = self._active[k]
-            lanes = index[at] - self._cuts[k]
-            out[at[:, None, None], act[:, None], act] = \
-                blocks[k][:, :, lanes].transpose(2, 1, 0)
+        _updates.copy_factors(self._held, self._at, self._rank, self._counts, task,
+                              index - self._cuts[task], out)
         return out
 
     def _flush(self) -> None:

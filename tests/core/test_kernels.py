@@ -35,13 +35,32 @@ def _both(monkeypatch, *args):
     return ref, factor_scores(*[a.copy() for a in args])
 
 
-@pytest.mark.parametrize(("M", "R"), [(1, 1), (37, 9), (70, 30), (5, 55), (3, 93)])
+@pytest.mark.parametrize(("M", "R"), [(1, 1), (37, 9), (70, 30), (16, 55), (16, 93)])
 def test_kernel_matches_the_numpy_path(monkeypatch, M, R):
     pytest.importorskip("numba")
     (ll0, L0), (ll1, L1) = _both(monkeypatch, *_pairs(np.random.default_rng(R), M, R))
     np.testing.assert_allclose(ll1, ll0, rtol=1e-12, atol=0)
     np.testing.assert_allclose(L1, L0, rtol=1e-12, atol=1e-12 * np.abs(L0).max())
     assert np.all(np.triu(L1, 1) == 0.0)
+
+
+@pytest.mark.parametrize(("M", "R"), [(3, 93), (15, 49)])
+def test_a_few_large_matrices_take_lapack(monkeypatch, M, R):
+    """Fewer than FEW_LANES matrices of more than LARGE_ROWS rows: the numpy path's numbers
+    bit for bit with the kernel on (its lanes would be mostly empty); one more matrix, or
+    one row fewer, and the kernel factors them (within round-off, not bit for bit)."""
+    pytest.importorskip("numba")
+    from sandbox.core import factor
+
+    assert R + 1 > factor.LARGE_ROWS and M < factor.FEW_LANES
+    (ll0, L0), (ll1, L1) = _both(monkeypatch, *_pairs(np.random.default_rng(R), M, R))
+    np.testing.assert_array_equal(ll1, ll0)
+    np.testing.assert_array_equal(L1, L0)
+    for args in (_pairs(np.random.default_rng(R), factor.FEW_LANES, R),
+                 _pairs(np.random.default_rng(R), M, factor.LARGE_ROWS - 1)):
+        (ll0, _), (ll1, _) = _both(monkeypatch, *args)
+        np.testing.assert_allclose(ll1, ll0, rtol=1e-12, atol=0)
+        assert not np.array_equal(ll1, ll0)        # the kernel's own order of operations
 
 
 def test_kernel_clamps_a_lost_last_pivot_as_the_numpy_path(monkeypatch):
