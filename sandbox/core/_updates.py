@@ -23,7 +23,7 @@ both.
 
 from __future__ import annotations
 
-from math import log, sqrt
+from math import sqrt
 
 import numpy as np
 
@@ -54,8 +54,9 @@ def compile_with(jit) -> None:
     """Replace the kernels by their versions compiled by ``jit`` and load them now (the
     first update should not pay it): called by :func:`update_kernels` the first time, when
     a stream's statistics are made."""
-    global _update, _loglik, _fold, copy_factors
+    global _update, _loglik, _fold, _log_pivots, copy_factors
     _fold = jit(_fold_py)                 # _update_py calls it by its global name
+    _log_pivots = jit(_kernels._log_pivots_py)      # and _loglik_py this one
     copy_factors = jit(_copy_factors_py)
     _update, _loglik = jit(_update_py), jit(_loglik_py)
     ints = np.zeros(1, dtype=np.int64)
@@ -155,25 +156,14 @@ def _loglik_py(store, at, ranks, counts, offset, loglik) -> None:
     """``loglik[m] = -(offset[m] + log|K| + U_m[r, r]^2) / 2`` (eq. 12) of every packed
     pair m (task after task) from its factor: log|K| from the first r pivots as the log
     of their running product, one ``log`` per factor of 1e100 (pivots of K = I + J are 1
-    or more), as :func:`~sandbox.core._kernels._log_pivots_py`, the grid's own, computes
-    it for one pair: the same operations in the same order, here every lane of a task at
-    once, pivot after pivot (a pivot's lanes are contiguous in the store; pair after pair,
-    each pivot was a read of its own cache line, out of cache with many tasks)."""
+    or more): :func:`~sandbox.core._kernels._log_pivots_py`, the grid's own."""
     m = 0
     for k in range(ranks.size):
         r, C = ranks[k], counts[k]
         U = store[at[k]:at[k + 1]].reshape((r + 1, r + 1, C))
-        ld, prod = np.zeros(C), np.ones(C)
-        for j in range(r):
-            d = U[j, j]
-            for lane in range(C):
-                prod[lane] *= d[lane]
-                if prod[lane] > 1e100 or prod[lane] < 1e-100:
-                    ld[lane] += log(prod[lane])
-                    prod[lane] = 1.0
         for lane in range(C):
-            loglik[m] = -0.5 * (offset[m] + 2.0 * (ld[lane] + log(prod[lane]))
-                                + U[r, r, lane] ** 2)
+            ld = _log_pivots(U, lane, r)
+            loglik[m] = -0.5 * (offset[m] + 2.0 * ld + U[r, r, lane] ** 2)
             m += 1
 
 
@@ -197,4 +187,5 @@ def _copy_factors_py(store, at, ranks, counts, tasks, lanes, out) -> None:
 _update = _update_py         # replaced by their compiled versions in compile_with
 _loglik = _loglik_py
 copy_factors = _copy_factors_py
+_log_pivots = _kernels._log_pivots_py
 _fold = _fold_py
