@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import os
 import shutil
+import signal
 import tempfile
 from pathlib import Path
 
@@ -22,6 +23,17 @@ _CACHE = os.environ["SANDBOX_CACHE_DIR"] = tempfile.mkdtemp(prefix="sandbox-test
 
 def pytest_sessionfinish(session, exitstatus) -> None:
     shutil.rmtree(_CACHE, ignore_errors=True)
+
+
+@pytest.fixture(autouse=True)
+def _sigint_restored():
+    """A test that runs ``sandbox.cli.run`` in-process leaves its "Ctrl-C ends the
+    process" handler on SIGINT; put the previous one back, so no later test (in the same
+    worker) starts with it."""
+    previous = signal.getsignal(signal.SIGINT)
+    yield
+    if signal.getsignal(signal.SIGINT) is not previous and previous is not None:
+        signal.signal(signal.SIGINT, previous)
 
 REPO = Path(__file__).resolve().parents[1]
 RECORDED_SET = "birl-handover-20180329"

@@ -255,8 +255,9 @@ def test_a_ctrl_c_while_the_late_handler_goes_in_is_130(monkeypatch, capsys):
         return real(signum, handler)
 
     monkeypatch.setattr(cli, "main", lambda argv=None: 0)
-    monkeypatch.setattr(signal, "signal", interrupted_once)
     previous = signal.getsignal(signal.SIGINT)
+    real(signal.SIGINT, signal.default_int_handler)   # Python's default, as in a fresh process
+    monkeypatch.setattr(signal, "signal", interrupted_once)
     try:
         with pytest.raises(SystemExit) as leaving:
             cli.run([])
