@@ -127,8 +127,8 @@ def evaluate_trial(model: IProMP, test, config: EvalConfig, fk, truth=None) -> d
     """All measures of one held-out trial (see the module docstring).
 
     ``truth`` is the same trial preprocessed for training (smoothed; default
-    ``test``): its motion's end is the true duration. ``fk`` maps joints to the
-    gripper position (m); a model whose robot part is in task space is scored on
+    ``test``): its motion's end is the true duration. ``fk`` maps joints (..., Q) to the
+    gripper position (..., 3) (m); a model whose robot part is in task space is scored on
     its positions instead (:func:`~sandbox.eval.metrics.goal_map`; e_q None).
     """
     truth = test if truth is None else truth
@@ -153,12 +153,13 @@ def evaluate_trial(model: IProMP, test, config: EvalConfig, fk, truth=None) -> d
     if config.window_mode == "all":
         shared |= {x for times in windows.values() for x in times}
     preds = predictions_at(model, scorer, t_obs, y_obs, sorted(shared), config, opts)
-    out = {"task": test.task, "source": test.source, "duration": T,
-           "oracle": _score(held_trajectory(oracle, T, model.basis, t), q, goal, fk, 0.0),
+    static = [preds[cut] for cut in cuts.values()]
+    scores = _scores([held_trajectory(oracle, T, model.basis, t)]
+                     + [pred.trajectory(model.basis, t) for pred in static],
+                     [0.0] + [abs(pred.duration - T) for pred in static], q, goal, fk)
+    out = {"task": test.task, "source": test.source, "duration": T, "oracle": scores[0],
            "static": {}}
-    for f, cut in cuts.items():
-        pred = preds[cut]
-        res = _score(pred.trajectory(model.basis, t), q, goal, fk, abs(pred.duration - T))
+    for f, pred, res in zip(cuts, static, scores[1:]):
         res["recognition"] = float(pred.task_index == k)
         out["static"][f"{f:.1f}"] = res
     out["dynamic"] = {f"{w:.1f}": _dynamic(template.with_window(w), test, t, q, T, goal, fk,
@@ -191,20 +192,29 @@ def predictions_at(model, scorer, t_obs, y_obs, times, config, opts) -> dict:
 
 
 def _score(traj, q, goal, fk, e_phi) -> dict:
-    mean, cov = traj
-    e_q = None if fk is metrics.task_goal else metrics.joint_rms(mean, q)   # n/a in task space
-    nll, coverage = metrics.calibration(q, mean, cov)
-    return {"e_p": float(np.linalg.norm(fk(mean[-1]) - goal)),
-            "e_q": e_q, "e_phi": float(e_phi), "nll": nll, "coverage": coverage}
+    return _scores([traj], [e_phi], q, goal, fk)[0]
+
+
+def _scores(trajs, e_phis, q, goal, fk) -> list[dict]:
+    """The measures of predicted trajectories (means (T, Q), covariances (T, Q, Q)), their
+    final means' goals in one ``fk`` call (the same numbers as one call each)."""
+    ends = fk(np.array([mean[-1] for mean, _ in trajs]))
+    out = []
+    for (mean, cov), end, e_phi in zip(trajs, ends, e_phis):
+        e_q = None if fk is metrics.task_goal else metrics.joint_rms(mean, q)   # n/a in task space
+        nll, coverage = metrics.calibration(q, mean, cov)
+        out.append({"e_p": float(np.linalg.norm(end - goal)), "e_q": e_q,
+                    "e_phi": float(e_phi), "nll": nll, "coverage": coverage})
+    return out
 
 
 def _dynamic(pred, test, t, q, T, goal, fk, config, times, preds, t_obs) -> dict:
     model = pred.model
-    goal_err, believed, at_recording = [], [], []
+    ends, believed, at_recording = [], [], []
 
     def record(upd):
         at_recording.append(upd.time / t[-1])
-        goal_err.append(float(np.linalg.norm(fk(pred.plan()[1][-1]) - goal)))
+        ends.append(pred.plan()[1][-1])      # the plan's last command; its fk after the loop
         believed.append(upd.task == test.task)
 
     if config.window_mode == "all":        # the same estimates a streamed predictor makes
@@ -220,6 +230,8 @@ def _dynamic(pred, test, t, q, T, goal, fk, config, times, preds, t_obs) -> dict
                 record(upd)
     res = _score(pred.commands(t), q, goal, fk, abs(pred.duration - T))
     res["recognition"] = float(pred.task == test.task)
+    # fk of all the updates' last commands in one call (the same numbers as one call each)
+    goal_err = [float(np.linalg.norm(p - goal)) for p in fk(np.array(ends))] if ends else []
     res["time_to_correct"] = metrics.time_to_correct(np.array(at_recording), np.array(goal_err),
                                                      config.goal_tol)
     res["jumps"] = [u.jump for u in pred.updates]

@@ -16,21 +16,32 @@ def setup():
 
 
 def test_shared_estimates_equal_a_streamed_predictor(setup):
-    """The evaluation's shortcut (one estimate per update time) equals streaming each window."""
+    """The evaluation's shortcut (one estimate per update time) equals streaming each window;
+    its goal errors (forward kinematics of all updates at once) equal one call per update."""
+    from sandbox.eval.metrics import time_to_correct
+
     model, demos = setup
     test = demos[0]
-    config = EvalConfig(windows=(0.5, 0.2), ratios=(0.5,), subsample=2, n_basis=15)
+    config = EvalConfig(windows=(0.5, 0.2), ratios=(0.5,), subsample=2, n_basis=15,
+                        goal_tol=0.2)
     fk = BaxterKinematics().fk
     res = evaluate_trial(model, test, config, fk)
     t = test.times - test.times[0]
+    goal = fk(test.robot[-1])
     for w in (0.5, 0.2):
         pred = DynamicPredictor(model, dow_t=w, **config.predictor_options())
+        at, errors = [], []
         for ti, yi in zip(t, test.human):
-            pred.observe(ti, yi)
+            if pred.observe(ti, yi) is not None:
+                at.append(ti / t[-1])
+                errors.append(np.linalg.norm(fk(pred.plan()[1][-1]) - goal))
         mean, _ = pred.commands(t)
         rms = np.sqrt(np.mean((mean - test.robot) ** 2))
-        assert res["dynamic"][f"{w:.1f}"]["e_q"] == pytest.approx(rms, rel=1e-9)
-        assert res["dynamic"][f"{w:.1f}"]["n_updates"] == len(pred.updates)
+        got = res["dynamic"][f"{w:.1f}"]
+        assert got["e_q"] == pytest.approx(rms, rel=1e-9)
+        assert got["n_updates"] == len(pred.updates)
+        assert got["e_p"] == pytest.approx(np.linalg.norm(fk(mean[-1]) - goal), rel=1e-9)
+        assert got["time_to_correct"] == time_to_correct(np.array(at), np.array(errors), 0.2)
 
 
 def test_kept_observations_skip_nan_and_subsample(setup):
