@@ -56,7 +56,7 @@ GRID = (0.0, 0.01, 0.03, 0.1, 0.3, 1.0)
 RATIOS = (0.25, 0.5, 0.75, 1.0)
 #: The largest factor a number may give (10 x the empirical-Bayes estimate).
 MAX_FACTOR = 10.0
-#: What a model loaded from a file written before ``span_reg`` says (:attr:`IProMP.span_note`).
+#: What a model loaded from a file written before ``span_reg`` says (its ``span_note``).
 SPAN_NOTE = ("this model file predates span_reg: loaded with the weight regulariser alone "
              "(span_reg None, today's default)")
 
