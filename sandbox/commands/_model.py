@@ -10,6 +10,7 @@ before any work: a mismatch is one ``ValueError`` line.
 from __future__ import annotations
 
 import argparse
+import sys
 
 
 def add_argument(parser: argparse.ArgumentParser, what: str) -> None:
@@ -23,9 +24,12 @@ def load(path: str):
     from sandbox.core import IProMP
 
     try:
-        return IProMP.load(path)
+        model = IProMP.load(path)
     except ValueError as error:
         raise ValueError(f"--model: {error}") from None
+    if getattr(model, "span_note", None):       # a file written before span_reg
+        print(f"--model {path}: {model.span_note}", file=sys.stderr)
+    return model
 
 
 def observe(model, explicit, option: str = "--observe") -> tuple[str, ...]:

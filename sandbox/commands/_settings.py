@@ -6,6 +6,7 @@ predictor options, the names of :class:`~sandbox.eval.loocv.EvalConfig`::
     observe: [hand]          # modalities (or "hand,arm")
     n_basis: 21              # model (IProMP) options
     regularizer: 0.001
+    span_reg: auto           # null, a factor, or auto: regulariser from the out-of-span variance
     noise_floor: 0.02        # m, or auto: learned per position modality from the demos
     condition_floor: auto    # m, auto or null: the floor conditioning the robot (eq. 7-9)
     jitter_floor: 15         # position floors max(noise_floor, 15 x raw jitter); null: off
@@ -33,7 +34,7 @@ from pathlib import Path
 from typing import Any
 
 #: Options of the model (:class:`~sandbox.core.IProMP`).
-MODEL_KEYS = ("n_basis", "regularizer", "noise_scale", "noise_floor", "condition_floor",
+MODEL_KEYS = ("n_basis", "regularizer", "span_reg", "noise_scale", "noise_floor", "condition_floor",
               "signal_floor", "noise_floors", "jitter_floor", "shrinkage", "settle_tol",
               "arrive_tol")
 #: Options of the predictor (:class:`~sandbox.core.DynamicPredictor`).
@@ -116,6 +117,12 @@ def _check(path: Path, key: str, value: Any) -> Any:
         if value != "auto":
             raise fail("a number (m) or auto")
         return value
+    if key == "span_reg":
+        if value is None or value == "auto":
+            return value
+        if isinstance(value, bool) or not (isinstance(value, (int, float)) or _numeric(value)):
+            raise fail("a factor, auto or null")
+        return float(value)
     if key == "condition_floor":
         if value is None or value == "auto":
             return value

@@ -148,6 +148,9 @@ def _summary(model, args: argparse.Namespace, out: Path, n_demos: int, skipped: 
         "tasks": {t.name: {"demos": t.n_demos, "nominal_duration_s": t.nominal_duration,
                            "alpha_std": t.alpha_std} for t in model.task_models},
         "meeting_geometry": _geometry(model),
+        "span_reg": {"choice": model.span_reg, "modalities": {
+            k: {"variance": v["variance"], "factor": v["factor"]}
+            for k, v in model.span_report.items()}},
     }
 
 
@@ -210,6 +213,9 @@ def _format(s: dict) -> str:
         from sandbox.data.noisefloor import format_floors
 
         lines += format_floors(s["noise_floor"])
+    for name, e in s["span_reg"]["modalities"].items():
+        lines.append(f"  {name} weight regulariser at least {e['factor']:g} x its out-of-span "
+                     f"variance {e['variance'] or 0:.3g} (span_reg={s['span_reg']['choice']})")
     if s["robot_space"] == "task":
         lines.append("  robot part in task space (m): e_p is measured on it directly, e_q "
                      "does not apply; episodes and play follow it through the arm's inverse "

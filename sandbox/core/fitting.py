@@ -17,12 +17,11 @@ from typing import Any, Protocol
 import numpy as np
 
 from sandbox.core.basis import GaussianBasis
-from sandbox.core.limits import MAX_ABS_VALUE, MAX_ALPHA_STD, MIN_NOISE_STD
+from sandbox.core.limits import MAX_ALPHA_STD
 from sandbox.core.modality import Modality
 from sandbox.core.promp import WeightDistribution, check_human_conditioning, fit_weights
 from sandbox.core.shrinkage import shrunk
-from sandbox.limits import BOUNDS
-from sandbox.validation import FloatArray, check_positive
+from sandbox.validation import FloatArray
 
 
 class DemonstrationLike(Protocol):
@@ -252,6 +251,7 @@ def observation_noise(fits: Sequence[DemoFit], scale: FloatArray, floors: FloatA
 def task_models(weights: Mapping[str, FloatArray], durations: Mapping[str, FloatArray],
                 sigma2: FloatArray, modalities: Sequence[Modality], regularizer: float,
                 n_basis: int, min_alpha_std: float, shrinkage: str = "none",
+                reg_floor: FloatArray | None = None,
                 ) -> tuple[tuple[TaskModel, ...], dict[str, float]]:
     """One :class:`TaskModel` per task, in the order of ``weights``, and their shrinkage.
 
@@ -273,6 +273,9 @@ def task_models(weights: Mapping[str, FloatArray], durations: Mapping[str, Float
     shrinkage : {"auto", "none", "robot"}
         Covariance shrinkage toward the pooled one (:mod:`sandbox.core.shrinkage`);
         ``"robot"``: in :attr:`TaskModel.robot` only.
+    reg_floor : ndarray, shape (P,), optional
+        Lower bound of each modality's mean human regulariser (normalised units;
+        :mod:`sandbox.core.spanreg`), equal over a modality's dims.
 
     Returns
     -------
@@ -286,17 +289,11 @@ def task_models(weights: Mapping[str, FloatArray], durations: Mapping[str, Float
     shrunk_dists, intensities = shrunk(weights, dists, shrinkage)
     if shrinkage != "robot":
         dists = shrunk_dists
-    kappa = np.empty(P)
-    start = 0
-    for m in modalities:       # one kappa per modality, from its own dims only
-        dims = slice(start, start + m.size)
-        var = np.mean([d.reg[dims] / regularizer for d in dists.values()])
-        kappa[dims] = regularizer * var / sigma2[dims].mean()
-        start += m.size
+    human_reg = _human_reg(dists, sigma2, modalities, regularizer, reg_floor)
     tasks = []
     for k, dist in dists.items():
         reg = dist.reg.copy()
-        reg[:P] = kappa * sigma2
+        reg[:P] = human_reg
         dist = WeightDistribution(dist.mean, dist.factor, reg, n_basis)
         robot = (WeightDistribution(dist.mean, shrunk_dists[k].factor, reg, n_basis)
                  if shrinkage == "robot" else None)
@@ -309,6 +306,20 @@ def task_models(weights: Mapping[str, FloatArray], durations: Mapping[str, Float
                                robot))
     return tuple(tasks), intensities
 
+
+def _human_reg(dists: Mapping, sigma2: FloatArray, modalities: Sequence[Modality],
+               regularizer: float, reg_floor: FloatArray | None) -> FloatArray:
+    """The human dims' regulariser (P,): :math:`\\kappa_m \\sigma_p^2`, one
+    :math:`\\kappa_m` per modality from its own dims only, at least ``reg_floor``'s mean."""
+    kappa = np.empty(sigma2.size)
+    start = 0
+    for m in modalities:
+        dims = slice(start, start + m.size)
+        var = np.mean([d.reg[dims] / regularizer for d in dists.values()])
+        low = 0.0 if reg_floor is None else float(np.mean(reg_floor[dims]))
+        kappa[dims] = max(regularizer * var, low) / sigma2[dims].mean()
+        start += m.size
+    return kappa * sigma2
 
 
 def check_speed_spread(task: str, alpha_std: float, durations: FloatArray) -> None:
@@ -340,47 +351,6 @@ def signal_scale(modalities: Sequence[Modality], moments: FloatArray) -> FloatAr
                              f"in every training demonstration; nothing to normalise by")
         scale[dims] = std
     return scale
-
-
-def check_floor(value, name: str, bound: str | None = None) -> float:
-    """A noise floor: a number in [MIN_NOISE_STD, the high end of ``BOUNDS[bound]``]
-    (:mod:`sandbox.limits`; ``MAX_ABS_VALUE`` without ``bound``)."""
-    v = check_positive(value, name, high=MAX_ABS_VALUE if bound is None else BOUNDS[bound].high)
-    if v < MIN_NOISE_STD:
-        raise ValueError(f"{name}: expected at least {MIN_NOISE_STD:g} (limits.MIN_NOISE_STD), "
-                         f"got {value!r}")
-    return v
-
-
-def check_tolerance(value, name: str) -> float | None:
-    """``settle_tol``/``arrive_tol``: None, or a number in the range ``BOUNDS[name]``."""
-    return None if value is None else check_positive(value, name, high=BOUNDS[name].high)
-
-
-def check_floor_names(floors: Mapping[str, float], modalities: Sequence[Modality]) -> None:
-    """Refuse floors of modalities the demonstrations do not have (``ValueError``)."""
-    unknown = sorted(set(floors) - {m.name for m in modalities})
-    if unknown:
-        raise ValueError(f"noise_floors: expected floors of the demonstrations' modalities "
-                         f"{[m.name for m in modalities]}, got {unknown}")
-
-
-def check_fits(fits, n_basis: int) -> None:
-    """Per-demo fits of one layout: DemoFit instances with one P and one D*N."""
-    if isinstance(fits, (str, bytes)) or not hasattr(fits, "__len__") or len(fits) == 0:
-        raise ValueError("fits: expected a non-empty sequence of DemoFit")
-    if not all(isinstance(f, DemoFit) for f in fits):
-        raise ValueError("fits: expected DemoFit instances (IProMP.demo_fit)")
-    sizes = {(f.residual.size, f.weights.size) for f in fits}
-    if len(sizes) != 1 or next(iter(sizes))[1] % n_basis:
-        raise ValueError(f"fits: expected one layout (P, D*N with N={n_basis}), "
-                         f"got {sorted(sizes)}")
-
-def check_robot_space(value) -> str:
-    """``"joint"`` or ``"task"``: what a demonstration's robot dims are (``ValueError`` else)."""
-    if value not in ("joint", "task"):
-        raise ValueError(f"robot_space: expected 'joint' or 'task', got {value!r}")
-    return str(value)
 
 
 def task_priors(tasks: Sequence[str], spec: Mapping[str, float] | None) -> FloatArray:

@@ -20,15 +20,15 @@ the Mahalanobis term is ranked, ``end_prob`` when gated to the ongoing motion) a
 ``end_prob``, one of every update; ``motion`` (2, n), the calibration motions' lowest answer
 to each question (:mod:`sandbox.core.questions`; without it, compared as they are).
 
-Optional: a ``session`` object in the metadata, what a recording session taught besides
-the model (e.g. the meeting geometry, :mod:`sandbox.data.geometry`), kept as
-:attr:`IProMP.session`, never interpreted here; files without it load with an empty one.
+Optional: a ``session`` object in the metadata (e.g. the meeting geometry,
+:mod:`sandbox.data.geometry`), kept as :attr:`IProMP.session`, never interpreted here.
+``span_reg`` (:mod:`sandbox.core.spanreg`, null too) and, when set, ``span_used`` (per
+modality its out-of-span variance and factor); files before it load without and say so.
 
 Version history: 1 (package 0.1.0) had the hand only (``human_names``, no modalities, no
 scale); such files still load, as one position modality ``"hand"``. Version 2 adds the
-modalities, the scale and the floors. The familiarity section is optional within version 2:
-files without it load with ``calibration = None`` (the predictors' familiarity is then None,
-never computed lazily), and readers that predate it ignore it.
+modalities, the scale and the floors. Files without the optional familiarity section load
+with ``calibration = None`` (never computed lazily); readers that predate it ignore it.
 
 Loading trusts nothing in the file (:mod:`sandbox.core.archive`): the file's size and
 number of members are checked first; the metadata is read and checked
@@ -66,17 +66,12 @@ from sandbox.core.modelmeta import (  # noqa: F401 - the format's constants, re-
     READABLE_VERSIONS,
     check_metadata,
 )
-from sandbox.core.promp import (
-    WeightDistribution,
-    check_human_conditioning,
-    check_robot_definite,
-)
-
-if TYPE_CHECKING:
-    from sandbox.core.model import IProMP
+from sandbox.core.promp import WeightDistribution, check_human_conditioning, check_robot_definite
+from sandbox.core.spanreg import SPAN_NOTE
 
 if TYPE_CHECKING:
     from sandbox.core.calibration import Calibration
+    from sandbox.core.model import IProMP
 
 #: Most time bins of a stored familiarity calibration.
 MAX_TIME_BINS = 1000
@@ -145,6 +140,9 @@ def _put_options(model: IProMP, meta: dict) -> None:
     """Write the options older files lack into ``meta``: ``jitter_floor`` always (null too,
     so a file tells its constant floor from the default), the others only when set."""
     meta["hyperparameters"]["jitter_floor"] = getattr(model, "jitter_floor", None)  # null too
+    meta["hyperparameters"]["span_reg"] = getattr(model, "span_reg", None)  # null too
+    if getattr(model, "span_reg", None) is not None:
+        meta["span_used"] = getattr(model, "span_report", {})
     if getattr(model, "noise_floor", None) == "auto":     # the floors it learned (m)
         meta["floors_used"] = np.asarray(model.floors_used, dtype=float).tolist()
     _put_condition(model, meta)
@@ -396,5 +394,7 @@ def model_from_file(cls, f: ModelFile):
     if meta.get("condition_noise") is not None:     # files before it condition with noise
         model.condition_noise = np.asarray(meta["condition_noise"], dtype=np.float64)
     model.condition_floor = meta["hyperparameters"].get("condition_floor")
+    model.span_report = dict(meta.get("span_used") or {})
+    model.span_note = None if "span_reg" in meta["hyperparameters"] else SPAN_NOTE
     model._fitted = True
     return model

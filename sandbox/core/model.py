@@ -62,16 +62,18 @@ import numpy as np
 from sandbox.core.basis import GaussianBasis
 from sandbox.core.condfloor import check_condition_floor, condition_noise
 from sandbox.core.demos import as_demo_list, check_demo, check_demos, check_spread, modalities_of
-from sandbox.core.fitting import (
-    DemoFit,
-    DemonstrationLike,
-    TaskModel,  # noqa: F401 - re-exported (sandbox.core)
-    by_task,
+from sandbox.core.fitchecks import (
     check_fits,
     check_floor,
     check_floor_names,
     check_robot_space,
     check_tolerance,
+)
+from sandbox.core.fitting import (
+    DemoFit,
+    DemonstrationLike,
+    TaskModel,  # noqa: F401 - re-exported (sandbox.core)
+    by_task,
     fit_one,
     motion_end,
     observation_noise,
@@ -86,6 +88,7 @@ from sandbox.core.jitter import JITTER_FACTOR, demo_jitter
 from sandbox.core.limits import MAX_DURATION_S, MAX_RELATIVE, check_alpha_std
 from sandbox.core.modality import Modality
 from sandbox.core.shrinkage import check_shrinkage
+from sandbox.core.spanreg import check_span_reg, model_span
 from sandbox.limits import BOUNDS
 from sandbox.validation import FloatArray, check_mapping, check_number, check_positive
 
@@ -112,19 +115,19 @@ class IProMP:
         Use normalised basis functions (default): plain Gaussians (eq. 1) without a
         margin misfit the ends of a motion, where the handover happens, by cm.
     regularizer : float
-        Relative size of the weight-covariance regulariser (module docstring);
-        default chosen by leave-one-out on the recorded handovers. In
-        [:data:`~sandbox.core.limits.MIN_REGULARIZER`,
-        :data:`~sandbox.core.limits.MAX_RELATIVE`]; ``noise_scale`` and ``ridge``
-        are at most ``MAX_RELATIVE`` too.
+        Relative size of the weight-covariance regulariser (module docstring), in
+        [:data:`~sandbox.core.limits.MIN_REGULARIZER`, :data:`~sandbox.core.limits.MAX_RELATIVE`]
+        (``noise_scale`` and ``ridge`` too).
+    span_reg : float, "auto" or None
+        Raise each modality's regulariser to a factor of its weights' out-of-span variance
+        (:mod:`sandbox.core.spanreg`; :attr:`span_report`); ``"auto"``: the factor per
+        modality by a held-out score on the training demos; None: the regulariser alone.
     noise_scale : float
         Multiplies the estimated observation noise :math:`\\Sigma_y`.
     noise_floor : float
-        Lowest :math:`\\sigma_p` of position modalities (m). Default 2 cm,
-        chosen by leave-one-out on the recorded handovers: a live, causally filtered
-        track departs from what the model can explain by ~2 cm (tracker jumps and
-        occlusions, motion the demos do not span); trusting observations more made
-        every prediction worse, including the oracle's. ``"auto"``: each position
+        Lowest :math:`\\sigma_p` of position modalities (m). Default 2 cm (leave-one-out
+        on the recorded handovers: a live track departs from what the model explains by
+        ~2 cm; trusting observations more made every prediction worse). ``"auto"``: each position
         modality's floor is chosen from a grid (2 to 40 mm) by a held-out score on the
         training demos (:mod:`sandbox.core.floorsearch`; scores: :attr:`floor_scores`).
     condition_floor : float, "auto" or None
@@ -188,6 +191,7 @@ class IProMP:
         basis_margin: float = 0.0,
         normalized_basis: bool = True,
         regularizer: float = 1e-3,
+        span_reg: float | str | None = None,
         noise_scale: float = 1.0,
         noise_floor: float | str = 0.02,
         condition_floor: float | str | None = None,
@@ -205,6 +209,8 @@ class IProMP:
     ) -> None:
         self.basis = GaussianBasis(n_basis, basis_width, basis_margin, normalized_basis)
         self.regularizer = float(BOUNDS["regularizer"].check(regularizer, "regularizer"))
+        self.span_reg = check_span_reg(span_reg)
+        self.span_report: dict[str, dict] = {}   #: of span_reg: v_m, c_m (and scores) per modality
         self.noise_scale = check_positive(noise_scale, "noise_scale", high=MAX_RELATIVE)
         self.noise_floor = check_noise_floor(noise_floor, check_floor)
         self.floor_scores: dict[str, dict[float, float]] = {}   #: of noise_floor="auto"
@@ -293,7 +299,8 @@ class IProMP:
         arrays = {k: np.array(v) / divide for k, v in weights.items()}
         for k, w in arrays.items():
             check_spread(k, w)
-        self._set_fit(arrays, durations, sigma2, P, Q, names_from, modalities, scale)
+        floor = model_span(self, modalities, arrays, sigma2, fits, scale)
+        self._set_fit(arrays, durations, sigma2, P, Q, names_from, modalities, scale, floor)
         self.condition_noise = cond
         return self
 
@@ -302,10 +309,11 @@ class IProMP:
         """Noise floors (P,), normalised: :func:`~sandbox.core.floorsearch.model_floors`."""
         return model_floors(self, modalities, fits, scale)
 
-    def _set_fit(self, weights, durations, sigma2, P, Q, first, modalities, scale) -> None:
+    def _set_fit(self, weights, durations, sigma2, P, Q, first, modalities, scale,
+                 reg_floor=None) -> None:
         tasks, self.shrinkage_used = task_models(
             weights, durations, sigma2, modalities, self.regularizer, self.basis.n_basis,
-            self.min_alpha_std, self.shrinkage)
+            self.min_alpha_std, self.shrinkage, reg_floor)
         self.task_models = tasks
         self.noise = sigma2
         self.scale = np.asarray(scale, dtype=np.float64)
@@ -359,13 +367,9 @@ class IProMP:
         return self
 
     def calibrate(self, demos, streams=None, **options):
-        """Calibrate the familiarity of this model, fitted on ``demos`` (leave-one-out).
-
-        Sets and returns :attr:`calibration`; see
-        :func:`sandbox.core.familiarity.calibrate` for ``streams`` and the options.
-        Without a calibration (a fresh fit, a model file saved without one) the
-        predictors' ``familiarity`` is None.
-        """
+        """Calibrate the familiarity of this model, fitted on ``demos`` (leave-one-out): sets
+        and returns :attr:`calibration` (:func:`sandbox.core.familiarity.calibrate`: ``streams``,
+        options); without one (a fresh fit, a file without one) ``familiarity`` is None."""
         from sandbox.core.familiarity import calibrate
 
         self._require_fit()

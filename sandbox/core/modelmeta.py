@@ -35,7 +35,7 @@ HYPERPARAMETERS = {
     1: {"regularizer", "noise_scale", "noise_floor", "min_alpha_std", "ridge"},
     2: {"regularizer", "noise_scale", "noise_floor", "signal_floor", "noise_floors",
         "jitter_floor", "settle_tol", "arrive_tol", "min_alpha_std", "shrinkage", "ridge",
-        "condition_floor"},
+        "condition_floor", "span_reg"},
 }
 TASK_KEYS = {"name", "nominal_duration", "alpha_mean", "alpha_std", "n_demos", "prior"}
 #: Spaces a model's robot dims may be in: joint angles (rad) or a task-space position (m).
@@ -71,7 +71,8 @@ def check_metadata(meta, path: Path) -> dict:
             "familiarity": meta.get("familiarity"),
             "session": _session(meta.get("session", {})),
             "floors_used": _floors_used(meta.get("floors_used"), P),
-            "condition_noise": _floors_used(meta.get("condition_noise"), P, "condition_noise")}
+            "condition_noise": _floors_used(meta.get("condition_noise"), P, "condition_noise"),
+            "span_used": _span_used(meta.get("span_used"))}
 
 
 
@@ -109,6 +110,26 @@ def _floors_used(value, P: int, name: str = "floors_used") -> list | None:
         for v in value)
     if not ok:
         raise ValueError(f"metadata {name}: expected {P} positive numbers, "
+                         f"got {str(value)[:60]}")
+    return value
+
+
+def _span_used(value) -> dict | None:
+    """``span_used``: per modality name, ``variance`` (a non-negative number or null) and
+    ``factor`` (a non-negative number), and the held-out ``scores`` of ``span_reg="auto"``."""
+    if value is None:
+        return None
+
+    def number(v, null: bool = False) -> bool:
+        return (v is None and null) or (isinstance(v, (int, float)) and not isinstance(v, bool)
+                                        and 0 <= v < np.inf)
+
+    ok = isinstance(value, dict) and all(
+        isinstance(k, str) and isinstance(e, dict) and number(e.get("variance"), True)
+        and number(e.get("factor")) and set(e) <= {"variance", "factor", "scores"}
+        for k, e in value.items())
+    if not ok:
+        raise ValueError(f"metadata span_used: expected per modality a variance and a factor, "
                          f"got {str(value)[:60]}")
     return value
 
