@@ -128,7 +128,7 @@ def span_floors(choice, weights: Mapping[str, FloatArray], modalities: Sequence,
     basis : GaussianBasis
     counts, residual : mappings of str to ndarray
         By task, each demo's valid samples (n_k,) and basis-fit residual variance (n_k, P)
-        (:func:`sandbox.core.floorsearch._per_demo`).
+        (``sandbox.core.floorsearch._per_demo``).
     log_prior : mapping of str to float
         Log task priors.
 
