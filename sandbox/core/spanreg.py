@@ -226,6 +226,9 @@ def model_span(model, modalities: Sequence, weights: Mapping[str, FloatArray],
     (``scale``, shape (P,), of the human dims; uniform task priors, as
     :func:`~sandbox.core.floorsearch.auto_floors`); the report is kept as
     ``model.span_report``."""
+    if getattr(model, "span_reg", None) is None:     # the default: no per-demo work at fit
+        model.span_report = {}
+        return None
     counts, residual = _per_demo(fits, scale)
     p = np.full(len(weights), 1.0 / len(weights))
     log_prior = {k: float(np.log(v)) for k, v in zip(weights, p)}
