@@ -120,7 +120,8 @@ def _check(path: Path, key: str, value: Any) -> Any:
     if key == "span_reg":
         if value is None or value == "auto":
             return value
-        if isinstance(value, bool) or not (isinstance(value, (int, float)) or _numeric(value)):
+        if isinstance(value, bool) or not (isinstance(value, (int, float))
+                                           or isinstance(value, str) and _numeric(value)):
             raise fail("a factor, auto or null")
         return float(value)
     if key == "condition_floor":
