@@ -218,7 +218,7 @@ def run_core_benchmarks(repeats: int = 200, seed: int = 0) -> dict:
     cold_pred = _fed_predictor(model, t200, y200, incremental=False, n_candidates=n_cand)
     cold = _median_ms(_timed_update(cold_pred, t_update), repeats)
     lattice = Lattice.for_tasks(model.task_models, n_cand, 3.0)
-    naive_reps = max(20, repeats // 10)
+    naive_reps = min(repeats, max(20, repeats // 10))   # --repeats 1 means one
     naive = _median_ms(lambda: naive_update(model, times, values, lattice), naive_reps)
     upd = pred.update(t_update)
     spans = lattice.spans()
