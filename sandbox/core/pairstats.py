@@ -17,8 +17,10 @@ on n < N rows, W has rank n: :math:`W = F^T F` with F (n, N) from the rows' n x 
 matrix :math:`I + \\kappa\\Psi_o\\Psi_o^T` (Woodbury), so the kernel takes
 :math:`\\tilde K = X^T X`, X the dims' :math:`F V_p` stacked (n Pg x (r+1)): n (r+1)^2
 multiply-adds a dim, in one product. The many-demos bench case (20 observations, N = 31,
-r + 1 = 94): the refinement's pairs 0.XX ms against 0.XX. With N rows or more the kernel
-takes W as before (the same numbers, bit for bit).
+r + 1 = 94): the refinement's four pairs' statistics 0.42-0.70 ms against 0.60-0.82 (3
+alternating runs, load 12). With N rows or more the kernel takes W as before (the same
+numbers, bit for bit); the log-likelihoods of the rows' space agree with the numpy path's
+within 1e-12 of themselves (1.7e-13 seen).
 """
 
 from __future__ import annotations
