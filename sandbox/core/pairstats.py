@@ -188,8 +188,9 @@ def _pair_stats_py(psi, values, present, tasks, dims, starts, modality, kappa, c
         beta, ab = np.empty((N, b - a)), np.empty((N, b - a))
         yy, gamma = np.empty(b - a), np.empty(b - a)
         few = count < N
-        F = np.empty((count, N))
-        X = np.empty(((b - a) * count, Kt.shape[1]))
+        n = count if few else 0                    # the rows' space only when it is cheaper
+        F = np.empty((n, N))
+        X = np.empty(((b - a) * n, Kt.shape[1]))
         for m in range(M):
             ld = _group_part(psi[m], values, rows, dims[a:b], kappa[g], G, beta, yy, Li, W,
                              ab, gamma, not few)
