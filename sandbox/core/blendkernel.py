@@ -142,17 +142,17 @@ def _held_rows_py(mu, F, reg, centers, neg_half_h: float, normalized: bool, z, m
         psi_t = np.ascontiguousarray(psi.T)
         for a in range(Q):
             A[a] = np.dot(F[a].T, psi_t)                          # (r, mk)
-    acc = np.empty(mk)
+    sums = np.empty(mk)
     for a in range(Q):
         for b in range(a + 1):
-            acc[:] = 0.0
+            sums[:] = 0.0
             Aa, Ab = A[a], A[b]
             for k in range(r):            # across the phases: a vector operation, no chain
                 for j in range(mk):
-                    acc[j] += Aa[k, j] * Ab[k, j]
+                    sums[j] += Aa[k, j] * Ab[k, j]
             for j in range(mk):
-                cov[j, a, b] = acc[j]
-                cov[j, b, a] = acc[j]
+                cov[j, a, b] = sums[j]
+                cov[j, b, a] = sums[j]
     for j in range(mk):
         for a in range(Q):
             cov[j, a, a] += reg[a] * sq[j]
