@@ -36,6 +36,7 @@ import numpy as np
 
 from sandbox.core import _kernels
 from sandbox.core.factor import condition_robot
+from sandbox.core.pairstats import pair_kernel
 from sandbox.core.phase import estimate_phase
 from sandbox.core.plan import Held
 from sandbox.core.recognition import task_posterior
@@ -122,9 +123,14 @@ def _pair_flops(sc, values, M: int, s: int) -> float:
     N, R1 = sc.N, sc.R + 1
     present = sc.present(values)
     flops = M * s * N * 6                                        # basis at t/T
+    rows_space = pair_kernel(R1) is not None     # the kernel's rows' space when sg < N
     for g in sc.groups:
         sg, pg = int(present[g.modality].sum()), g.dims.size
         flops += M * (2 * sg * N * N + 2 * sg * N * pg)          # G = Psi^T Psi, beta
+        if rows_space and sg < N:                                # pairstats' F, X = F V
+            flops += M * (2 * N**3 / 3 + 4 * N * N * pg + 3 * sg * sg * N + sg**3 / 3)
+            flops += M * (2 * sg * N * pg * R1 + 2 * sg * pg * R1 * R1 + 2 * N * pg * R1)
+            continue
         flops += M * (2 * N**3 / 3 + 4 * N**3 + 4 * N * N * pg)  # b_part: chol, trtri, Q, W
         flops += M * (2 * N * N * pg * R1 + 2 * N * pg * R1 * R1 + 2 * N * pg * R1)
     return flops + M * (R1**3 / 3 + 4 * R1)

@@ -72,16 +72,10 @@ def _compile():
     globals()["_write_factor"] = jit(_write_factor_py)
     globals()["_log_pivots"] = jit(_log_pivots_py)
     globals()["_gather"] = jit(_gather_py)
-    globals()["_group_part"] = jit(_group_part_py)
-    globals()["_pair_stats"] = jit(_pair_stats_py)
     globals()["_product"] = jit(_product_py)
     kernel = jit(_scores_py)
     one = np.ones((1, 1, 1))          # load (or compile) the machine code now, not in an update
     kernel(one, np.zeros((1, 1)), np.ones(1), np.zeros(1), np.empty((1, 1, 1)), np.empty(1), 1)
-    ints, yes = np.zeros(1, dtype=np.int64), np.ones((1, 1), dtype=np.bool_)
-    _pair_stats(np.ones((1, 1, 1)), np.ones((1, 1)), yes, ints, ints, np.array([0, 1]), ints,
-                np.ones(1), np.ones((3, 1)), yes, np.ones((1, 1, 1, 2)), np.zeros((1, 2, 2)),
-                np.zeros((1, 2)), np.zeros(1), np.zeros(1))   # every kernel loaded now
     _product(np.ones((1, 1)), np.ones((1, 1, 1)), np.ones(1), np.ones((1, 1)),
              np.ones((1, 1, 1)), np.ones(1), np.empty((1, 1)), np.empty((1, 1, 1)))
     return kernel
@@ -100,13 +94,6 @@ def product_kernel():
     """The compiled :func:`_product_py` (the blend's product of two distributions,
     :mod:`sandbox.core.blending`) when :func:`factor_kernel` has a kernel; else None."""
     return None if factor_kernel(1) is None else _product
-
-
-def pair_kernel(size: int):
-    """The compiled :func:`_pair_stats_py` (the statistics of a few (duration, task) pairs
-    from their phases, :meth:`~sandbox.core.likelihood.Scorer.joint_pairs`) when
-    :func:`factor_kernel` gives a kernel for augmented matrices of ``size`` rows; else None."""
-    return None if factor_kernel(size) is None else _pair_stats
 
 
 def block_size(size: int) -> int:
@@ -251,89 +238,6 @@ def _write_factor_py(buf, b: int, r: int, out) -> None:
     out[R, R] = buf[r, r, b]
 
 
-def _group_part_py(psi, values, rows, dims, kappa: float, G, beta, yy, Li, W, ab, gamma):
-    """One group's part of one candidate (:func:`~sandbox.core.factor.b_part`) from the
-    phases ``psi`` (s, N) of the rows observing it: fills G, W (N, N), ab (N, Pg), gamma
-    (Pg,) and returns log|A|, A = I + kappa G. ``beta``, ``yy``, ``Li`` are scratch."""
-    s, N = psi.shape
-    Pg = dims.size
-    G[:, :] = 0.0
-    beta[:, :] = 0.0
-    yy[:] = 0.0
-    for j in range(s):
-        if rows[j]:
-            for a in range(N):
-                for b in range(N):
-                    G[a, b] += psi[j, a] * psi[j, b]
-                for p in range(Pg):
-                    beta[a, p] += psi[j, a] * values[j, dims[p]]
-            for p in range(Pg):
-                yy[p] += values[j, dims[p]] ** 2
-    A = kappa * G
-    for a in range(N):
-        A[a, a] += 1.0
-    L = np.linalg.cholesky(A)
-    ld = 0.0
-    for a in range(N):
-        ld += 2.0 * log(L[a, a])
-    Li[:, :] = 0.0
-    for c in range(N):                     # L^-1 column by column (forward substitution)
-        Li[c, c] = 1.0 / L[c, c]
-        for a in range(c + 1, N):
-            acc = 0.0
-            for b in range(c, a):
-                acc -= L[a, b] * Li[b, c]
-            Li[a, c] = acc / L[a, a]
-    Q = Li @ G
-    W[:, :] = G - kappa * (Q.T @ Q)
-    Lb = Li @ beta
-    ab[:, :] = Li.T @ Lb
-    for p in range(Pg):
-        acc = 0.0
-        for a in range(N):
-            acc += Lb[a, p] ** 2
-        gamma[p] = yy[p] - kappa * acc
-    return ld
-
-
-def _pair_stats_py(psi, values, present, tasks, dims, starts, modality, kappa, columns,
-                   member, blocks, Kt, eps, gamma_term, offset) -> None:
-    """The statistics of :meth:`~sandbox.core.likelihood.Scorer._stats` for pairs of one
-    duration and one task each, added into ``Kt`` (M, R+1, R+1), ``eps`` (M, R+1),
-    ``gamma_term`` and ``offset`` (M,). ``psi`` (M, s, N); group g's columns are
-    ``starts[g]:starts[g+1]`` of ``dims`` (human dims), ``member`` (K, cols) and
-    ``blocks`` (K, cols, N, R+1); ``present`` (modalities, s); ``columns`` (3, cols):
-    each column's :math:`\\sigma_p`, :math:`\\sigma_p^2` and
-    :math:`\\log 2\\pi + \\log\\sigma_p^2`."""
-    M, s, N = psi.shape
-    G, Li, W = np.empty((N, N)), np.empty((N, N)), np.empty((N, N))
-    for g in range(kappa.size):
-        a, b = starts[g], starts[g + 1]
-        rows = present[modality[g]]
-        count = 0
-        for j in range(s):
-            count += rows[j]
-        if count == 0:
-            continue
-        beta, ab = np.empty((N, b - a)), np.empty((N, b - a))
-        yy, gamma = np.empty(b - a), np.empty(b - a)
-        for m in range(M):
-            ld = _group_part(psi[m], values, rows, dims[a:b], kappa[g], G, beta, yy, Li, W,
-                             ab, gamma)
-            k = tasks[m]
-            for p in range(b - a):
-                V = blocks[k, a + p]                                 # (N, R+1)
-                Kt[m] += V.T @ (W @ V)
-                e, sp = eps[m], columns[0, a + p]
-                for c in range(N):                  # eps[m] += (ab / sigma) V[c], no temporaries
-                    x = ab[c, p] / sp
-                    for j in range(V.shape[1]):
-                        e[j] += x * V[c, j]
-                if member[k, a + p]:
-                    gamma_term[m] += gamma[p] / columns[1, a + p]
-                    offset[m] += count * columns[2, a + p] + ld
-
-
 def _product_py(m1, S1, a1, m2, S2, a2, mean, cov) -> bool:
     """``blending._product`` knot by knot into ``mean`` (T, Q) and ``cov`` (T, Q, Q): means
     (T, Q), covariances (T, Q, Q), activations (T,) > 0; the same formulas, M = a2 S1 + a1 S2
@@ -391,8 +295,6 @@ def _product_py(m1, S1, a1, m2, S2, a2, mean, cov) -> bool:
 
 
 _product = _product_py
-_group_part = _group_part_py
-_pair_stats = _pair_stats_py
 _factor_block = _factor_block_py     # replaced by their compiled versions in _compile
 _active_rows = _active_rows_py
 _write_factor = _write_factor_py

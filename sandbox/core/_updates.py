@@ -170,7 +170,10 @@ def _loglik_py(store, at, ranks, counts, offset, loglik) -> None:
 def _copy_factors_py(store, at, ranks, counts, tasks, lanes, out) -> None:
     """The kept factors of pairs (``tasks[i]``, candidate ``lanes[i]`` of that task) into
     ``out`` (n, R+1, R+1), padded: the identity on a task's padding rows, its augmented row
-    and column at R, zeros elsewhere (``out`` comes zeroed). A copy, entry for entry."""
+    and column at R, zeros elsewhere (``out`` comes zeroed). A copy, entry for entry, of
+    the upper triangle only: the store's strictly lower part is zero (:func:`_fold_py`
+    writes the upper one; the numpy path's factors are Cholesky's), and each entry read is
+    a cache line of its own (the lanes lie side by side), so that halves the reads."""
     R = out.shape[1] - 1
     for i in range(tasks.size):
         k, lane = tasks[i], lanes[i]
@@ -178,10 +181,10 @@ def _copy_factors_py(store, at, ranks, counts, tasks, lanes, out) -> None:
         U = store[at[k]:at[k + 1]].reshape((r + 1, r + 1, counts[k]))
         for a in range(r, R):
             out[i, a, a] = 1.0
-        for a in range(r + 1):
-            ia = a if a < r else R
-            for b in range(r + 1):
-                out[i, ia, b if b < r else R] = U[b, a, lane]
+        for b in range(r + 1):          # U's upper triangle (zeros below), row by row
+            ib = b if b < r else R
+            for a in range(b, r + 1):
+                out[i, a if a < r else R, ib] = U[b, a, lane]
 
 
 _update = _update_py         # replaced by their compiled versions in compile_with

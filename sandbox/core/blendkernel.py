@@ -112,7 +112,8 @@ def _held_rows_py(mu, F, reg, centers, neg_half_h: float, normalized: bool, z, m
     :func:`~sandbox.core.promp.trajectory_distribution`) into rows ``0 .. mk-1`` of ``mean``
     (., Q) and ``cov`` (., Q, Q): means ``mu`` (Q, N), factor ``F`` (Q, N, r). The basis at
     every phase first, then each dim's factor rows at all of them in one matrix product
-    (BLAS: with many demos r is large and this product is most of the blend)."""
+    (BLAS: with many demos r is large and this product is most of the blend), laid out by
+    column (r, mk) so that the covariances sum every column across the phases at once."""
     Q, N, r = F.shape
     mk = z.size
     psi = np.empty((mk, N))
@@ -136,25 +137,24 @@ def _held_rows_py(mu, F, reg, centers, neg_half_h: float, normalized: bool, z, m
             for c in range(N):
                 acc += psi[j, c] * mu[a, c]
             mean[j, a] = acc
-    A = np.zeros((Q, mk, r))
+    A = np.zeros((Q, r, mk))              # each dim's factor rows at every phase, by column
     if mk and r:
+        psi_t = np.ascontiguousarray(psi.T)
         for a in range(Q):
-            A[a] = np.dot(psi, F[a])                              # (mk, r)
-    four = r - r % 4
+            A[a] = np.dot(F[a].T, psi_t)                          # (r, mk)
+    sums = np.empty(mk)
+    for a in range(Q):
+        for b in range(a + 1):
+            sums[:] = 0.0
+            Aa, Ab = A[a], A[b]
+            for k in range(r):            # across the phases: a vector operation, no chain
+                for j in range(mk):
+                    sums[j] += Aa[k, j] * Ab[k, j]
+            for j in range(mk):
+                cov[j, a, b] = sums[j]
+                cov[j, b, a] = sums[j]
     for j in range(mk):
         for a in range(Q):
-            for b in range(a + 1):
-                u, v, w, x = 0.0, 0.0, 0.0, 0.0       # four sums: independent chains
-                for k in range(0, four, 4):
-                    u += A[a, j, k] * A[b, j, k]
-                    v += A[a, j, k + 1] * A[b, j, k + 1]
-                    w += A[a, j, k + 2] * A[b, j, k + 2]
-                    x += A[a, j, k + 3] * A[b, j, k + 3]
-                for k in range(four, r):
-                    u += A[a, j, k] * A[b, j, k]
-                acc = (u + v) + (w + x)
-                cov[j, a, b] = acc
-                cov[j, b, a] = acc
             cov[j, a, a] += reg[a] * sq[j]
 
 

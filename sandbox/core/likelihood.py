@@ -45,10 +45,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from sandbox.core import _kernels
 from sandbox.core.factor import b_parts, factor_scores
 from sandbox.core.interaction import LOG_2PI
-from sandbox.core.pairstats import pack_groups, pair_statistics
+from sandbox.core.pairstats import pack_groups, pair_kernel, pair_statistics
 from sandbox.core.promp import WeightDistribution
 from sandbox.core.rest import start_distribution
 from sandbox.validation import FloatArray
@@ -170,7 +169,7 @@ class Scorer:
         self.groups = _make_groups(kappa, self.modality_dims, pad)
         self._packed = pack_groups(self.groups, self.sigma2, self.log_sigma2)   # pairstats.py
         self.conditioner = self if noise is not None else _conditioner(self, model)
-        _kernels.factor_kernel(self.R + 1)    # numba's kernel loaded now, not in an update
+        pair_kernel(self.R + 1)     # numba's kernels loaded now, not in an update
 
     @property
     def kappas(self) -> list[float]:
