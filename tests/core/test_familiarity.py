@@ -363,9 +363,11 @@ def test_tampered_calibration_is_refused(model, tmp_path):
         IProMP.load(tmp_path / "short.npz")
 
 
-def test_a_calibration_on_fresh_motions_streams_them_by_the_model_itself(model):
+@pytest.mark.parametrize("cells", ["own", "chosen"])
+def test_a_calibration_on_fresh_motions_streams_them_by_the_model_itself(model, cells):
     """``refit=False`` (the default models' split-conformal calibration): each fresh
-    motion is streamed by the fitted model, no leave-one-out refit."""
+    motion is streamed by the fitted model, no leave-one-out refit; its cells are filed
+    under each motion's own task (default) or the chosen one."""
     import copy
 
     from sandbox.core.familiarity import EDGES
@@ -373,13 +375,16 @@ def test_a_calibration_on_fresh_motions_streams_them_by_the_model_itself(model):
     rng = np.random.default_rng(11)
     fresh = [noisy(d, rng) for d in synth.demos(rng, n_per_task=6, n_tasks=2)]
     other = copy.copy(model)
-    cal = other.calibrate(fresh, refit=False, **OPTIONS)
-    assert other.calibration is cal and model.calibration is not cal
-    records = [stream_record(model, d.times - d.times[0], d.human, dow_t=0.2, **OPTIONS)
-               for d in fresh]
-    records = [(t, v[:, :len(TIMING)], k) for t, v, k in records]      # the default score
+    cal = other.calibrate(fresh, refit=False, cells=cells, **OPTIONS)
+    assert other.calibration is cal and model.calibration is not cal and cal.cells == cells
+    records = [stream_record(model, d.times - d.times[0], d.human, dow_t=0.2,
+                             own=model.task_index(d.task), **OPTIONS) for d in fresh]
+    own = [(t, u[:, :len(TIMING)], np.full(t.size, model.task_index(d.task)))
+           for (t, _, _, u), d in zip(records, fresh)]
+    records = [(t, v[:, :len(TIMING)], k) for t, v, k, _ in records]      # the default score
     mean = float(np.dot(model.priors, [t.mean_duration for t in model.task_models]))
     want = Calibration.from_records(records, 2, alpha=0.05, edges=np.array(EDGES) * mean,
+                                    own=own if cells == "own" else None,
                                     subsample=OPTIONS["subsample"], dow_t=0.2)
     np.testing.assert_array_equal(cal.quantiles, want.quantiles)
     assert cal.threshold == want.threshold
