@@ -29,10 +29,12 @@ task's tube now, which :math:`m`, averaged over all values so far, sees late);
 
 They are *calibrated* (:func:`calibrate`): each training motion,
 streamed as a predictor sees it, is scored by a model fitted without it
-(leave-one-out), and the quantiles of each statistic per chosen task and bin of
-elapsed time are stored (:class:`Calibration`). Each statistic of an update
+(leave-one-out), and the quantiles of each statistic per task and bin of
+elapsed time are stored (:class:`Calibration`; a task's cell holds the updates that chose
+it, or with ``cells="own"`` every update of its own motions under it:
+:mod:`sandbox.core.cells`, with the derivation). Each statistic of an update
 then ranks as a p-value-like :math:`p_j` in (0, 1]: the share of held-out
-training updates that chose the same task at about the same elapsed time and
+training updates in the cell of the task chosen at it, at about the same elapsed time, that
 scored worse (:math:`s_T` and :math:`s_G`, p-value bounds by construction, rank as
 :math:`e^{-s}`); the familiarity is Fisher's combination of the four,
 :math:`f = P(\\chi^2_8 \\ge -2 \\sum_j \\log p_j)`, and with the goal or the position
