@@ -80,7 +80,7 @@ from sandbox.core.likelihood import Scorer
 from sandbox.core.phase import Lattice
 from sandbox.core.statistics import StreamStatistics
 from sandbox.core.stream import ObservationStream
-from sandbox.validation import FloatArray, check_array, check_choice
+from sandbox.validation import FloatArray, check_array, check_choice, check_integer
 
 if TYPE_CHECKING:
     from sandbox.core.model import IProMP
@@ -194,8 +194,7 @@ def stream_record(model: IProMP, times, human, *, dow_t: float = 0.2, subsample:
         The motion's true task (index in [0, K)): also return its statistics under it.
     """
     times = check_array(times, "times", 1)
-    if own is not None and not 0 <= int(own) < len(model.task_models):
-        raise ValueError(f"own: expected a task index in [0, {len(model.task_models)}), got {own}")
+    own = None if own is None else check_integer(own, "own", 0, len(model.task_models) - 1)
     timing = check_choice(score, "score", SCORES) != "mahalanobis"
     stream = ObservationStream(model, subsample=subsample)
     for ti, yi in zip(times, np.asarray(human, dtype=np.float64)):
@@ -297,18 +296,8 @@ def calibrate(model: IProMP, demos, streams=None, *, alpha: float = 0.05, dow_t:
         (before issue 30's own-task cells); :mod:`sandbox.core.cells` for why.
     """
     labelled = check_choice(cells, "cells", CELLS) == "own"
-    if refit:
-        records = loo_records(model, demos, streams, dow_t=dow_t, subsample=subsample,
-                              score=score, ended=True, labelled=labelled, **options)
-    else:
-        streams = demos if streams is None else streams
-        records = []
-        for d, s in zip(demos, streams, strict=True):
-            t = np.asarray(s.times, dtype=np.float64)
-            records.append(stream_record(model, t - t[0], s.human, dow_t=dow_t,
-                                         subsample=subsample, score=score, ended=True,
-                                         own=model.task_index(d.task) if labelled else None,
-                                         **options))
+    records = _records(model, demos, streams, refit, labelled, dow_t=dow_t, subsample=subsample,
+                       score=score, ended=True, **options)
     names = SCORE_NAMES[score]
     where = [COMPONENTS.index(n) for n in names]
     pick = (lambda v: np.asarray(v)[:, where]) if score != "mahalanobis" else np.asarray
@@ -322,3 +311,17 @@ def calibrate(model: IProMP, demos, streams=None, *, alpha: float = 0.05, dow_t:
                                    components=names)
     model.calibration = cal
     return cal
+
+
+def _records(model: IProMP, demos, streams, refit: bool, labelled: bool, **options) -> list:
+    """:func:`calibrate`'s records: :func:`loo_records` (``refit``) or each stream by
+    ``model`` itself; ``labelled``: with the statistics under each demo's own task last."""
+    if refit:
+        return loo_records(model, demos, streams, labelled=labelled, **options)
+    streams = demos if streams is None else streams
+    out = []
+    for d, s in zip(demos, streams, strict=True):
+        t = np.asarray(s.times, dtype=np.float64)
+        out.append(stream_record(model, t - t[0], s.human,
+                                 own=model.task_index(d.task) if labelled else None, **options))
+    return out

@@ -125,27 +125,15 @@ def rank(records: list[dict], edges=None, score: str = "timing",
     (``"own"``, its ``own_stats``; :mod:`sandbox.core.cells`) or under the task chosen at
     each update (``"chosen"``, what records made before own-task cells allow).
     """
-    from sandbox.core.conformal import ongoing
-    from sandbox.core.familiarity import CELLS, COMPONENTS, EDGES, SCORE_NAMES, SCORES
+    from sandbox.core.familiarity import CELLS, EDGES, SCORE_NAMES, SCORES
 
     names = SCORE_NAMES[check_choice(score, "score", SCORES[:-1])]
-    keep = [COMPONENTS.index(n) for n in names]
     labelled = check_choice(cells, "cells", CELLS) == "own"
     if labelled and any(r["held_in"] and "own_stats" not in r for r in records):
         raise ValueError("records: expected each held-in motion's statistics under its own "
                          "task ('own_stats', records made since own-task cells) for "
                          "cells='own'; rank older records with cells='chosen'")
-
-    def stats(r, key="stats"):   # what the calibration ranks (records keep all they have)
-        v = np.array(r[key], dtype=float)
-        if v.ndim == 2 and v.shape[1] <= max(keep):
-            raise ValueError(f"records: expected the statistics {names}, got {v.shape[1]} "
-                             f"per update (records made before the position have five)")
-        v = v[:, keep] if v.ndim == 2 else v
-        if gate is not None:
-            v[~ongoing(r["ended"], gate)] = np.nan
-        return v
-
+    stats = _picker(names, gate)
     fractions = np.asarray(EDGES if edges is None else edges, dtype=float)
     out = []
     for left in sorted({r["left_out"] for r in records}):
@@ -171,6 +159,27 @@ def rank(records: list[dict], edges=None, score: str = "timing",
                        for t, v, k in zip(r["times"], stats(r), r["chosen"])]
                 out.append({**r, "familiarity": fam, "reference": lowest.tolist()})
     return out
+
+
+def _picker(names: tuple, gate: float | None):
+    """``stats(record, key)``: the statistics ``names`` of a record's updates (records keep
+    all they have), NaN past the estimated end with a ``gate`` (:func:`rank`)."""
+    from sandbox.core.conformal import ongoing
+    from sandbox.core.familiarity import COMPONENTS
+
+    keep = [COMPONENTS.index(n) for n in names]
+
+    def stats(r, key="stats"):
+        v = np.array(r[key], dtype=float)
+        if v.ndim == 2 and v.shape[1] <= max(keep):
+            raise ValueError(f"records: expected the statistics {names}, got {v.shape[1]} "
+                             f"per update (records made before the position have five)")
+        v = v[:, keep] if v.ndim == 2 else v
+        if gate is not None:
+            v[~ongoing(r["ended"], gate)] = np.nan
+        return v
+
+    return stats
 
 
 def judge(ranked: list[dict], alpha: float = 0.05) -> list[dict]:

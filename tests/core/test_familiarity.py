@@ -310,6 +310,10 @@ def test_a_goal_or_position_calibration_ranks_its_statistics_and_round_trips(sco
     loaded = IProMP.load(tmp_path / "m.npz")
     assert loaded.calibration.components == names
     assert cal.motion is None and loaded.calibration.motion is None
+    # the file keeps the own-task cells' quantiles and threshold, not which filing made them
+    assert cal.cells == "own" and loaded.calibration.cells is None
+    np.testing.assert_array_equal(loaded.calibration.stack, cal.stack)
+    assert loaded.calibration.threshold == cal.threshold
     motion = np.array([[0.5, 1.0, 2.0], [0.1, 3.0, 4.0]])    # per_motion=True keeps these
     bare.calibration = replace(cal, motion=motion)
     bare.save(tmp_path / "p.npz")
