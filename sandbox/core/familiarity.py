@@ -319,6 +319,8 @@ def _records(model: IProMP, demos, streams, refit: bool, labelled: bool, **optio
     if refit:
         return loo_records(model, demos, streams, labelled=labelled, **options)
     streams = demos if streams is None else streams
+    if len(streams) != len(demos):
+        raise ValueError(f"streams: expected one per demo ({len(demos)}), got {len(streams)}")
     out = []
     for d, s in zip(demos, streams, strict=True):
         t = np.asarray(s.times, dtype=np.float64)

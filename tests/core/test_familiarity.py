@@ -422,3 +422,24 @@ def test_a_calibration_gated_to_the_ongoing_motion_judges_no_update_past_its_end
     gated.save(tmp_path / "gated.npz")
     assert IProMP.load(tmp_path / "gated.npz").calibration.end_prob == 0.5
     assert model.calibration.end_prob is None
+
+
+def test_the_statistics_under_a_task_are_the_chosen_ones_where_it_was_chosen(model):
+    """``stream_record(..., own=k)``: at updates that chose k the statistics under k are the
+    recorded ones; under a task never chosen they differ (its own factor and priors), and
+    the records' other entries do not change. A task index out of range is refused."""
+    demo = unseen(1, seed=3)
+    t = demo.times - demo.times[0]
+    at, stats, tasks = stream_record(model, t, demo.human, dow_t=0.2, **OPTIONS)
+    under = {}
+    for k in (0, 1):
+        at_k, stats_k, tasks_k, under[k] = stream_record(model, t, demo.human, dow_t=0.2,
+                                                         own=k, **OPTIONS)
+        np.testing.assert_array_equal(at_k, at)
+        np.testing.assert_array_equal(stats_k, stats)
+        np.testing.assert_array_equal(tasks_k, tasks)
+        np.testing.assert_array_equal(under[k][tasks == k], stats[tasks == k])
+    assert np.all(tasks == 1)                       # a motion of task 1 ...
+    assert np.all(under[0][:, 0] > stats[:, 0])      # ... fits task 0 worse at every update
+    with pytest.raises(ValueError, match="own"):
+        stream_record(model, t, demo.human, own=2, **OPTIONS)
