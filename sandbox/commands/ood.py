@@ -103,6 +103,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "estimated end (once the probability that it ended reached P, "
                              "e.g. 0.5; calibrate(end_prob=P)); default every update; with "
                              "--model: its calibration's")
+    parser.add_argument("--cells", choices=("own", "chosen"), default="own",
+                        help="file each calibration motion's updates under its own task "
+                             "(default: the labels are used in calibration only) or under the "
+                             "task chosen at each update (before; calibrate(cells=...)); with "
+                             "--model: its calibration's")
     parser.add_argument("--workers", type=_types.WORKERS, default=1,
                         help=f"processes, 1 to {_types.MAX_WORKERS} (default 1)")
     parser.add_argument("--out", type=_types.output_file, default=None,
@@ -146,7 +151,7 @@ def run(args: argparse.Namespace) -> int:
     if args.records:
         saved = _read_records(args.records)
         about = {k: saved.get(k) for k in ("mode", "data", "ood_data", "observe", "dow_t",
-                                            "score", "end_prob")}
+                                            "score", "end_prob", "cells")}
         about["mode"] = about["mode"] or MODES[0]
         records, seconds = saved["records"], float(saved.get("seconds", 0.0))
     else:
@@ -202,16 +207,18 @@ def _score(args) -> tuple[dict, list[dict]]:
     if sets:
         records = oodsets.score_sets(*normal, sets, config, dow_t=args.dow_t,
                                      workers=args.workers, progress=progress)
-        return ({**about, "mode": MODES[1], "score": args.score, "end_prob": args.end_prob},
-                ood.rank(records, score=args.score, gate=args.end_prob))
+        return ({**about, "mode": MODES[1], "score": args.score, "end_prob": args.end_prob,
+                 "cells": args.cells},
+                ood.rank(records, score=args.score, gate=args.end_prob, cells=args.cells))
     train, test = normal
     if len({d.task for d in train}) < 3:
         raise ValueError(f"--data: leave-task-out needs at least three tasks (two stay "
                          f"trained), got {sorted({d.task for d in train})}; give --ood-data")
     records = ood.score_all(train, test, config, dow_t=args.dow_t, workers=args.workers,
                             progress=progress)
-    return ({**about, "mode": MODES[0], "score": args.score, "end_prob": args.end_prob},
-            ood.rank(records, score=args.score, gate=args.end_prob))
+    return ({**about, "mode": MODES[0], "score": args.score, "end_prob": args.end_prob,
+             "cells": args.cells},
+            ood.rank(records, score=args.score, gate=args.end_prob, cells=args.cells))
 
 
 def _load(args, data: str, spec, observe, progress: bool) -> tuple[list, list]:

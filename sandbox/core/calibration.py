@@ -1,9 +1,11 @@
 """The familiarity calibration: quantiles of held-out updates' statistics, to rank new ones.
 
-:class:`Calibration` stores, per chosen task and bin of elapsed time, the
+:class:`Calibration` stores, per task and bin of elapsed time, the
 quantiles of each statistic of :data:`~sandbox.core.evidence.COMPONENTS` (or of
 the Mahalanobis term alone, as files before them did) over the updates of
-held-out training motions, and ranks a new update against them
+held-out training motions of that task, under it (or, ``cells="chosen"``, the updates
+that chose it; :mod:`sandbox.core.cells`, with the derivation), and ranks a new update
+in the cell of the task chosen at it
 (:meth:`Calibration.familiarity`); :func:`leave_one_out` builds it from
 per-motion records and ranks each motion against the others (for the
 threshold, :func:`conformal_threshold`); :func:`check` validates one (e.g. read
@@ -61,6 +63,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from sandbox.core.cells import CELLS, MIN_CELL, against_others, quantile_cells
 from sandbox.core.conformal import (
     LEVELS,
     conformal_threshold,
@@ -83,8 +86,8 @@ from sandbox.validation import (
     check_positive,
 )
 
-__all__ = ["BINLESS", "COMPONENTS", "EDGES", "LEVELS", "NAMES", "Calibration", "check",
-           "conformal_threshold", "fisher", "leave_one_out", "ongoing", "rank"]
+__all__ = ["BINLESS", "CELLS", "COMPONENTS", "EDGES", "LEVELS", "MIN_CELL", "NAMES", "Calibration",
+           "check", "conformal_threshold", "fisher", "leave_one_out", "ongoing", "rank"]
 
 #: Left edges of the time bins, as fractions of the model's mean duration (last bin open).
 EDGES = (0.0, 0.2, 0.4, 0.6, 0.8, 1.0, 1.3, 1.7)
@@ -96,8 +99,6 @@ EXTRA_MIN_TAIL = 0.1
 #: issue 30), the four of timing, those with the goal, with the position, or all
 #: :data:`COMPONENTS`.
 NAMES = (("mahalanobis",), TIMING, TIMING + ("goal",), TIMING + ("position",), COMPONENTS)
-#: Fewest updates of a (task, time bin) cell for its own quantiles (else the bin's).
-MIN_CELL = 20
 #: Statistics ranked against all of the task's updates, whatever the elapsed time.
 BINLESS = ("position",)
 
@@ -113,7 +114,7 @@ class Calibration:
         the last bin is open-ended.
     quantiles : ndarray, shape (K, B, L)
         Quantiles of :func:`~sandbox.core.familiarity.statistic` at :data:`LEVELS` of
-        the updates whose chosen task was k, in each bin (a cell with fewer than
+        the updates filed under task k (:attr:`cells`), in each bin (a cell with fewer than
         :data:`MIN_CELL` updates holds those of all tasks in the bin).
     counts : ndarray, shape (K, B)
         Updates each cell's quantiles come from (at least one).
@@ -157,6 +158,7 @@ class Calibration:
     extra: FloatArray | None = None
     end_prob: float | None = None
     motion: FloatArray | None = None
+    cells: str | None = None
 
     def __post_init__(self) -> None:
         if self.motion is not None:            # a model file's metadata holds a list
@@ -226,7 +228,7 @@ class Calibration:
 
     @classmethod
     def from_records(cls, records, n_tasks: int, *, alpha: float = 0.05, edges=None,
-                     **settings) -> Calibration:
+                     own=None, **settings) -> Calibration:
         """Calibration from per-motion records.
 
         Parameters
@@ -244,6 +246,12 @@ class Calibration:
             Share of calibration motions that may be unfamiliar at some update.
         edges : array_like, shape (B,), optional
             Left bin edges (s); bins holding no update are merged into the one before.
+        own : sequence of (times, values, tasks[, ended]), optional
+            Per record, the same updates with the statistics under the motion's own (true)
+            task, that task at every update: the cells are filed from these
+            (``cells="own"``, :mod:`sandbox.core.cells`), the motions still ranked as
+            ``records`` say (the chosen task's cell); None: filed from ``records``
+            (``cells="chosen"``).
         **settings
             ``likelihood``, ``subsample``, ``dow_t``, ``end_prob`` as stored (with
             ``end_prob``, the updates past each motion's estimated end are left out);
@@ -251,23 +259,23 @@ class Calibration:
             (:mod:`sandbox.core.questions`; measured, not the default: docs, Results).
         """
         alpha = check_fraction(alpha, "alpha")
-        full, held_out = leave_one_out(records, n_tasks, edges=edges, **settings)
+        full, held_out = leave_one_out(records, n_tasks, edges=edges, own=own, **settings)
         lowest = np.array([f.min() if f.size else np.inf for f in held_out])
         return replace(full, threshold=conformal_threshold(lowest, alpha), alpha=alpha)
 
 
-def leave_one_out(records, n_tasks: int, *, edges=None,
+def leave_one_out(records, n_tasks: int, *, edges=None, own=None,
                   **settings) -> tuple[Calibration, list[FloatArray]]:
     """The quantiles of all records, and each record's familiarities against the others.
 
-    A calibration motion is ranked as a new one would be: against the quantiles
-    of the other motions (ranked against quantiles that include its own
-    extremes, it would look familiar, and the threshold would let twice
-    ``alpha`` of new motions fire).
+    A calibration motion is ranked as a new one would be: under the task chosen at each
+    update, against the cells of the other motions (ranked against quantiles that include
+    its own extremes, it would look familiar, and the threshold would let twice ``alpha``
+    of new motions fire).
 
     Parameters
     ----------
-    records, n_tasks, edges, **settings
+    records, n_tasks, edges, own, **settings
         As for :meth:`Calibration.from_records`.
 
     Returns
@@ -283,19 +291,26 @@ def leave_one_out(records, n_tasks: int, *, edges=None,
     if end_prob is not None:
         settings["end_prob"] = check_fraction(end_prob, "end_prob")
     times, values, tasks, owner = _pool(records, n_tasks, settings.get("end_prob"))
+    filing = _filing(records, own, n_tasks, settings.get("end_prob"), values.shape[1])
     edges = check_array(EDGES if edges is None else edges, "edges", 1)
-    edges = _populated(np.sort(edges), times)
-    bins = np.searchsorted(edges, times, side="right") - 1
+    edges = _populated(np.sort(edges), np.concatenate([times, filing[0]]))
+    filed_bins = np.searchsorted(edges, filing[0], side="right") - 1
     names = [n for n in NAMES if len(n) == values.shape[1]]   # the first of a length, unless named
     if not names or len(settings.setdefault("components", names[0])) != values.shape[1]:
         raise ValueError(f"records: expected {' or '.join(sorted({str(len(n)) for n in NAMES}))} "
                          f"statistics per update ({NAMES}), got {values.shape[1]}")
     binless = [j for j, n in enumerate(settings["components"]) if n in BINLESS]
-    q, counts = _cells(values, tasks, bins, (n_tasks, edges.size), binless)
+    _, filed, filed_tasks, filed_owner = filing
+    q, counts = quantile_cells(filed, filed_tasks, filed_bins, (n_tasks, edges.size), binless)
     full = Calibration(edges, q[0], counts, 0.0, 1.0, n_motions=len(records),
-                       extra=q[1:] if q.shape[0] > 1 else None, **settings)
-    found = [_against_others(full, times, values, tasks, bins, owner == i, binless)
-             for i in range(len(records))]
+                       extra=q[1:] if q.shape[0] > 1 else None,
+                       cells="chosen" if own is None else "own", **settings)
+    found = []
+    for i in range(len(records)):
+        mine, others = owner == i, filed_owner != i
+        found.append(against_others(full, (times[mine], values[mine], tasks[mine]),
+                                    (filed[others], filed_tasks[others], filed_bins[others]),
+                                    binless))
     if found[0].shape[1] == 1 or not per_motion:
         return full, [np.array([combine(x, None) for x in a]) for a in found]
     lowest = np.array([a.min(axis=0) if a.size else np.full(a.shape[1], np.inf) for a in found])
@@ -306,43 +321,19 @@ def leave_one_out(records, n_tasks: int, *, edges=None,
     return replace(full, motion=motion_quantiles(lowest)), held_out
 
 
-def _cells(values: FloatArray, tasks: np.ndarray, bins: np.ndarray, cells: tuple[int, int],
-           binless=()) -> tuple[FloatArray, FloatArray]:
-    """Quantiles (J, K, B, L) of ``values`` (n, J) and counts (K, B) per (task, bin); thin
-    cells use the whole bin; statistics ``binless`` (indices) those of the task in every bin
-    (of all updates when the task has fewer than :data:`MIN_CELL`)."""
-    K, B = cells
-    q, counts = np.empty((values.shape[1], K, B, LEVELS.size)), np.zeros((K, B))
-    for b in range(B):
-        in_bin = bins == b
-        pooled = (np.quantile(values[in_bin], LEVELS, axis=0).T if in_bin.any()
-                  else np.full((values.shape[1], LEVELS.size), np.nan))
-        for k in range(K):
-            mine = in_bin & (tasks == k)
-            n = int(mine.sum())
-            if n >= MIN_CELL:
-                q[:, k, b], counts[k, b] = np.quantile(values[mine], LEVELS, axis=0).T, n
-            else:
-                q[:, k, b], counts[k, b] = pooled, int(in_bin.sum())
-    for k in range(K) if binless else ():
-        mine = values[tasks == k] if np.sum(tasks == k) >= MIN_CELL else values
-        q[binless, k] = np.quantile(mine[:, binless], LEVELS, axis=0).T[:, None]
-    return q, counts
-
-
-def _against_others(full: Calibration, times, values, tasks, bins, mine,
-                    binless=()) -> FloatArray:
-    """Answers (s, M) of one calibration motion's updates against the quantiles of the others
-    (:meth:`Calibration.answers`)."""
-    if not mine.any():
-        return np.empty((0, len(groups(tuple(full.components)))))
-    q, counts = _cells(values[~mine], tasks[~mine], bins[~mine], full.counts.shape, binless)
-    empty = counts == 0
-    q[:, empty], counts[empty] = full.stack[:, empty], full.counts[empty]
-    others = replace(full, quantiles=q[0], counts=counts,
-                     extra=q[1:] if q.shape[0] > 1 else None)
-    return np.array([others.answers(t, v, k)
-                     for t, v, k in zip(times[mine], values[mine], tasks[mine])])
+def _filing(records, own, n_tasks: int, end_prob, n_stats: int) -> tuple:
+    """Times, statistics, tasks and owner of the updates filed into cells: ``own``'s (one
+    per record, as many statistics), else those of ``records``."""
+    if own is None:
+        return _pool(records, n_tasks, end_prob)
+    if len(own) != len(records):
+        raise ValueError(f"own: expected one record per calibration motion ({len(records)}), "
+                         f"got {len(own)}")
+    filing = _pool(own, n_tasks, end_prob)
+    if filing[1].shape[1] != n_stats:
+        raise ValueError(f"own: expected {n_stats} statistics per update as in records, got "
+                         f"{filing[1].shape[1]}")
+    return filing
 
 
 def check(cal: Calibration) -> Calibration:
@@ -367,6 +358,8 @@ def check(cal: Calibration) -> Calibration:
     check_integer(cal.n_motions, "calibration n_motions", 0)
     if cal.end_prob is not None:
         check_fraction(cal.end_prob, "calibration end_prob")
+    if cal.cells is not None:
+        check_choice(cal.cells, "calibration cells", CELLS)
     if cal.motion is not None:
         motion = check_array(cal.motion, "calibration motion quantiles", 2,
                              shape=(len(groups(tuple(cal.components))), None))

@@ -29,10 +29,12 @@ task's tube now, which :math:`m`, averaged over all values so far, sees late);
 
 They are *calibrated* (:func:`calibrate`): each training motion,
 streamed as a predictor sees it, is scored by a model fitted without it
-(leave-one-out), and the quantiles of each statistic per chosen task and bin of
-elapsed time are stored (:class:`Calibration`). Each statistic of an update
+(leave-one-out), and the quantiles of each statistic per task and bin of
+elapsed time are stored (:class:`Calibration`; a task's cell holds the updates that chose
+it, or with ``cells="own"`` every update of its own motions under it:
+:mod:`sandbox.core.cells`, with the derivation). Each statistic of an update
 then ranks as a p-value-like :math:`p_j` in (0, 1]: the share of held-out
-training updates that chose the same task at about the same elapsed time and
+training updates in the cell of the task chosen at it, at about the same elapsed time, that
 scored worse (:math:`s_T` and :math:`s_G`, p-value bounds by construction, rank as
 :math:`e^{-s}`); the familiarity is Fisher's combination of the four,
 :math:`f = P(\\chi^2_8 \\ge -2 \\sum_j \\log p_j)`, and with the goal or the position
@@ -71,21 +73,21 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from sandbox.core.calibration import EDGES, LEVELS, Calibration, check, leave_one_out
+from sandbox.core.calibration import CELLS, EDGES, LEVELS, Calibration, check, leave_one_out
 from sandbox.core.evidence import COMPONENTS, TIMING, components
 from sandbox.core.inference import Prediction, predict
 from sandbox.core.likelihood import Scorer
 from sandbox.core.phase import Lattice
 from sandbox.core.statistics import StreamStatistics
 from sandbox.core.stream import ObservationStream
-from sandbox.validation import FloatArray, check_array, check_choice
+from sandbox.validation import FloatArray, check_array, check_choice, check_integer
 
 if TYPE_CHECKING:
     from sandbox.core.model import IProMP
 
-__all__ = ["COMPONENTS", "EDGES", "LEVELS", "SCORES", "SCORE_NAMES", "Calibration", "calibrate",
-           "check", "chosen", "leave_one_out", "loo_records", "statistic", "statistics",
-           "stream_record", "update_times"]
+__all__ = ["CELLS", "COMPONENTS", "EDGES", "LEVELS", "SCORES", "SCORE_NAMES", "Calibration",
+           "calibrate", "check", "chosen", "leave_one_out", "loo_records", "statistic",
+           "statistics", "statistics_under", "stream_record", "update_times"]
 
 #: What a calibration ranks, by the name ``calibrate(score=...)`` takes: the four of
 #: timing (default), those and the goal, those and the position, all six
@@ -162,12 +164,14 @@ def update_times(times: FloatArray, kept: FloatArray, dow_t: float) -> FloatArra
 
 def stream_record(model: IProMP, times, human, *, dow_t: float = 0.2, subsample: int = 2,
                   n_candidates: int = 50, width: float = 3.0, refine_steps: int = 1,
-                  score: str = "timing", ended: bool = False) -> tuple:
+                  score: str = "timing", ended: bool = False, own: int | None = None) -> tuple:
     """Update times (u,), statistics and chosen task (u,) of a stream, as a predictor sees it.
 
     The statistics are :func:`statistics` (u, 6) for every score but
     ``"mahalanobis"`` (all are recorded; a calibration keeps its own),
-    :func:`statistic` (u,) with ``score="mahalanobis"``.
+    :func:`statistic` (u,) with ``score="mahalanobis"``. With ``own``, the same
+    statistics under task ``own`` at every update follow last (u, 6) or (u,): what an
+    own-task calibration files into that task's cells (:mod:`sandbox.core.cells`).
 
     Parameters
     ----------
@@ -186,8 +190,11 @@ def stream_record(model: IProMP, times, human, *, dow_t: float = 0.2, subsample:
         Also return, fourth, each update's posterior probability that the chosen
         task's motion had ended (u,) (:meth:`~sandbox.core.inference.Prediction.ended_probability`),
         what :func:`~sandbox.core.conformal.ongoing` gates on.
+    own : int or None
+        The motion's true task (index in [0, K)): also return its statistics under it.
     """
     times = check_array(times, "times", 1)
+    own = None if own is None else check_integer(own, "own", 0, len(model.task_models) - 1)
     timing = check_choice(score, "score", SCORES) != "mahalanobis"
     stream = ObservationStream(model, subsample=subsample)
     for ti, yi in zip(times, np.asarray(human, dtype=np.float64)):
@@ -197,6 +204,7 @@ def stream_record(model: IProMP, times, human, *, dow_t: float = 0.2, subsample:
     stats = StreamStatistics(scorer, Lattice.for_tasks(model.task_models, n_candidates, width))
     at = update_times(times, t_obs, dow_t)
     out = np.empty((at.size, len(COMPONENTS)) if timing else at.size)
+    under = np.empty_like(out)
     task, fed, done = np.zeros(at.size, dtype=np.int64), 0, np.zeros(at.size)
     for j, tau in enumerate(at):
         n = int(np.searchsorted(t_obs, tau, side="right"))
@@ -208,16 +216,34 @@ def stream_record(model: IProMP, times, human, *, dow_t: float = 0.2, subsample:
         out[j] = statistics(model, pred, tau, t_obs[:n], y_obs[:n]) if timing else statistic(pred)
         task[j] = chosen(pred)
         done[j] = min(1.0, pred.ended_probability(tau, task[j]))     # sums may round over 1
-    return (at, out, task, done) if ended else (at, out, task)
+        if own is not None:
+            under[j] = (out[j] if task[j] == own else
+                        statistics_under(model, pred, tau, t_obs[:n], y_obs[:n], int(own),
+                                         timing))
+    found = (at, out, task, done) if ended else (at, out, task)
+    return found if own is None else (*found, under)
 
 
-def loo_records(model: IProMP, demos, streams=None, **options) -> list[tuple]:
+def statistics_under(model: IProMP, prediction: Prediction, t: float, times: FloatArray,
+                     values: FloatArray, k: int, timing: bool = True):
+    """:func:`statistics` (all six; ``timing=False``: :math:`m` alone, a float) of an update
+    under task ``k`` instead of the chosen one: :math:`m` from task k's factor at its MAP
+    speed, the others with k's priors (:func:`~sandbox.core.evidence.components`)."""
+    if prediction.factors is None or not prediction.n_values:
+        return np.full(len(COMPONENTS), np.nan) if timing else float("nan")
+    m = float(prediction.factors[k, -1, -1] ** 2 / prediction.n_values)
+    return components(model, prediction, t, times, values, k, m) if timing else m
+
+
+def loo_records(model: IProMP, demos, streams=None, *, labelled: bool = False,
+                **options) -> list[tuple]:
     """:func:`stream_record` of every demo by a model fitted on all the others.
 
     ``model`` gives the options (its fit, if any, is not used); ``streams[i]``
     is demo i as a predictor receives it (e.g. causally filtered; default the
     demo itself, whose smoothing makes it fit better than live streams do).
-    Each task needs three demos or more (two left when one is out).
+    Each task needs three demos or more (two left when one is out). ``labelled``:
+    each record ends with the statistics under the demo's own task (``own``).
     """
     streams = demos if streams is None else streams
     if len(streams) != len(demos):
@@ -227,13 +253,14 @@ def loo_records(model: IProMP, demos, streams=None, **options) -> list[tuple]:
     for i, s in enumerate(streams):
         held_out = copy.copy(model).fit_demo_fits(fits[:i] + fits[i + 1:], demos[0])
         t = np.asarray(s.times, dtype=np.float64)
-        out.append(stream_record(held_out, t - t[0], s.human, **options))
+        own = held_out.task_index(demos[i].task) if labelled else None
+        out.append(stream_record(held_out, t - t[0], s.human, own=own, **options))
     return out
 
 
 def calibrate(model: IProMP, demos, streams=None, *, alpha: float = 0.05, dow_t: float = 0.2,
               subsample: int = 2, score: str = "timing", refit: bool = True,
-              end_prob: float | None = None, **options) -> Calibration:
+              end_prob: float | None = None, cells: str = "own", **options) -> Calibration:
     """Leave-one-out calibration of the familiarity of ``model`` (fitted on ``demos``).
 
     Sets ``model.calibration`` and returns it. Cost: one stream of every demo
@@ -263,26 +290,40 @@ def calibrate(model: IProMP, demos, streams=None, *, alpha: float = 0.05, dow_t:
         Calibrate (and rank) only the updates before each motion's estimated end, where
         the probability that it had ended first reached ``end_prob``
         (:func:`~sandbox.core.conformal.ongoing`); None: every update.
+    cells : {"own", "chosen"}
+        File each calibration motion's updates under its own task (each demo's ``task``,
+        its statistics under that task: default) or under the task chosen at each update
+        (before issue 30's own-task cells); :mod:`sandbox.core.cells` for why.
     """
-    if refit:
-        records = loo_records(model, demos, streams, dow_t=dow_t, subsample=subsample,
-                              score=score, ended=True, **options)
-    else:
-        streams = demos if streams is None else streams
-        records = []
-        for s in streams:
-            t = np.asarray(s.times, dtype=np.float64)
-            records.append(stream_record(model, t - t[0], s.human, dow_t=dow_t,
-                                         subsample=subsample, score=score, ended=True,
-                                         **options))
+    labelled = check_choice(cells, "cells", CELLS) == "own"
+    records = _records(model, demos, streams, refit, labelled, dow_t=dow_t, subsample=subsample,
+                       score=score, ended=True, **options)
     names = SCORE_NAMES[score]
-    if score != "mahalanobis":
-        where = [COMPONENTS.index(n) for n in names]
-        records = [(t, np.asarray(v)[:, where], k, *rest) for t, v, k, *rest in records]
+    where = [COMPONENTS.index(n) for n in names]
+    pick = (lambda v: np.asarray(v)[:, where]) if score != "mahalanobis" else np.asarray
+    own = ([(t, pick(u), np.full(len(t), model.task_index(d.task)), e)
+            for (t, _, _, e, u), d in zip(records, demos, strict=True)] if labelled else None)
+    records = [(t, pick(v), k, e) for t, v, k, e, *_ in records]
     mean = float(np.dot(model.priors, [t.mean_duration for t in model.task_models]))
     cal = Calibration.from_records(records, len(model.task_models), alpha=alpha,
-                                   edges=np.array(EDGES) * mean,
+                                   edges=np.array(EDGES) * mean, own=own,
                                    subsample=subsample, dow_t=dow_t, end_prob=end_prob,
                                    components=names)
     model.calibration = cal
     return cal
+
+
+def _records(model: IProMP, demos, streams, refit: bool, labelled: bool, **options) -> list:
+    """:func:`calibrate`'s records: :func:`loo_records` (``refit``) or each stream by
+    ``model`` itself; ``labelled``: with the statistics under each demo's own task last."""
+    if refit:
+        return loo_records(model, demos, streams, labelled=labelled, **options)
+    streams = demos if streams is None else streams
+    if len(streams) != len(demos):
+        raise ValueError(f"streams: expected one per demo ({len(demos)}), got {len(streams)}")
+    out = []
+    for d, s in zip(demos, streams, strict=True):
+        t = np.asarray(s.times, dtype=np.float64)
+        out.append(stream_record(model, t - t[0], s.human,
+                                 own=model.task_index(d.task) if labelled else None, **options))
+    return out

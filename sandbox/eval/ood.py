@@ -67,12 +67,13 @@ def _score(job) -> dict:
     d = test[i]
     t = d.times - d.times[0]
     end = float(t[model.motion_end(t, d.robot, train[i].human)])
-    times, stats, tasks, ended = stream_record(model, t, d.human, dow_t=dow_t,
-                                               subsample=config.subsample,
-                                               n_candidates=config.n_candidates,
-                                               refine_steps=config.refine_steps, ended=True)
+    own = model.task_index(d.task) if d.task != left else None
+    times, stats, tasks, ended, *under = stream_record(
+        model, t, d.human, dow_t=dow_t, subsample=config.subsample,
+        n_candidates=config.n_candidates, refine_steps=config.refine_steps, ended=True, own=own)
     return {"left_out": left, "trial": i, "task": d.task, "held_in": d.task != left,
             "source": d.source, "end": end, "times": times.tolist(), "stats": stats.tolist(),
+            **({"own_stats": under[0].tolist()} if under else {}),
             "ended": ended.tolist(), "chosen": [model.tasks[k] for k in tasks],
             "tasks": list(model.tasks),
             "mean_duration": float(np.dot(model.priors,
@@ -104,7 +105,7 @@ def _progress(enabled: bool, n: int, total: int) -> None:
 
 
 def rank(records: list[dict], edges=None, score: str = "timing",
-         gate: float | None = None) -> list[dict]:
+         gate: float | None = None, cells: str = "own") -> list[dict]:
     """Per record: its familiarity at each update and the reference it is thresholded with.
 
     Per left-out task, the held-in records are the calibration
@@ -119,33 +120,31 @@ def rank(records: list[dict], edges=None, score: str = "timing",
     (records before the position have five). ``gate``: only the
     updates before the motion's estimated end are calibrated and ranked
     (:func:`~sandbox.core.conformal.ongoing` at that level of the records'
-    ``ended``; the others' familiarity is NaN), None: all.
+    ``ended``; the others' familiarity is NaN), None: all. ``cells``: the calibration's
+    cells are filed from each held-in record's statistics under its own task
+    (``"own"``, its ``own_stats``; :mod:`sandbox.core.cells`) or under the task chosen at
+    each update (``"chosen"``, what records made before own-task cells allow).
     """
-    from sandbox.core.conformal import ongoing
-    from sandbox.core.familiarity import COMPONENTS, EDGES, SCORE_NAMES, SCORES
+    from sandbox.core.familiarity import CELLS, EDGES, SCORE_NAMES, SCORES
 
     names = SCORE_NAMES[check_choice(score, "score", SCORES[:-1])]
-    keep = [COMPONENTS.index(n) for n in names]
-
-    def stats(r):   # the statistics the calibration ranks (records keep all they have)
-        v = np.array(r["stats"], dtype=float)
-        if v.ndim == 2 and v.shape[1] <= max(keep):
-            raise ValueError(f"records: expected the statistics {names}, got {v.shape[1]} "
-                             f"per update (records made before the position have five)")
-        v = v[:, keep] if v.ndim == 2 else v
-        if gate is not None:
-            v[~ongoing(r["ended"], gate)] = np.nan
-        return v
-
+    labelled = check_choice(cells, "cells", CELLS) == "own"
+    if labelled and any(r["held_in"] and "own_stats" not in r for r in records):
+        raise ValueError("records: expected each held-in motion's statistics under its own "
+                         "task ('own_stats', records made since own-task cells) for "
+                         "cells='own'; rank older records with cells='chosen'")
+    stats = _picker(names, gate)
     fractions = np.asarray(EDGES if edges is None else edges, dtype=float)
     out = []
     for left in sorted({r["left_out"] for r in records}):
         pool = [r for r in records if r["left_out"] == left and r["held_in"]]
         tasks = pool[0]["tasks"]
         mean = float(np.mean([r["mean_duration"] for r in pool]))
+        own = ([(r["times"], stats(r, "own_stats"), [tasks.index(r["task"])] * len(r["times"]))
+                for r in pool] if labelled else None)
         full, held = leave_one_out(
             [(r["times"], stats(r), [tasks.index(k) for k in r["chosen"]]) for r in pool],
-            len(tasks), edges=fractions * mean,
+            len(tasks), edges=fractions * mean, own=own,
             components=names if np.ndim(pool[0]["stats"]) == 2 else ("mahalanobis",))
         lowest = np.array([h.min(initial=np.inf) for h in held])
         for i, r in enumerate(pool):
@@ -160,6 +159,27 @@ def rank(records: list[dict], edges=None, score: str = "timing",
                        for t, v, k in zip(r["times"], stats(r), r["chosen"])]
                 out.append({**r, "familiarity": fam, "reference": lowest.tolist()})
     return out
+
+
+def _picker(names: tuple, gate: float | None):
+    """``stats(record, key)``: the statistics ``names`` of a record's updates (records keep
+    all they have), NaN past the estimated end with a ``gate`` (:func:`rank`)."""
+    from sandbox.core.conformal import ongoing
+    from sandbox.core.familiarity import COMPONENTS
+
+    keep = [COMPONENTS.index(n) for n in names]
+
+    def stats(r, key="stats"):
+        v = np.array(r[key], dtype=float)
+        if v.ndim == 2 and v.shape[1] <= max(keep):
+            raise ValueError(f"records: expected the statistics {names}, got {v.shape[1]} "
+                             f"per update (records made before the position have five)")
+        v = v[:, keep] if v.ndim == 2 else v
+        if gate is not None:
+            v[~ongoing(r["ended"], gate)] = np.nan
+        return v
+
+    return stats
 
 
 def judge(ranked: list[dict], alpha: float = 0.05) -> list[dict]:

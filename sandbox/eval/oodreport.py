@@ -155,6 +155,7 @@ def markdown(result: dict) -> str:
                 if result.get("ood_data") else "")
              + f" (observe {result['observe']}; dow_t = {result['dow_t']:g} s"
              + (f"; score {result['score']}" if result.get("score") else "")
+             + (f"; cells of the {result['cells']} task" if result.get("cells") else "")
              + (f"; until the estimated end, P >= {result['end_prob']:g}"
                 if result.get("end_prob") is not None else "") + "); "
              f"{result['n_streams']} streams, {result['seconds']:.0f} s.", "",

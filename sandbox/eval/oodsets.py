@@ -45,16 +45,20 @@ def handover_time(model, stream, truth) -> float:
     return float(t[model.motion_end(t, stream.robot, truth.human)])
 
 
-def _record(model, stream, truth, dow_t: float, config: EvalConfig, **about) -> dict:
-    """One stream's statistics under ``model`` (:func:`~sandbox.core.familiarity.stream_record`)."""
+def _record(model, stream, truth, dow_t: float, config: EvalConfig, labelled: bool = False,
+            **about) -> dict:
+    """One stream's statistics under ``model`` (:func:`~sandbox.core.familiarity.stream_record`);
+    ``labelled``: also under the stream's own task (``own_stats``, what the calibration's
+    cells are filed from: :mod:`sandbox.core.cells`)."""
     t = stream.times - stream.times[0]
-    times, stats, tasks, ended = stream_record(model, t, stream.human, dow_t=dow_t,
-                                               subsample=config.subsample,
-                                               n_candidates=config.n_candidates,
-                                               refine_steps=config.refine_steps, ended=True)
+    own = model.task_index(stream.task) if labelled else None
+    times, stats, tasks, ended, *under = stream_record(
+        model, t, stream.human, dow_t=dow_t, subsample=config.subsample,
+        n_candidates=config.n_candidates, refine_steps=config.refine_steps, ended=True, own=own)
     return {**about, "task": stream.task, "source": stream.source,
             "end": handover_time(model, stream, truth), "times": times.tolist(),
             "stats": stats.tolist(), "ended": ended.tolist(),
+            **({"own_stats": under[0].tolist()} if under else {}),
             "chosen": [model.tasks[k] for k in tasks], "tasks": list(model.tasks),
             "mean_duration": float(np.dot(model.priors,
                                           [m.mean_duration for m in model.task_models]))}
@@ -79,8 +83,9 @@ def _score_job(n: int) -> dict:
             s["full"] = config.model().fit_demo_fits(s["fits"], s["train"][0])
         model = s["full"]
         truth, stream = s["sets"][group][0][i], s["sets"][group][1][i]
-    return _record(model, stream, truth, s["dow_t"], config, left_out=NORMAL, trial=i,
-                   held_in=kind == "normal", group=None if kind == "normal" else group)
+    normal = kind == "normal"
+    return _record(model, stream, truth, s["dow_t"], config, normal, left_out=NORMAL, trial=i,
+                   held_in=normal, group=None if normal else group)
 
 
 def score_sets(train, test, sets: dict, config: EvalConfig, *, dow_t: float = 0.2,

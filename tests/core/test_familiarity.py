@@ -310,6 +310,10 @@ def test_a_goal_or_position_calibration_ranks_its_statistics_and_round_trips(sco
     loaded = IProMP.load(tmp_path / "m.npz")
     assert loaded.calibration.components == names
     assert cal.motion is None and loaded.calibration.motion is None
+    # the file keeps the own-task cells' quantiles and threshold, not which filing made them
+    assert cal.cells == "own" and loaded.calibration.cells is None
+    np.testing.assert_array_equal(loaded.calibration.stack, cal.stack)
+    assert loaded.calibration.threshold == cal.threshold
     motion = np.array([[0.5, 1.0, 2.0], [0.1, 3.0, 4.0]])    # per_motion=True keeps these
     bare.calibration = replace(cal, motion=motion)
     bare.save(tmp_path / "p.npz")
@@ -363,9 +367,11 @@ def test_tampered_calibration_is_refused(model, tmp_path):
         IProMP.load(tmp_path / "short.npz")
 
 
-def test_a_calibration_on_fresh_motions_streams_them_by_the_model_itself(model):
+@pytest.mark.parametrize("cells", ["own", "chosen"])
+def test_a_calibration_on_fresh_motions_streams_them_by_the_model_itself(model, cells):
     """``refit=False`` (the default models' split-conformal calibration): each fresh
-    motion is streamed by the fitted model, no leave-one-out refit."""
+    motion is streamed by the fitted model, no leave-one-out refit; its cells are filed
+    under each motion's own task (default) or the chosen one."""
     import copy
 
     from sandbox.core.familiarity import EDGES
@@ -373,13 +379,16 @@ def test_a_calibration_on_fresh_motions_streams_them_by_the_model_itself(model):
     rng = np.random.default_rng(11)
     fresh = [noisy(d, rng) for d in synth.demos(rng, n_per_task=6, n_tasks=2)]
     other = copy.copy(model)
-    cal = other.calibrate(fresh, refit=False, **OPTIONS)
-    assert other.calibration is cal and model.calibration is not cal
-    records = [stream_record(model, d.times - d.times[0], d.human, dow_t=0.2, **OPTIONS)
-               for d in fresh]
-    records = [(t, v[:, :len(TIMING)], k) for t, v, k in records]      # the default score
+    cal = other.calibrate(fresh, refit=False, cells=cells, **OPTIONS)
+    assert other.calibration is cal and model.calibration is not cal and cal.cells == cells
+    records = [stream_record(model, d.times - d.times[0], d.human, dow_t=0.2,
+                             own=model.task_index(d.task), **OPTIONS) for d in fresh]
+    own = [(t, u[:, :len(TIMING)], np.full(t.size, model.task_index(d.task)))
+           for (t, _, _, u), d in zip(records, fresh)]
+    records = [(t, v[:, :len(TIMING)], k) for t, v, k, _ in records]      # the default score
     mean = float(np.dot(model.priors, [t.mean_duration for t in model.task_models]))
     want = Calibration.from_records(records, 2, alpha=0.05, edges=np.array(EDGES) * mean,
+                                    own=own if cells == "own" else None,
                                     subsample=OPTIONS["subsample"], dow_t=0.2)
     np.testing.assert_array_equal(cal.quantiles, want.quantiles)
     assert cal.threshold == want.threshold
@@ -413,3 +422,24 @@ def test_a_calibration_gated_to_the_ongoing_motion_judges_no_update_past_its_end
     gated.save(tmp_path / "gated.npz")
     assert IProMP.load(tmp_path / "gated.npz").calibration.end_prob == 0.5
     assert model.calibration.end_prob is None
+
+
+def test_the_statistics_under_a_task_are_the_chosen_ones_where_it_was_chosen(model):
+    """``stream_record(..., own=k)``: at updates that chose k the statistics under k are the
+    recorded ones; under a task never chosen they differ (its own factor and priors), and
+    the records' other entries do not change. A task index out of range is refused."""
+    demo = unseen(1, seed=3)
+    t = demo.times - demo.times[0]
+    at, stats, tasks = stream_record(model, t, demo.human, dow_t=0.2, **OPTIONS)
+    under = {}
+    for k in (0, 1):
+        at_k, stats_k, tasks_k, under[k] = stream_record(model, t, demo.human, dow_t=0.2,
+                                                         own=k, **OPTIONS)
+        np.testing.assert_array_equal(at_k, at)
+        np.testing.assert_array_equal(stats_k, stats)
+        np.testing.assert_array_equal(tasks_k, tasks)
+        np.testing.assert_array_equal(under[k][tasks == k], stats[tasks == k])
+    assert np.all(tasks == 1)                       # a motion of task 1 ...
+    assert np.all(under[0][:, 0] > stats[:, 0])      # ... fits task 0 worse at every update
+    with pytest.raises(ValueError, match="own"):
+        stream_record(model, t, demo.human, own=2, **OPTIONS)

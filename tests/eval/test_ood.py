@@ -42,6 +42,8 @@ def records(rng, shift: float, n_per_task: int = 12):
             out.append({"left_out": left, "trial": trial, "task": task, "held_in": held_in,
                         "end": 1.2, "times": times.tolist(), "stats": stats.tolist(),
                         "chosen": chosen, "tasks": trained, "mean_duration": 1.0})
+            if held_in:                          # it chose its own task throughout
+                out[-1]["own_stats"] = out[-1]["stats"]
     return out
 
 
@@ -127,7 +129,7 @@ def test_the_score_chooses_the_statistics_ranked_and_records_keep_all():
     for r in recs:
         base = np.asarray(r["stats"])[:, None] * rng.lognormal(0.0, 0.3, (len(r["stats"]), 4))
         goal = np.full((len(r["stats"]), 1), 0.1 if r["held_in"] else 30.0)
-        r["stats"] = np.hstack([base, goal]).tolist()
+        r["stats"] = r["own_stats"] = np.hstack([base, goal]).tolist()
     detected = {}
     for score in ("timing", "goal"):
         judged = ood.judge(ood.rank(recs, score=score), alpha=0.05)
@@ -150,6 +152,7 @@ def test_a_gate_ranks_only_the_updates_before_the_estimated_end():
         if not r["held_in"]:
             stats[2] *= 3.0
         r["stats"], r["ended"] = stats.tolist(), [0.0] * m + [0.7] + [0.2] * (7 - m)
+        r["own_stats"] = r["stats"]
     detected = {}
     for gate in (None, 0.5):
         judged = ood.judge(ood.rank(recs, gate=gate), alpha=0.05)
@@ -158,3 +161,31 @@ def test_a_gate_ranks_only_the_updates_before_the_estimated_end():
             past = np.isnan(j["familiarity"])
             assert past.sum() == (0 if gate is None else 8 - j["ended"].index(0.7))
     assert detected[0.5] > detected[None] + 0.3
+
+
+def test_own_task_cells_change_only_what_a_motion_choosing_another_task_files():
+    """Held-in motions that chose their own task throughout file the same cells either way
+    (the same familiarities); when their first two updates chose the other trained task and
+    scored large under it, filed by the chosen task those scores widen the other task's
+    early cells, filed by the true task they do not, so the held-out motions' own early
+    updates rank lower and the threshold falls (a systematic wrong early choice costs the
+    own-task filing; docs, Results). Records without ``own_stats`` are refused."""
+    recs = records(np.random.default_rng(8), shift=3.0)
+    same = [ood.rank(recs, cells=cells) for cells in ("own", "chosen")]
+    for a, b in zip(*same):
+        np.testing.assert_array_equal(a["familiarity"], b["familiarity"])
+    rng = np.random.default_rng(9)
+    for r in recs:
+        if r["held_in"]:
+            stats = np.asarray(r["stats"])
+            stats[:2] *= rng.lognormal(3.0, 0.5, 2)
+            r["stats"] = stats.tolist()
+            r["chosen"] = [next(k for k in r["tasks"] if k != r["task"])] * 2 + [r["task"]] * 6
+    low = {cells: np.median([j["threshold"] for j in ood.judge(ood.rank(recs, cells=cells))])
+           for cells in ("own", "chosen")}
+    assert low["own"] < 0.5 * low["chosen"]
+    for r in recs:
+        r.pop("own_stats", None)
+    with pytest.raises(ValueError, match="own_stats"):
+        ood.rank(recs)
+    assert len(ood.rank(recs, cells="chosen")) == len(recs)
