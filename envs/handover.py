@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from typing import Any
 
@@ -284,19 +285,19 @@ class BaxterHandoverEnv(gym.Env):
         self._check_open("step")
         if self.motion is None:
             raise RuntimeError("step: call reset() before step()")
-        dof = self.robot.dof
+        robot, dof = self.robot, self.robot.dof      # a finite a.a: finite a (else check_array)
         if not (type(action) is np.ndarray and action.dtype == np.float64
-                and action.shape == (dof + 1,) and np.isfinite(action).all()):
+                and action.shape == (dof + 1,) and math.isfinite(action.dot(action))):
             action = check_array(action, "action", 1, shape=(dof + 1,))  # else read, not kept
-        target = np.minimum(np.maximum(action[:dof], self.robot.lower), self.robot.upper)
-        self.robot.act(target, close=bool(action[dof] > 0.0))
+        target = np.minimum(np.maximum(action[:dof], robot.lower), robot.upper)
+        robot.command(target.tolist(), close=bool(action[dof] > 0.0))
         physics_dt = self.dt / self.substeps
         self.task.advance(self.motion.positions([self._t + k * physics_dt
                                                  for k in range(1, self.substeps + 1)]))
         self._steps += 1
         self._t = self._steps * self.dt
-        q, dq, opening = self.robot.state()     # read once: the handover, reward and observation
-        grasp = self.task.grasp_point()
+        q, dq, opening = robot.read()     # read once: the handover, reward and observation
+        grasp = self.task.grasp_floats()
         distance = self.task.distance(grasp)
         handed = self.task.try_handover(opening, distance)   # fixes the object where it is
         self._handover_time = self._t if handed else self._handover_time
@@ -355,10 +356,10 @@ class BaxterHandoverEnv(gym.Env):
 
     # ------------------------------------------------------------- internals
     def _observation(self, read: tuple | None = None) -> dict[str, FloatArray]:
-        """The observation now; ``read``: ``(q, dq, opening, grasp point)`` if read already."""
-        q, dq, opening, grasp = read or (*self.robot.state(), self.task.grasp_point())
-        state = {"object": grasp, "q": q, "dq": dq, "gripper": np.array([opening])}
-        return self._observer(self.motion, self._t, state)
+        """The observation now; ``read``: ``(q, dq, opening, grasp)`` if read already (the
+        robot's ``read()`` and the task's ``grasp_floats()``)."""
+        q, dq, opening, grasp = read or (*self.robot.read(), self.task.grasp_floats())
+        return self._observer(self.motion, self._t, grasp, q, dq, opening)
 
     def human_intent(self, t: float | None = None) -> str | None:
         """The task the human pursues at time ``t`` (s; default now), when the source knows it.

@@ -34,6 +34,7 @@ FloatArray = NDArray[np.float64]
 #: shoulder in the recordings, lowered to elbow height (the forearm's far end
 #: is drawn 0.31 m from the hand along this direction).
 SHOULDER = np.array([1.36, 0.0, 0.15])
+_SHOULDER: list[float] = SHOULDER.tolist()
 #: Body modalities a motion may carry besides the hand, and their dims: the
 #: tracked elbow then shoulder (x, y, z each, m) and the 8-channel EMG envelope.
 BODY_DIMS = {"arm": 6, "emg": 8}
@@ -109,10 +110,13 @@ class HumanMotion:
         """:meth:`position` at each of ``times`` (s), as lists of three floats (m): a control
         step's substeps in one call."""
         out, (ts, true), last, right = [], self._lists, len(self._lists[0]) - 1, bisect.bisect_right
-        for t in times:
-            i = min(max(right(ts, t), 1), last)
+        for t in times:                # min(max(x, low), high) written as comparisons
+            i = right(ts, t)
+            i = 1 if i < 1 else i
+            i = last if i > last else i
             t0, t1 = ts[i - 1], ts[i]
-            w = min(max((t - t0) / (t1 - t0), 0.0), 1.0)
+            w = (t - t0) / (t1 - t0)
+            w = 0.0 if w < 0.0 else 1.0 if w > 1.0 else w
             a, b, v = true[i - 1], true[i], 1.0 - w
             out.append([v * a[0] + w * b[0], v * a[1] + w * b[1], v * a[2] + w * b[2]])
         return out
@@ -129,6 +133,17 @@ class HumanMotion:
     def _row(self, t: float) -> int:
         """The last row at or before ``t`` (s) (the first row before the recording)."""
         return max(bisect.bisect_right(self._lists[0], t) - 1, 0)
+
+    def tracked(self, t: float) -> tuple[FloatArray, float, dict[str, FloatArray | None]]:
+        """What the tracker gives at ``t`` (s), found once: :meth:`measurement` (3,) m, its
+        :meth:`frame_time` (s), and for each body modality the motion carries, the
+        :meth:`body_measurement` (dims,) or None before its first valid sample (a modality
+        not carried is left out). The arrays are read-only views of the motion's own."""
+        row = self._row(t)
+        body = {name: (None if (i := int(last[row])) < 0 else self.body[name][i])
+                for name, last in self._body_last.items()}
+        return (self.measured[self._last_valid[row]], float(self.times[self._frame_row[row]]),
+                body)
 
     def body_measurement(self, name: str, t: float) -> FloatArray:
         """Latest valid sample (dims,) of body modality ``name`` at or before ``t`` (s).
@@ -187,19 +202,24 @@ def forearm_orientation(hand: FloatArray) -> tuple[float, float, float, float]:
     The body's y axis is horizontal (z_world x x), its z axis completes the frame.
     Written out in floats: it runs at every control step.
     """
-    dx, dy, dz = (SHOULDER - hand).tolist()
+    h0, h1, h2 = hand if type(hand) is list else np.asarray(hand, dtype=float).tolist()
+    dx, dy, dz = _SHOULDER[0] - h0, _SHOULDER[1] - h1, _SHOULDER[2] - h2
     n = max(math.sqrt(dx * dx + dy * dy + dz * dz), 1e-9)
     x = (dx / n, dy / n, dz / n)
     h = max(math.hypot(x[0], x[1]), 1e-9)
     y = (-x[1] / h, x[0] / h, 0.0)
     z = (-x[2] * y[1], x[2] * y[0], x[0] * y[1] - x[1] * y[0])
-    return _quaternion(((x[0], y[0], z[0]), (x[1], y[1], z[1]), (x[2], y[2], z[2])))
+    return _quaternion_rows([[x[0], y[0], z[0]], [x[1], y[1], z[1]], [x[2], y[2], z[2]]])
 
 
 def _quaternion(R) -> tuple[float, float, float, float]:
     """Quaternion (x, y, z, w) of a rotation matrix (3, 3) (an array or rows of floats),
     stable for any rotation. In Python floats: it runs at every control step."""
-    R = [[float(v) for v in row] for row in R]
+    return _quaternion_rows([[float(v) for v in row] for row in R])
+
+
+def _quaternion_rows(R: list[list[float]]) -> tuple[float, float, float, float]:
+    """:func:`_quaternion` of a rotation matrix given as three rows of three floats."""
     trace = R[0][0] + R[1][1] + R[2][2]
     if trace > 0:
         s = 2.0 * math.sqrt(1.0 + trace)

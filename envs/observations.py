@@ -11,6 +11,7 @@ stale sample stamped with the step time. See
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -24,6 +25,9 @@ FloatArray = NDArray[np.float64]
 EMG_MAX = 1e4
 #: Upper bound of the time entries (s).
 TIME_MAX = 1e4
+#: The order of an observation's entries.
+_ORDER = ("hand", "object", "q", "dq", "gripper", "time", "hand_valid", "hand_time", "arm",
+          "arm_valid", "emg", "emg_valid")
 
 
 def observation_space(robot: Any, observe_body: bool) -> spaces.Dict:
@@ -62,56 +66,61 @@ class Observer:
         The environment's observation space (values are clipped to it).
     observe_body : bool
         Add the v1 entries (``hand_valid``, ``hand_time``, ``arm``, ``emg`` and flags).
+
+    Every observation is new: its float entries are slices of one new array, clipped to
+    the space in one go, its flags slices of one new int8 array (it is built at every
+    step); nothing is shared with the environment or with another observation.
     """
 
     def __init__(self, space: spaces.Dict, observe_body: bool) -> None:
         self.space, self.observe_body = space, observe_body
-        #: Each Box entry's bounds, looked up once (the observation is built at every step).
-        self._bounds = {k: (v.low, v.high) for k, v in space.items()
-                        if isinstance(v, spaces.Box)}
-        self._scalars = {k: (float(low[0]), float(high[0])) for k, (low, high)
-                         in self._bounds.items() if low.shape == (1,)}
-        self._body_keys = [(name, f"{name}_valid") for name in BODY_DIMS]
+        floats = ["hand", "object", "q", "dq", "gripper", "time"]
+        flags: list[str] = []
+        if observe_body:
+            floats += ["hand_time", *BODY_DIMS]
+            flags = ["hand_valid", *(f"{name}_valid" for name in BODY_DIMS)]
+        boxes = [space[k] for k in floats]
+        self._low = np.concatenate([b.low for b in boxes])
+        self._high = np.concatenate([b.high for b in boxes])
+        ends = np.cumsum([b.low.size for b in boxes]).tolist()
+        where = {k: (0, slice(a, b)) for k, a, b in zip(floats, [0, *ends], ends)}
+        where.update({k: (1, slice(i, i + 1)) for i, k in enumerate(flags)})
+        #: (key, 0 for the float array or 1 for the flags, slice), in the order of _ORDER
+        self._layout = [(k, *where[k]) for k in _ORDER if k in where]
+        if len(self._layout) != len(space.spaces):
+            raise ValueError(f"space: expected the entries {list(where)}, got {list(space)}")
+        self._zeros = {name: [0.0] * dims for name, dims in BODY_DIMS.items()}
         self.reset()
 
     def reset(self) -> None:
         """A new episode: its first observation's hand frame is new."""
         self._given: float | None = None
 
-    def __call__(self, motion: Any, t: float, state: dict[str, FloatArray]) -> dict:
-        """The observation at episode time ``t`` (s) of ``motion`` and the robot ``state``
-        (``object``, ``q``, ``dq``, ``gripper``)."""
-        obs = {"hand": motion.measurement(t), **state, "time": np.array([t])}
-        bounds, lower, upper = self._bounds, np.maximum, np.minimum
-        # np.clip's result without its wrapper's cost (NaN stays NaN): built at every step;
-        # an entry of one value in Python floats (max(x, low) keeps a NaN x, as np.maximum)
-        obs = {k: (upper(lower(v, bounds[k][0]), bounds[k][1]) if k not in self._scalars
-                   else np.array([min(max(float(v[0]), self._scalars[k][0]), self._scalars[k][1])]))
-               for k, v in obs.items()}
-        if not self.observe_body:
-            return obs
-        obs.update(self._hand_frame(motion, t))
-        self._body(motion, t, obs)
-        return obs
+    def __call__(self, motion: Any, t: float, grasp: Sequence[float], q: list[float],
+                 dq: list[float], opening: float) -> dict[str, np.ndarray]:
+        """The observation at episode time ``t`` (s) of ``motion`` (its ``tracked(t)``:
+        :meth:`sandbox.envs.human.HumanMotion.tracked`) and the robot's state: the grasp
+        point (3 floats, m), joint positions ``q`` and velocities ``dq`` (lists of dof
+        floats, rad, rad/s) and the gripper's opening in [0, 1].
 
-    def _hand_frame(self, motion: Any, t: float) -> dict[str, np.ndarray]:
-        """``hand_valid`` (1 for a frame not given before) and ``hand_time`` (the frame's
-        time, s; a frame shown before its time, the motion's first valid one, at ``t``)."""
-        frame = float(motion.frame_time(t))
-        new = frame != self._given
-        self._given = frame
-        return {"hand_valid": np.array([new], dtype=np.int8),
-                "hand_time": np.array([min(max(min(frame, float(t)), 0.0), TIME_MAX)])}
-
-    def _body(self, motion: Any, t: float, out: dict[str, np.ndarray]) -> None:
-        """Add ``arm``/``emg`` (0 where unmeasured) and their ``*_valid`` flags (int8 (1,))
-        to ``out``."""
-        for name, flag in self._body_keys:
-            value = motion.body_measurement(name, t)
-            valid = bool(np.isfinite(value).all())
-            if valid:
-                low, high = self._bounds[name]
-                out[name] = np.minimum(np.maximum(value, low), high)
-            else:
-                out[name] = np.zeros(value.shape, value.dtype)
-            out[flag] = np.array([valid], dtype=np.int8)
+        ``hand_valid`` is 1 for a frame not given before; ``hand_time`` is the frame's
+        time (s; a frame shown before its time, the motion's first valid one, at ``t``);
+        ``arm``/``emg`` are 0 where unmeasured, with their ``*_valid`` flag 0.
+        """
+        hand, frame, body = motion.tracked(t)
+        t = float(t)
+        values = [*hand.tolist(), *grasp, *q, *dq, float(opening), t]
+        flags = []
+        if self.observe_body:
+            frame = float(frame)
+            flags.append(frame != self._given)
+            self._given = frame
+            values.append(min(frame, t))
+            for name, zeros in self._zeros.items():
+                value = body.get(name)
+                flags.append(value is not None)
+                values.extend(zeros if value is None else value.tolist())
+        # np.clip's result without its wrapper's cost (NaN stays NaN)
+        arrays = (np.minimum(np.maximum(np.array(values), self._low), self._high),
+                  np.array(flags, dtype=np.int8))
+        return {key: arrays[which][at] for key, which, at in self._layout}

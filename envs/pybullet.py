@@ -49,8 +49,10 @@ class Simulation:
         with _quiet():  # PyBullet prints 'argv[0]=' on connecting
             self.client = BulletClient(connection_mode=pybullet.DIRECT)
         # The calls made at every step go to pybullet with this id, not through the client
-        # (its __getattr__ builds a partial per call: a tenth of a step's Python time).
+        # (its __getattr__ builds a partial per call: a tenth of a step's Python time);
+        # ``_cid`` is passed by position, which PyBullet parses faster than a keyword.
         self._id = {"physicsClientId": self.client._client}
+        self._cid: int = self.client._client
         self.client.setTimeStep(self.time_step)
         self.client.setGravity(0.0, 0.0, float(gravity))
         self.client.setPhysicsEngineParameter(deterministicOverlappingPairs=1)
@@ -88,21 +90,27 @@ class Simulation:
         ``at_rest`` also zeroes its velocity (for a dynamic body moved kinematically).
         """
         body = self.bodies[name]
-        pybullet.resetBasePositionAndOrientation(body, vec3(position), orientation, **self._id)
+        pybullet.resetBasePositionAndOrientation(body, vec3(position), orientation, self._cid)
         if at_rest:
-            pybullet.resetBaseVelocity(body, _ZERO, _ZERO, **self._id)
+            pybullet.resetBaseVelocity(body, _ZERO, _ZERO, self._cid)
 
     def pose(self, name: str) -> tuple[FloatArray, FloatArray]:
         """Base position (3,) m and quaternion (4,) (x, y, z, w) of body ``name``."""
-        position, quaternion = pybullet.getBasePositionAndOrientation(self.bodies[name],
-                                                                     **self._id)
+        position, quaternion = self.pose_floats(name)
         return np.array(position), np.array(quaternion)
+
+    def pose_floats(self, name: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
+        """:meth:`pose` as PyBullet gives it: position (3 floats, m), quaternion (4 floats)."""
+        return pybullet.getBasePositionAndOrientation(self.bodies[name], self._cid)
 
     def link_position(self, name: str, link: int) -> FloatArray:
         """World position (3,) m of the URDF frame of ``link`` of body ``name``."""
-        state = pybullet.getLinkState(self.bodies[name], link, computeForwardKinematics=True,
-                                      **self._id)
-        return np.array(state[4])
+        return np.array(self.link_position_floats(name, link))
+
+    def link_position_floats(self, name: str, link: int) -> tuple[float, float, float]:
+        """:meth:`link_position` as PyBullet gives it (3 floats, m)."""
+        # positional: computeLinkVelocity 0, computeForwardKinematics 1
+        return pybullet.getLinkState(self.bodies[name], link, 0, 1, self._cid)[4]
 
     def link_pose(self, name: str, link: int) -> tuple[FloatArray, FloatArray]:
         """World position (3,) and quaternion (4,) of the URDF frame of ``link``."""
@@ -119,8 +127,14 @@ class Simulation:
     # ------------------------------------------------------------------ joints
     def joint_states(self, name: str, joints: Sequence[int]) -> tuple[FloatArray, FloatArray]:
         """Positions and velocities (n,) of ``joints`` of body ``name`` (rad or m, per s)."""
-        states = pybullet.getJointStates(self.bodies[name], list(joints), **self._id)
-        return np.array([s[0] for s in states]), np.array([s[1] for s in states])
+        positions, velocities = self.joint_states_floats(name, joints)
+        return np.array(positions), np.array(velocities)
+
+    def joint_states_floats(self, name: str, joints: Sequence[int]
+                            ) -> tuple[list[float], list[float]]:
+        """:meth:`joint_states` as Python floats: positions and velocities, lists of n."""
+        states = pybullet.getJointStates(self.bodies[name], joints, self._cid)
+        return [s[0] for s in states], [s[1] for s in states]
 
     def joint_limits(self, name: str, joints: Sequence[int]) -> tuple[FloatArray, FloatArray]:
         """Maximum effort (N m or N) and velocity (rad/s or m/s) of ``joints``, from the URDF."""
@@ -134,12 +148,31 @@ class Simulation:
 
     def control_joints(self, name: str, joints: Sequence[int], targets: ArrayLike,
                        forces: ArrayLike, max_velocities: ArrayLike) -> None:
-        """Position-control ``joints`` toward ``targets`` with effort and speed limits."""
+        """Position-control ``joints`` toward ``targets`` with effort and speed limits.
+
+        One PyBullet call per joint (``setJointMotorControl2``: the array call takes no speed
+        limit). Each joint's motor keeps the speed limit until a command gives another, so
+        later commands may go through :meth:`retarget_joints`.
+        """
         body, control = self.bodies[name], pybullet.setJointMotorControl2
         for joint, target, force, speed in zip(joints, _floats(targets), _floats(forces),
                                                _floats(max_velocities), strict=True):
             control(body, joint, pybullet.POSITION_CONTROL, targetPosition=target,
                     force=force, maxVelocity=speed, **self._id)
+
+    def retarget_joints(self, name: str, joints: list[int], targets: list[float],
+                        forces: list[float]) -> None:
+        """New position targets (and effort limits) for ``joints`` that :meth:`control_joints`
+        commanded before: one PyBullet call (``setJointMotorControlArray``).
+
+        The array call carries no speed limit; PyBullet's joint motor keeps the one the last
+        :meth:`control_joints` gave (it changes its speed clamp only when a command carries
+        one), so the motion is the same as with :meth:`control_joints`, bit for bit
+        (``tests/envs/test_pybullet.py``). ``targets`` and ``forces``: lists of floats.
+        """
+        pybullet.setJointMotorControlArray(self.bodies[name], joints, pybullet.POSITION_CONTROL,
+                                           targetPositions=targets, forces=forces,
+                                           physicsClientId=self._cid)
 
     # ------------------------------------------------------------- constraints
     def attach(self, parent: str, parent_link: int, child: str, *,
@@ -164,7 +197,7 @@ class Simulation:
     # ---------------------------------------------------------------- stepping
     def step_physics(self) -> None:
         """Advance the world by one physics step."""
-        pybullet.stepSimulation(**self._id)
+        pybullet.stepSimulation(self._cid)
 
     def advance(self, n: int, carried: str | None = None,
                 positions: Sequence[Sequence[float]] = ()) -> None:
@@ -172,20 +205,21 @@ class Simulation:
         ``positions[k]`` (3,) m, upright and at rest, as :meth:`set_pose` does.
 
         One call for a control step's substeps: their Python cost is a tenth of a step's.
+        PyBullet's teleport (``resetBasePositionAndOrientation``) zeroes the base's velocity
+        itself, so :meth:`set_pose`'s ``at_rest`` call is not needed here
+        (``tests/envs/test_pybullet.py``).
         """
-        step, ids = pybullet.stepSimulation, self._id
+        step, cid = pybullet.stepSimulation, self._cid
         if carried is None:
             for _ in range(n):
-                step(**ids)
+                step(cid)
             return
-        body, teleport, stop = self.bodies[carried], pybullet.resetBasePositionAndOrientation, \
-            pybullet.resetBaseVelocity
+        body, teleport = self.bodies[carried], pybullet.resetBasePositionAndOrientation
         if len(positions) != n:
             raise ValueError(f"positions: expected {n} (one per step), got {len(positions)}")
         for position in positions:
-            teleport(body, vec3(position), IDENTITY, **ids)
-            stop(body, _ZERO, _ZERO, **ids)
-            step(**ids)
+            teleport(body, vec3(position), IDENTITY, cid)
+            step(cid)
 
     def save(self) -> None:
         """Remember the current state (in memory) for :meth:`restore`."""

@@ -70,8 +70,12 @@ class RobotArm:
                                  for close in (False, True)}
         self._finger_limits = (self._finger_force.tolist(), self._finger_speed.tolist())
         self._state_joints, self._dof = [*self.baxter.arm, *self.baxter.fingers], self.spec.dof
+        self._arm_joints, self._finger_joints = list(self.baxter.arm), list(self.baxter.fingers)
         #: The gripper command the motors hold (None: unknown, sent at the next act()).
         self._gripper_sent: bool | None = None
+        #: Whether the motors hold the speed limits (sent with the first command after reset;
+        #: later commands go in one array call, which carries none: the motors keep them).
+        self._limits_sent = False
 
     @property
     def dof(self) -> int:
@@ -99,24 +103,40 @@ class RobotArm:
                                     np.full(len(joints), 1.0))
         self.sim.reset_joints(self.name, self.baxter.arm, q)
         self.sim.reset_joints(self.name, self.baxter.fingers, self._open)
-        self._gripper_sent = None
+        self._gripper_sent, self._limits_sent = None, False
         self.act(q, close=False)
 
     def act(self, q_target: ArrayLike, close: bool) -> None:
         """Command joint targets ``q_target`` (dof,) rad (clipped to limits) and the gripper.
 
         The motors keep a command until the next one: the gripper's is sent only when it
-        changes (and at every :meth:`reset`).
+        changes (and at every :meth:`reset`). The speed limits go with the first command
+        after :meth:`reset` (one PyBullet call per joint); the motors keep them, so later
+        commands go in one array call
+        (:meth:`~sandbox.envs.pybullet.Simulation.retarget_joints`), the same motion.
         """
         q_target = np.minimum(np.maximum(np.asarray(q_target, dtype=float), self.lower),
                               self.upper)                  # np.clip, without its wrapper
-        self.sim.control_joints(self.name, self.baxter.arm, q_target.tolist(),
-                                *self._arm_limits)
+        self.command(q_target.tolist(), close)
+
+    def command(self, q_target: list[float], close: bool) -> None:
+        """:meth:`act` with targets already within the joint limits, as a list of dof floats
+        (rad): what the environment's step sends (it clipped the action itself)."""
+        sim, name = self.sim, self.name
+        if self._limits_sent:
+            sim.retarget_joints(name, self._arm_joints, q_target, self._arm_limits[0])
+        else:
+            sim.control_joints(name, self._arm_joints, q_target, *self._arm_limits)
         close = bool(close)
         if close is not self._gripper_sent:
-            self.sim.control_joints(self.name, self.baxter.fingers,
-                                    self._finger_commands[close], *self._finger_limits)
+            if self._limits_sent:
+                sim.retarget_joints(name, self._finger_joints, self._finger_commands[close],
+                                    self._finger_limits[0])
+            else:
+                sim.control_joints(name, self._finger_joints, self._finger_commands[close],
+                                   *self._finger_limits)
             self._gripper_sent = close
+        self._limits_sent = True
 
     def joint_state(self) -> tuple[FloatArray, FloatArray]:
         """Arm joint positions (dof,) rad and velocities (dof,) rad/s."""
@@ -125,21 +145,28 @@ class RobotArm:
     def state(self) -> tuple[FloatArray, FloatArray, float]:
         """:meth:`joint_state` and :meth:`gripper_opening` read at once (one PyBullet call):
         positions (dof,) rad, velocities (dof,) rad/s, opening in [0, 1]."""
-        q, dq = self.sim.joint_states(self.name, self._state_joints)
+        q, dq, opening = self.read()
+        return np.array(q), np.array(dq), opening
+
+    def read(self) -> tuple[list[float], list[float], float]:
+        """:meth:`state` as Python floats (what the environment's step reads): positions
+        (dof,) rad and velocities (dof,) rad/s as lists, the opening in [0, 1]."""
+        q, dq = self.sim.joint_states_floats(self.name, self._state_joints)
         dof = self._dof
-        return q[:dof].copy(), dq[:dof].copy(), self._opening(q[dof:])
+        return q[:dof], dq[:dof], self._opening(q[dof:])
 
     def gripper_opening(self) -> float:
         """Finger opening in [0, 1]: 0 closed, 1 fully open (mean of both fingers)."""
         q, _ = self.sim.joint_states(self.name, self.baxter.fingers)
         return self._opening(q)
 
-    def _opening(self, q: FloatArray) -> float:
+    def _opening(self, q: FloatArray | list[float]) -> float:
         """The opening in [0, 1] of finger positions ``q`` (2,) (rad or m)."""
-        if self.name == "baxter":
-            opening = 0.5 * (q[0] - q[1]) / self._finger_travel
+        if self.name == "baxter":         # in floats: the same arithmetic as on float64
+            opening = 0.5 * (float(q[0]) - float(q[1])) / self._finger_travel
         else:
-            opening = float(np.mean((q - self._closed) / (self._open - self._closed)))
+            opening = float(np.mean((np.asarray(q, dtype=float) - self._closed)
+                                    / (self._open - self._closed)))
         return min(max(float(opening), 0.0), 1.0)
 
     def gripper_closed(self) -> bool:

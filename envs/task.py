@@ -24,6 +24,7 @@ and sum to the reward)::
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -159,17 +160,24 @@ class HandoverTask:
             return
         a, b, c = self.hold_offset.tolist()
         self.sim.advance(len(hands), self._require_object(),
-                         [[x + a, y + b, z + c] for x, y, z in map(vec3, hands)])
+                         [[x + a, y + b, z + c] for x, y, z in hands])
 
     def grasp_point(self) -> FloatArray:
         """World position (3,) m of the object's grasp point."""
-        return self.sim.pose(self._require_object())[0]
+        return np.array(self.grasp_floats())
 
-    def distance(self, grasp: FloatArray | None = None) -> float:
+    def grasp_floats(self) -> tuple[float, float, float]:
+        """:meth:`grasp_point` as PyBullet gives it (3 floats, m)."""
+        return self.sim.pose_floats(self._require_object())[0]
+
+    def distance(self, grasp: FloatArray | Sequence[float] | None = None) -> float:
         """Fingertip-to-grasp-point distance (m); ``grasp`` (3,) m the grasp point if read
-        already (:meth:`grasp_point`)."""
-        d = self.robot.tip_position() - (self.grasp_point() if grasp is None else grasp)
-        return math.sqrt(d.dot(d))              # np.linalg.norm's own arithmetic, without it
+        already (:meth:`grasp_point` or :meth:`grasp_floats`)."""
+        g0, g1, g2 = (self.grasp_floats() if grasp is None
+                      else grasp if type(grasp) is tuple else vec3(grasp))
+        t0, t1, t2 = self.sim.link_position_floats(self.robot.name, self.robot.tip_link)
+        d0, d1, d2 = t0 - g0, t1 - g1, t2 - g2  # np.linalg.norm's value (checked), in floats
+        return math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
 
     def try_handover(self, opening: float | None = None, distance: float | None = None) -> bool:
         """Transfer the object if the closed gripper is within reach; True if it happened now.

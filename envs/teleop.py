@@ -140,6 +140,11 @@ class TeleopMotion:
         """Index of the tracker frame current at ``t`` (s)."""
         return int(math.floor(float(t) * self.frame_hz + 1e-9))
 
+    def tracked(self, t: float) -> tuple[FloatArray, float, dict[str, FloatArray | None]]:
+        """:meth:`measurement` (3,) m and its :meth:`frame_time` (s) at ``t`` (s), and no
+        body modality (as :meth:`sandbox.envs.human.HumanMotion.tracked`)."""
+        return self.measurement(t), self.frame_time(t), {}
+
     def body_measurement(self, name: str, t: float) -> FloatArray:
         """All NaN (dims,): the teleoperated hand has no tracked arm and no EMG."""
         if name not in BODY_DIMS:

@@ -7,10 +7,13 @@
   motor targets are set and the physics advanced by the same number of
   substeps, nothing else (no observation, no hand motion, no reward).
 * ``env_raw_ratio``: their ratio (issue 25's target >= 0.9). Both advance the same physics
-  substeps per step. The environment is reset before each of its blocks; a block that
-  reaches the episode's end (``n_steps`` >= 300, the time limit) holds one more reset (a
-  new synthetic reach is generated), which the raw block never has. ``env_reset_ms``: one
-  reset's median time (ms), so that it can be taken out of such a block's time.
+  substeps per step. ``env_raw_cpu_ratio``: the same ratio in this process's CPU time (the
+  raw block's CPU seconds over the env block's, medians), which other processes on the
+  machine sway less than the wall time. The environment is reset before each of its
+  blocks; a block that reaches the episode's end (``n_steps`` >= 300, the time limit)
+  holds one more reset (a new synthetic reach is generated), which the raw block never
+  has. ``env_reset_ms``: one reset's median time (ms), so that it can be taken out of such
+  a block's time.
 * ``env_v0_steps_per_s``: the same random stepping of the legacy hand-only id
   (``sandbox/BaxterHandoverDiverging-v0``), and ``env_v1_v0_ratio`` the cost of
   observing the arm and EMG (target >= 0.9).
@@ -58,18 +61,24 @@ def _make_env(env_id: str = ENV_ID, **kwargs):
 
 def _env_block(env, n_steps: int, rng: np.random.Generator) -> float:
     """Seconds for ``n_steps`` random-action steps (resets included when episodes end)."""
+    return _env_block_times(env, n_steps, rng)[0]
+
+
+def _env_block_times(env, n_steps: int, rng: np.random.Generator) -> tuple[float, float]:
+    """:func:`_env_block`'s wall and CPU seconds."""
     low, high = env.action_space.low, env.action_space.high   # looked up once, as the raw block
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     for _ in range(n_steps):
         action = rng.uniform(low, high)
         _, _, terminated, truncated, _ = env.step(action)
         if terminated or truncated:
             env.reset()
-    return time.perf_counter() - start
+    return time.perf_counter() - start, time.process_time() - cpu
 
 
-def _raw_block(env, n_steps: int, rng: np.random.Generator) -> float:
-    """Seconds for ``n_steps`` steps of the same scene driven directly through PyBullet."""
+def _raw_block(env, n_steps: int, rng: np.random.Generator) -> tuple[float, float]:
+    """Wall and CPU seconds for ``n_steps`` steps of the same scene driven directly through
+    PyBullet."""
     from sandbox.robot.pybullet_quiet import pybullet
 
     base = env.unwrapped
@@ -77,7 +86,7 @@ def _raw_block(env, n_steps: int, rng: np.random.Generator) -> float:
     arm, fingers = list(base.robot.baxter.arm), list(base.robot.baxter.fingers)
     forces = base.robot.max_force.tolist()
     low, high = base.action_space.low[:7], base.action_space.high[:7]
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     for _ in range(n_steps):
         target = rng.uniform(low, high)
         client.setJointMotorControlArray(body, arm, pybullet.POSITION_CONTROL,
@@ -86,7 +95,7 @@ def _raw_block(env, n_steps: int, rng: np.random.Generator) -> float:
                                          targetPositions=[0.0, 0.0], forces=[20.0, 20.0])
         for _ in range(base.substeps):
             client.stepSimulation()
-    return time.perf_counter() - start
+    return time.perf_counter() - start, time.process_time() - cpu
 
 
 def env_vs_raw(n_steps: int = 200, blocks: int = 5, seed: int = 0) -> dict[str, float]:
@@ -99,7 +108,7 @@ def env_vs_raw(n_steps: int = 200, blocks: int = 5, seed: int = 0) -> dict[str, 
             _env_block(e, 20, rng)  # warm up
         env_times, legacy_times, raw_times, resets = [], [], [], []
         for _ in range(blocks):
-            env_times.append(_env_block(env, n_steps, rng))
+            env_times.append(_env_block_times(env, n_steps, rng))
             legacy_times.append(_env_block(legacy, n_steps, rng))
             env.reset()
             raw_times.append(_raw_block(env, n_steps, rng))
@@ -109,12 +118,14 @@ def env_vs_raw(n_steps: int = 200, blocks: int = 5, seed: int = 0) -> dict[str, 
     finally:
         env.close()
         legacy.close()
-    env_rate = n_steps / float(np.median(env_times))
+    (env_wall, env_cpu), (raw_wall, raw_cpu) = (np.median(env_times, axis=0),
+                                                np.median(raw_times, axis=0))
+    env_rate, raw_rate = n_steps / float(env_wall), n_steps / float(raw_wall)
     legacy_rate = n_steps / float(np.median(legacy_times))
-    raw_rate = n_steps / float(np.median(raw_times))
     return {"env_steps_per_s": env_rate, "raw_pybullet_steps_per_s": raw_rate,
-            "env_raw_ratio": env_rate / raw_rate, "env_v0_steps_per_s": legacy_rate,
-            "env_v1_v0_ratio": env_rate / legacy_rate,
+            "env_raw_ratio": env_rate / raw_rate,
+            "env_raw_cpu_ratio": float(raw_cpu) / float(env_cpu),
+            "env_v0_steps_per_s": legacy_rate, "env_v1_v0_ratio": env_rate / legacy_rate,
             "env_reset_ms": 1e3 * float(np.median(resets))}
 
 

@@ -10,7 +10,8 @@ from sandbox.bench import env as bench
 def test_env_vs_raw_reports_rates_and_their_ratio():
     result = bench.env_vs_raw(n_steps=20, blocks=1)
     assert set(result) == {"env_steps_per_s", "raw_pybullet_steps_per_s", "env_raw_ratio",
-                           "env_v0_steps_per_s", "env_v1_v0_ratio", "env_reset_ms"}
+                           "env_raw_cpu_ratio", "env_v0_steps_per_s", "env_v1_v0_ratio",
+                           "env_reset_ms"}
     assert all(math.isfinite(v) and v > 0 for v in result.values())
     ratio = result["env_steps_per_s"] / result["raw_pybullet_steps_per_s"]
     assert math.isclose(result["env_raw_ratio"], ratio)

@@ -125,6 +125,21 @@ def test_two_envs_stepped_alternately_do_not_interfere(diverging_env, second_env
     assert diverging_env.unwrapped.bullet_client._client != second_env.bullet_client._client
 
 
+def test_observations_share_no_memory(diverging_env):
+    """Each observation's entries are new arrays (slices of one per step): writing into one
+    changes no other entry, no later observation and nothing the environment keeps."""
+    first, _ = diverging_env.reset(seed=0)
+    second, *_ = diverging_env.step(np.append(Q_HOME, -1.0))
+    keep = {k: v.copy() for k, v in second.items()}
+    for value in first.values():
+        value[...] = 7
+        assert all(not np.shares_memory(value, other[k])
+                   for other in (first, second) for k in other if other[k] is not value)
+    third, *_ = diverging_env.step(np.append(Q_HOME, -1.0))
+    assert data_equivalence(second, keep, exact=True) and third["q"][0] != 7
+    assert third["hand_valid"].dtype == np.int8 and third["hand_valid"].shape == (1,)
+
+
 def test_reward_is_the_sum_of_its_terms(diverging_env):
     out = rollout(diverging_env, seed=2, n_steps=80, close_after=0)
     for reward, info in zip(out[3::5], out[6::5]):

@@ -112,6 +112,26 @@ def test_body_measurement_holds_the_latest_valid_sample_and_is_nan_before():
         motion.body_measurement("leg", 0.0)
 
 
+def test_tracked_gives_the_measurement_its_frame_and_the_body_at_once():
+    times = np.array([0.0, 0.1, 0.2, 0.3])
+    measured = np.array([[np.nan] * 3, [1.0] * 3, [1.0] * 3, [2.0] * 3])
+    arm = np.array([[np.nan] * 6, [np.nan] * 6, [1.0] * 6, [np.nan, 2, 2, 2, 2, 2]])
+    motion = HumanMotion(times, np.zeros((4, 3)), measured, "up", body={"arm": arm})
+    for t in (-1.0, 0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 9.0):
+        hand, frame, body = motion.tracked(t)
+        np.testing.assert_array_equal(hand, motion.measurement(t))
+        assert frame == motion.frame_time(t) and list(body) == ["arm"]   # emg: not carried
+        if t < 0.2:
+            assert body["arm"] is None            # no valid arm sample yet
+        else:
+            np.testing.assert_array_equal(body["arm"], motion.body_measurement("arm", t))
+    hand, _, body = motion.tracked(0.3)
+    with pytest.raises(ValueError, match="read-only"):
+        hand[0] = 9.0                             # views of the motion's own arrays
+    with pytest.raises(ValueError, match="read-only"):
+        body["arm"][0] = 9.0
+
+
 @pytest.mark.parametrize("body, match", [
     ({"leg": np.zeros((4, 3))}, "body: expected keys"),
     ({"arm": np.zeros((4, 3))}, "arm"),

@@ -65,6 +65,24 @@ def test_set_pose_at_rest_zeroes_the_velocity(sim):
     assert np.allclose(sim.client.getBaseVelocity(sim.bodies["box"])[0], 0.0)
 
 
+def test_advance_carries_a_moving_body_as_set_pose_at_rest_then_a_step(sim):
+    """advance() relies on PyBullet's teleport zeroing the base velocity (it makes no
+    resetBaseVelocity call): the same state, bit for bit, as set_pose(at_rest=True)."""
+    box, spin = sim.bodies["box"], ([1.0, -2.0, 3.0], [4.0, 5.0, -6.0])
+    sim.save()
+    sim.client.resetBaseVelocity(box, *spin)
+    sim.advance(2, "box", [[0.1, 0.2, 0.5], [0.1, 0.3, 0.5]])
+    carried = sim.client.getBasePositionAndOrientation(box), sim.client.getBaseVelocity(box)
+    sim.restore()
+    sim.client.resetBaseVelocity(box, *spin)
+    for position in ([0.1, 0.2, 0.5], [0.1, 0.3, 0.5]):
+        sim.set_pose("box", position, at_rest=True)
+        sim.step_physics()
+    assert carried == (sim.client.getBasePositionAndOrientation(box),
+                       sim.client.getBaseVelocity(box))
+    assert carried[1][0][2] != 0.0                 # a step under gravity after the teleport
+
+
 def test_names_are_unique_and_simulations_independent(sim):
     with pytest.raises(ValueError, match="exists already"):
         sim.load_urdf("box", urdf.path("box"), (0, 0, 0))

@@ -32,6 +32,34 @@ def test_arm_tracks_a_target_within_its_speed_limits(diverging_env):
     assert np.all(np.max(speeds, axis=0) <= MAX_VELOCITY * 1.05)
 
 
+def test_array_commands_keep_the_speed_limits_of_the_first_command(diverging_env):
+    """After reset, act() sends the targets in one array call, which carries no speed limit:
+    the motion is the per-joint commands' with the limits, bit for bit, not the one
+    without them."""
+    env = diverging_env.unwrapped
+    robot, sim = env.robot, env.sim
+    targets = np.random.default_rng(0).uniform(robot.lower, robot.upper, (8, robot.dof))
+
+    def run(command) -> np.ndarray:
+        env.reset(seed=0)
+        states = []
+        for target in targets:
+            command(target)
+            for _ in range(env.substeps):
+                sim.step_physics()
+            states.append(np.concatenate(robot.state()[:2]))
+        return np.array(states)
+
+    arm = robot.baxter.arm
+    fast = run(lambda q: robot.act(q, close=False))
+    limited = run(lambda q: sim.control_joints("baxter", arm, q, robot.max_force,
+                                               robot.max_velocity))
+    unlimited = run(lambda q: sim.control_joints("baxter", arm, q, robot.max_force,
+                                                 1e6 * robot.max_velocity))
+    np.testing.assert_array_equal(fast, limited)
+    assert np.abs(fast - unlimited).max() > 0.1      # the limits shape this motion
+
+
 def test_fingertip_matches_forward_kinematics(diverging_env):
     env = diverging_env.unwrapped
     obs, _ = env.reset(seed=0)

@@ -60,6 +60,15 @@ def test_tracker_holds_frames_and_adds_noise():
     assert 0.001 < np.std(errors) < 0.003  # the noise level asked for
 
 
+def test_tracked_is_the_measurement_and_its_frame_without_a_body():
+    hand = TeleopMotion(np.random.default_rng(3), noise_m=0.01)
+    twin = TeleopMotion(np.random.default_rng(3), noise_m=0.01)
+    for t in (0.0, 0.01, 0.05, 0.4):
+        measured, frame, body = hand.tracked(t)
+        np.testing.assert_array_equal(measured, twin.measurement(t))  # the same noise draws
+        assert frame == twin.frame_time(t) and body == {}
+
+
 @pytest.mark.parametrize("kwargs, match", [
     ({"rng": 0}, "rng"),
     ({"start": [1.0, 0.0]}, "start"),
