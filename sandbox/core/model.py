@@ -87,6 +87,7 @@ from sandbox.core.io import model_from_file, read_model, save_model
 from sandbox.core.jitter import JITTER_FACTOR, demo_jitter
 from sandbox.core.limits import MAX_DURATION_S, MAX_RELATIVE, check_alpha_std
 from sandbox.core.modality import Modality
+from sandbox.core.posthold import check_post_end, model_post_var, with_tail
 from sandbox.core.shrinkage import check_shrinkage
 from sandbox.core.spanreg import check_span_reg, model_span
 from sandbox.limits import BOUNDS
@@ -122,6 +123,9 @@ class IProMP:
         Raise each modality's regulariser to a factor of its weights' out-of-span variance
         (:mod:`sandbox.core.spanreg`; :attr:`span_report`); ``"auto"``: the factor per
         modality by a held-out score on the training demos; None: the regulariser alone.
+    post_end : float or None
+        Score observations past a candidate's end with a held offset of c x the demos'
+        post-end offset variance (:mod:`sandbox.core.posthold`, :attr:`post_var`); None: today's.
     noise_scale : float
         Multiplies the estimated observation noise :math:`\\Sigma_y`.
     noise_floor : float
@@ -192,6 +196,7 @@ class IProMP:
         normalized_basis: bool = True,
         regularizer: float = 1e-3,
         span_reg: float | str | None = None,
+        post_end: float | None = None,
         noise_scale: float = 1.0,
         noise_floor: float | str = 0.02,
         condition_floor: float | str | None = None,
@@ -211,6 +216,8 @@ class IProMP:
         self.regularizer = float(BOUNDS["regularizer"].check(regularizer, "regularizer"))
         self.span_reg = check_span_reg(span_reg)
         self.span_report: dict[str, dict] = {}   #: of span_reg: v_m, c_m (and scores) per modality
+        self.post_end = check_post_end(post_end)
+        self.post_var: FloatArray | None = None   #: s_m^2 per modality (posthold.py), None: off
         self.noise_scale = check_positive(noise_scale, "noise_scale", high=MAX_RELATIVE)
         self.noise_floor = check_noise_floor(noise_floor, check_floor)
         self.floor_scores: dict[str, dict[float, float]] = {}   #: of noise_floor="auto"
@@ -271,8 +278,9 @@ class IProMP:
         times, human, robot = check_demo(demo, "demo", self.max_duration)
         end = self.motion_end(times, robot, human)
         jitter = demo_jitter(demo, times, human, modalities_of(demo, human.shape[1]))
-        return fit_one(str(demo.task), times, human[:end + 1], robot, self.basis, self.ridge,
-                       settle_index(robot, self.robot_tol, end), jitter)
+        return with_tail(fit_one(str(demo.task), times, human[:end + 1], robot, self.basis,
+                                 self.ridge, settle_index(robot, self.robot_tol, end), jitter),
+                         human, end)
 
     def motion_end(self, times, robot, human) -> int:
         """:func:`motion_end` with this model's tolerances."""
@@ -302,6 +310,7 @@ class IProMP:
         floor = model_span(self, modalities, arrays, sigma2, fits, scale)
         self._set_fit(arrays, durations, sigma2, P, Q, names_from, modalities, scale, floor)
         self.condition_noise = cond
+        self.post_var = model_post_var(self.post_end, fits, scale, modalities)
         return self
 
     def floors(self, modalities: Sequence[Modality], fits: Sequence[DemoFit] = (),
