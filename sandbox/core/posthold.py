@@ -52,6 +52,7 @@ from sandbox.validation import FloatArray
 
 if TYPE_CHECKING:
     from sandbox.core.likelihood import Scorer
+    from sandbox.core.model import IProMP
 
 #: The largest factor ``post_end`` may be (10 x the learned offset variance).
 MAX_FACTOR = 10.0
@@ -67,6 +68,21 @@ def check_post_end(value) -> float | None:
     if not 0.0 <= v <= MAX_FACTOR:
         raise ValueError(f"post_end: expected a factor in [0, {MAX_FACTOR:g}], got {value!r}")
     return v
+
+
+def check_post_var(meta: dict, n_modalities: int) -> list | None:
+    """A model file's ``post_var`` (``n_modalities`` non-negative numbers), which it must
+    have exactly when its hyperparameters set ``post_end``; None when it has neither."""
+    value, factor = meta.get("post_var"), meta["hyperparameters"].get("post_end")
+    if value is None and factor is None:
+        return None
+    ok = isinstance(value, list) and len(value) == n_modalities and all(
+        isinstance(v, (int, float)) and not isinstance(v, bool) and 0 <= v < np.inf
+        for v in value)
+    if not ok or factor is None:
+        raise ValueError(f"metadata post_var: expected {n_modalities} non-negative numbers "
+                         f"with post_end set, got {str(value)[:60]} (post_end {factor!r})")
+    return value
 
 
 def demo_offsets(human: FloatArray, end: int) -> tuple[FloatArray, int]:
@@ -208,8 +224,8 @@ def statistics(scorer: Scorer, psi: FloatArray, ys: list, post: np.ndarray | Non
     yys = [np.einsum("sp,sp->p", y, y) for y in ys]
     if post is None:
         return G, betas, yys, 0.0
-    g = scorer.groups[first]
-    rho = float(scorer.post_var[g.modality]) / float(scorer.sigma2[g.dims].mean())
+    g, var = scorer.groups[first], np.asarray(scorer.post_var)
+    rho = float(var[g.modality]) / float(scorer.sigma2[g.dims].mean())
     out = [adjust(G, b, q, psi, y, post[:, rows], rho) for b, q, y in zip(betas, yys, ys)]
     return out[0][0], [o[1] for o in out], [o[2] for o in out], out[0][3]
 
@@ -234,12 +250,12 @@ def with_tail(fit: DemoFit, human: FloatArray, end: int) -> TailFit:
     return TailFit(**fields, tail=offset if n else None)
 
 
-def model_post_var(factor: float | None, fits: Sequence[DemoFit], scale: FloatArray,
-                   modalities: Sequence) -> FloatArray | None:
-    """:math:`s_m^2 = c\\, v_m` per modality from the training fits (module docstring), or
-    None when ``factor`` is None (today's likelihood)."""
-    if factor is None:
+def model_post_var(model: IProMP, fits: Sequence[DemoFit], scale: FloatArray
+                   ) -> FloatArray | None:
+    """:math:`s_m^2 = c\\, v_m` per modality of ``model`` (its ``post_end`` c and
+    modalities) from the training fits (module docstring); None when c is None."""
+    if model.post_end is None:
         return None
     v = post_end_variance([getattr(f, "tail", None) for f in fits], scale,
-                          [m.size for m in modalities])
-    return factor * v
+                          [m.size for m in model.modalities])
+    return model.post_end * v

@@ -9,7 +9,7 @@ import pytest
 from scipy.stats import multivariate_normal
 
 from sandbox.core.factor import condition_robot
-from sandbox.core.interaction import condition, observation_matrix
+from sandbox.core.interaction import observation_matrix
 from sandbox.core.likelihood import Scorer
 from sandbox.core.model import IProMP
 from sandbox.core.posthold import check_post_end, demo_offsets, post_end_variance
@@ -116,3 +116,17 @@ def test_a_bad_post_end_is_refused(bad):
         check_post_end(bad)
     with pytest.raises(ValueError, match="post_end"):
         IProMP(post_end=bad)
+
+
+def test_the_file_keeps_it_and_an_older_file_has_none(tmp_path):
+    rng = np.random.default_rng(2)
+    demos = synth.demos(rng, n_per_task=4, n_tasks=2, noise=0.003)
+    model = IProMP(n_basis=9, post_end=0.5).fit(demos)
+    model.save(tmp_path / "m.npz")
+    back = IProMP.load(tmp_path / "m.npz")
+    assert back.post_end == 0.5
+    np.testing.assert_array_equal(back.post_var, model.post_var)
+    plain = IProMP(n_basis=9).fit(demos)
+    plain.save(tmp_path / "p.npz")
+    again = IProMP.load(tmp_path / "p.npz")
+    assert again.post_end is None and again.post_var is None
