@@ -123,8 +123,7 @@ class PredictorBase:
         self.until_end = check_bool(until_end, "until_end")
         self.end_prob = check_fraction(end_prob, "end_prob")
         self.max_time = check_positive(max_time, "max_time")
-        self._incremental = (check_bool(incremental, "incremental") and self.likelihood == "joint"
-                             and getattr(model, "post_var", None) is None)   # posthold.py: batch
+        self._incremental = check_bool(incremental, "incremental") and self.likelihood == "joint"
         self._blending = Blending(self.dt, self.blend_rate, self.blend_delay, self.blend,
                                   self.horizon)
         self.stream = ObservationStream(model, observe, subsample)
