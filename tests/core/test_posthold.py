@@ -130,3 +130,29 @@ def test_the_file_keeps_it_and_an_older_file_has_none(tmp_path):
     plain.save(tmp_path / "p.npz")
     again = IProMP.load(tmp_path / "p.npz")
     assert again.post_end is None and again.post_var is None
+
+
+def test_a_streams_statistics_give_the_held_offsets_grid_not_todays(fitted):
+    """The phase grid of a model with ``post_var`` is the batch one (Scorer.joint) even when
+    a stream's incremental statistics, which score every row alone, are at hand."""
+    from sandbox.core.phase import Lattice, estimate_phase
+    from sandbox.core.statistics import StreamStatistics
+
+    model, t, y = fitted
+    held = copy.copy(model)
+    held.post_var = np.array([0.03**2])
+    tasks = model.task_models
+    for m in (held, model):
+        scorer = Scorer(m)
+        stats = StreamStatistics(scorer, Lattice.for_tasks(tasks, 20))
+        for ti, yi in zip(t, y):
+            stats.add(ti, yi)
+        a = estimate_phase(scorer, tasks, t, y, n_candidates=20, stats=stats, refine_steps=0)
+        b = estimate_phase(scorer, tasks, t, y, n_candidates=20, refine_steps=0)
+        np.testing.assert_allclose(a.log_likelihood, b.log_likelihood, rtol=1e-9)
+    today = estimate_phase(Scorer(model), tasks, t, y, n_candidates=20, refine_steps=0)
+    mine = estimate_phase(Scorer(held), tasks, t, y, n_candidates=20, refine_steps=0)
+    short = [T < t[-1] for T, _ in today.grid]                  # candidates with a tail
+    assert any(s.any() for s in short)
+    assert any(not np.allclose(wm[s], wt[s], rtol=1e-6)
+               for (_, wm), (_, wt), s in zip(mine.grid, today.grid, short) if s.any())
