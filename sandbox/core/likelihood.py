@@ -169,7 +169,7 @@ class Scorer:
         kappa = self.reg_h / self.sigma2                          # (K, P)
         self.groups = _make_groups(kappa, self.modality_dims, pad)
         self._packed = pack_groups(self.groups, self.sigma2, self.log_sigma2)   # pairstats.py
-        self.post_var = getattr(model, "post_var", None)   # posthold.py (None: today's)
+        self.post_var = posthold.active(model)   # posthold.py (None: today's likelihood)
         self.conditioner = self if noise is not None else _conditioner(self, model)
         _kernels.factor_kernel(self.R + 1)    # numba's kernel loaded now, not in an update
 
