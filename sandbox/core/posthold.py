@@ -190,11 +190,17 @@ def adjust(G: FloatArray, beta: FloatArray, yy: FloatArray, psi: FloatArray,
     return G2, beta2, yy2, np.log1p(rho * n)
 
 
+def active(model) -> FloatArray | None:
+    """``model.post_var`` when it has one above 0, else None: today's likelihood, on today's
+    paths (the compiled pair statistics, a stream's incremental grid), to the bit."""
+    v = getattr(model, "post_var", None)
+    return None if v is None or not np.any(np.asarray(v) > 0) else np.asarray(v, dtype=float)
+
+
 def post_rows(scorer: Scorer, times: FloatArray, durations: FloatArray) -> np.ndarray | None:
-    """Rows past each candidate's end, shape (C, s), when ``scorer``'s model has
-    post-end offset variances (``post_var``) with one above 0; else None (today's path)."""
-    v = scorer.post_var
-    if v is None or not np.any(np.asarray(v) > 0):
+    """Rows past each candidate's end, shape (C, s), when ``scorer`` has post-end offset
+    variances (:func:`active`); else None (today's path)."""
+    if scorer.post_var is None:
         return None
     return np.asarray(times)[None, :] > np.asarray(durations)[:, None]
 

@@ -71,6 +71,7 @@ def test_no_offset_is_todays_likelihood_and_an_offset_weakens_the_tail(fitted):
     today = Scorer(model).joint(t, y, durations, spans)
     zero, wide = copy.copy(model), copy.copy(model)
     zero.post_var, wide.post_var = np.zeros(1), np.array([1.0])
+    assert Scorer(zero).post_var is None           # today's paths, compiled and incremental
     same = Scorer(zero).joint(t, y, durations, spans)
     loose = Scorer(wide).joint(t, y, durations, spans)
     for k in range(2):
