@@ -24,6 +24,7 @@ Optional: a ``session`` object in the metadata (e.g. the meeting geometry,
 :mod:`sandbox.data.geometry`), kept as :attr:`IProMP.session`, never interpreted here.
 ``span_reg`` (:mod:`sandbox.core.spanreg`, null too) and, when set, ``span_used`` (per
 modality its out-of-span variance and factor); files before it load without and say so.
+``post_end`` and ``post_var`` (:mod:`sandbox.core.posthold`), only when set.
 
 Version history: 1 (package 0.1.0) had the hand only (``human_names``, no modalities, no
 scale); such files still load, as one position modality ``"hand"``. Version 2 adds the
@@ -58,6 +59,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from sandbox.core.archive import ArchiveError, check_path, open_archive, read_array
+from sandbox.core.fileoptions import put_options
 from sandbox.core.limits import MAX_METADATA_BYTES, MAX_MODEL_VALUE, MIN_NOISE_STD
 from sandbox.core.modelmeta import (  # noqa: F401 - the format's constants, re-exported
     FORMAT,
@@ -113,7 +115,7 @@ def save_model(model: IProMP, path: str | os.PathLike) -> None:
             for t, p in zip(model.task_models, model.priors)
         ],
     }
-    _put_options(model, meta)
+    put_options(model, meta)
     arrays = {"noise": model.noise, "scale": model.scale}
     _put_calibration(getattr(model, "calibration", None), meta, arrays)
     if getattr(model, "session", None):
@@ -134,27 +136,6 @@ def save_model(model: IProMP, path: str | os.PathLike) -> None:
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
-
-
-def _put_options(model: IProMP, meta: dict) -> None:
-    """Write the options older files lack into ``meta``: ``jitter_floor`` always (null too,
-    so a file tells its constant floor from the default), the others only when set."""
-    meta["hyperparameters"]["jitter_floor"] = getattr(model, "jitter_floor", None)  # null too
-    meta["hyperparameters"]["span_reg"] = getattr(model, "span_reg", None)  # null too
-    if getattr(model, "span_reg", None) is not None:
-        meta["span_used"] = getattr(model, "span_report", {})
-    if getattr(model, "noise_floor", None) == "auto":     # the floors it learned (m)
-        meta["floors_used"] = np.asarray(model.floors_used, dtype=float).tolist()
-    _put_condition(model, meta)
-    if getattr(model, "shrinkage", "none") != "none":
-        meta["hyperparameters"]["shrinkage"] = model.shrinkage
-
-
-def _put_condition(model, meta: dict) -> None:
-    """A ``condition_floor``'s noise (:mod:`sandbox.core.condfloor`), if any, into ``meta``."""
-    if getattr(model, "condition_noise", None) is not None:
-        meta["hyperparameters"]["condition_floor"] = model.condition_floor
-        meta["condition_noise"] = np.asarray(model.condition_noise, dtype=float).tolist()
 
 
 def _put_calibration(cal, meta: dict, arrays: dict) -> None:
@@ -396,5 +377,6 @@ def model_from_file(cls, f: ModelFile):
     model.condition_floor = meta["hyperparameters"].get("condition_floor")
     model.span_report = dict(meta.get("span_used") or {})
     model.span_note = None if "span_reg" in meta["hyperparameters"] else SPAN_NOTE
+    model.post_var = None if meta["post_var"] is None else np.asarray(meta["post_var"], float)
     model._fitted = True
     return model

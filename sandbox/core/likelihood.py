@@ -45,6 +45,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from sandbox.core import posthold
 from sandbox.core.factor import b_parts, factor_scores
 from sandbox.core.interaction import LOG_2PI
 from sandbox.core.pairstats import pack_groups, pair_kernel, pair_statistics
@@ -168,6 +169,7 @@ class Scorer:
         kappa = self.reg_h / self.sigma2                          # (K, P)
         self.groups = _make_groups(kappa, self.modality_dims, pad)
         self._packed = pack_groups(self.groups, self.sigma2, self.log_sigma2)   # pairstats.py
+        self.post_var = posthold.active(model)   # posthold.py (None: today's likelihood)
         self.conditioner = self if noise is not None else _conditioner(self, model)
         pair_kernel(self.R + 1)     # numba's kernels loaded now, not in an update
 
@@ -188,27 +190,28 @@ class Scorer:
         """
         return self.basis.evaluate(np.minimum(times[None, :] / durations[:, None], 1.0))
 
-    def _group_parts(self, psi: FloatArray, values: FloatArray):
+    def _group_parts(self, psi: FloatArray, values: FloatArray, post=None):
         """Per group: :func:`~sandbox.core.factor.b_part` of the rows observing it and the
-        likelihood's constant per dim."""
+        likelihood's constant per dim; ``post`` (C, s): rows past each candidate's end,
+        scored by :func:`sandbox.core.posthold.adjust` (None: as every other row)."""
         present = self.present(values)
         out: list[tuple | None] = [None] * len(self.groups)
         shared: dict[bytes, list[int]] = {}       # groups observed on the same rows share G
         for i, g in enumerate(self.groups):
             rows = present[g.modality]
             if rows.any():
-                shared.setdefault(rows.tobytes(), []).append(i)
+                key = rows.tobytes() + (b"" if post is None else str(g.modality).encode())
+                shared.setdefault(key, []).append(i)
         for members in shared.values():
             rows = present[self.groups[members[0]].modality]
             ps = psi if rows.all() else psi[:, rows]
-            ps_t = ps.transpose(0, 2, 1)
             ys = [values[rows][:, self.groups[i].dims] for i in members]
-            parts = b_parts(ps_t @ ps, [ps_t @ y for y in ys],
-                            [np.einsum("sp,sp->p", y, y) for y in ys],
-                            [self.groups[i].kappa for i in members])
+            G, betas, yys, extra = posthold.statistics(self, ps, ys, post, rows, members[0])
+            parts = b_parts(G, betas, yys, [self.groups[i].kappa for i in members])
             for i, part in zip(members, parts):
                 dims = self.groups[i].dims
-                out[i] = (part, int(rows.sum()) * (LOG_2PI + self.log_sigma2[dims]))
+                out[i] = ((part[0] + extra, *part[1:]),
+                          int(rows.sum()) * (LOG_2PI + self.log_sigma2[dims]))
         return out
 
     # --------------------------------------------------------------- joint
@@ -228,7 +231,8 @@ class Scorer:
         spans : ndarray of int, shape (K, 2)
             Task k scores candidates ``durations[spans[k,0]:spans[k,1]]``.
         """
-        parts = self._group_parts(self.phases(times, durations), values)
+        parts = self._group_parts(self.phases(times, durations), values,
+                                  posthold.post_rows(self, times, durations))
         loglik, factors = [], []
         for k in range(self.K):
             a, b = int(spans[k, 0]), int(spans[k, 1])
@@ -259,9 +263,11 @@ class Scorer:
             Augmented Cholesky factors (same layout as :meth:`joint`).
         """
         psi = self.phases(times, durations)
-        stats = pair_statistics(self._packed, self.R, psi, values, self.present(values), tasks)
+        post = posthold.post_rows(self, times, durations)
+        stats = (None if post is not None else
+                 pair_statistics(self._packed, self.R, psi, values, self.present(values), tasks))
         if stats is None:                                  # the numpy path
-            stats = self._stats(self._group_parts(psi, values), np.asarray(tasks),
+            stats = self._stats(self._group_parts(psi, values, post), np.asarray(tasks),
                                 slice(None), len(tasks))
         return factor_scores(*stats)
 

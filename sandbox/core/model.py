@@ -12,11 +12,10 @@ Choices this project makes (DESIGN.md section 3):
 * **A demonstration's motion ends when both partners have arrived**: the robot
   stays within ``settle_tol`` (rad) of its final configuration and the hand has
   come within ``arrive_tol`` (m) of its farthest reach (:func:`motion_end`).
-  Recordings run on after the handover (0.6 +/- 0.3 s in the recorded set: the hand
-  idles, retracts or is occluded); that idle tail is not part of the motion's phase.
-  Past its end a motion holds its final state (the phase is clipped at 1), for
-  the robot and the human alike; :mod:`sandbox.core.phase` scores observations
-  past a candidate's end that way instead of excluding short candidates.
+  Recordings run on after the handover (0.6 +/- 0.3 s in the recorded set: the hand idles,
+  retracts or is occluded), outside the motion's phase. Past its end a motion holds its
+  final state (phase clipped at 1), robot and human alike: :mod:`sandbox.core.phase` scores
+  observations past a candidate's end so (``post_end``: :mod:`sandbox.core.posthold`).
   ``settle_tol=None, arrive_tol=None`` keeps whole recordings (the paper's
   convention). The robot's part ends where it settles (``robot_tol``, :func:`fit_one`).
 * :math:`T_{nom,k}` is the mean motion duration of task k, so :math:`\\mu_\\alpha = 1`
@@ -87,6 +86,7 @@ from sandbox.core.io import model_from_file, read_model, save_model
 from sandbox.core.jitter import JITTER_FACTOR, demo_jitter
 from sandbox.core.limits import MAX_DURATION_S, MAX_RELATIVE, check_alpha_std
 from sandbox.core.modality import Modality
+from sandbox.core.posthold import check_post_end, model_post_var, with_tail
 from sandbox.core.shrinkage import check_shrinkage
 from sandbox.core.spanreg import check_span_reg, model_span
 from sandbox.limits import BOUNDS
@@ -122,33 +122,33 @@ class IProMP:
         Raise each modality's regulariser to a factor of its weights' out-of-span variance
         (:mod:`sandbox.core.spanreg`; :attr:`span_report`); ``"auto"``: the factor per
         modality by a held-out score on the training demos; None: the regulariser alone.
+    post_end : float or None
+        Observations past a candidate's end share a held offset, c x the demos' post-end
+        offset variance (:mod:`sandbox.core.posthold`; :attr:`post_var`); None: today's.
     noise_scale : float
         Multiplies the estimated observation noise :math:`\\Sigma_y`.
     noise_floor : float
-        Lowest :math:`\\sigma_p` of position modalities (m). Default 2 cm (leave-one-out
-        on the recorded handovers: a live track departs from what the model explains by
-        ~2 cm; trusting observations more made every prediction worse). ``"auto"``: each position
-        modality's floor is chosen from a grid (2 to 40 mm) by a held-out score on the
+        Lowest :math:`\\sigma_p` of position modalities (m). Default 2 cm (leave-one-out on the
+        recorded handovers: trusting observations more made every prediction worse). ``"auto"``:
+        each position modality's floor from a grid (2 to 40 mm) by a held-out score on the
         training demos (:mod:`sandbox.core.floorsearch`; scores: :attr:`floor_scores`).
     condition_floor : float, "auto" or None
-        A second floor (m) for conditioning the robot on the observations (eq. 7-9;
-        :attr:`condition_noise`), the likelihood keeping ``noise_floor``; ``"auto"``
-        learns it from the demos (:mod:`sandbox.core.condfloor`); None: ``noise_floor``.
+        A second floor (m) for conditioning the robot (eq. 7-9; :attr:`condition_noise`), the
+        likelihood keeping ``noise_floor``; ``"auto"``: learnt (:mod:`sandbox.core.condfloor`).
     jitter_floor : float or None
         k: a position modality's floor is ``max(noise_floor, k x its jitter)``
         (:mod:`sandbox.core.jitter`; default :data:`~sandbox.core.jitter.JITTER_FACTOR`);
         None: ``noise_floor``. Not used by ``noise_floor="auto"``; ``noise_floors`` wins.
     signal_floor : float
-        Lower bound of :math:`\\sigma_p` of signal modalities, in normalised units
-        (fractions of the training demos' standard deviation).
+        Lower bound of :math:`\\sigma_p` of signal modalities (normalised: fractions of sd).
     noise_floors : mapping of str to float, optional
         Per-modality floors (in the modality's normalised units) overriding the two
         above, for modalities of the demos; each in [:data:`~sandbox.core.limits.MIN_NOISE_STD`,
         its entry of :data:`sandbox.limits.BOUNDS`] (``noise_floor``: 1 m; others: 100).
     settle_tol, arrive_tol : float or None
-        The motion ends once the robot stays within ``settle_tol`` (rad) of its final
-        configuration and the hand has come within ``arrive_tol`` (m) of its farthest
-        reach (:func:`motion_end`); None for both: whole recordings.
+        The motion ends once the robot stays within ``settle_tol`` (rad) of its final pose
+        and the hand within ``arrive_tol`` (m) of its farthest reach (:func:`motion_end`);
+        None for both: whole recordings.
     robot_tol : float or None
         The robot's part ends once within this distance (rad) of its final pose for
         good, not before the motion's end (None: at it); not stored in model files.
@@ -169,8 +169,7 @@ class IProMP:
     Raises
     ------
     ValueError
-        For any option that is not what is described above (a string, a
-        boolean where a number is expected, a number out of range).
+        For any option not as described above (a string, a boolean, a number out of range).
 
     Examples
     --------
@@ -192,6 +191,7 @@ class IProMP:
         normalized_basis: bool = True,
         regularizer: float = 1e-3,
         span_reg: float | str | None = None,
+        post_end: float | None = None,
         noise_scale: float = 1.0,
         noise_floor: float | str = 0.02,
         condition_floor: float | str | None = None,
@@ -211,6 +211,8 @@ class IProMP:
         self.regularizer = float(BOUNDS["regularizer"].check(regularizer, "regularizer"))
         self.span_reg = check_span_reg(span_reg)
         self.span_report: dict[str, dict] = {}   #: of span_reg: v_m, c_m (and scores) per modality
+        self.post_end = check_post_end(post_end)
+        self.post_var: FloatArray | None = None   #: s_m^2 per modality (posthold.py), None: off
         self.noise_scale = check_positive(noise_scale, "noise_scale", high=MAX_RELATIVE)
         self.noise_floor = check_noise_floor(noise_floor, check_floor)
         self.floor_scores: dict[str, dict[float, float]] = {}   #: of noise_floor="auto"
@@ -271,8 +273,9 @@ class IProMP:
         times, human, robot = check_demo(demo, "demo", self.max_duration)
         end = self.motion_end(times, robot, human)
         jitter = demo_jitter(demo, times, human, modalities_of(demo, human.shape[1]))
-        return fit_one(str(demo.task), times, human[:end + 1], robot, self.basis, self.ridge,
-                       settle_index(robot, self.robot_tol, end), jitter)
+        return with_tail(fit_one(str(demo.task), times, human[:end + 1], robot, self.basis,
+                                 self.ridge, settle_index(robot, self.robot_tol, end), jitter),
+                         human, end)
 
     def motion_end(self, times, robot, human) -> int:
         """:func:`motion_end` with this model's tolerances."""
@@ -301,7 +304,7 @@ class IProMP:
             check_spread(k, w)
         floor = model_span(self, modalities, arrays, sigma2, fits, scale)
         self._set_fit(arrays, durations, sigma2, P, Q, names_from, modalities, scale, floor)
-        self.condition_noise = cond
+        self.condition_noise, self.post_var = cond, model_post_var(self, fits, scale)
         return self
 
     def floors(self, modalities: Sequence[Modality], fits: Sequence[DemoFit] = (),
@@ -392,8 +395,6 @@ class IProMP:
     def __repr__(self) -> str:
         if not self._fitted:
             return f"IProMP(n_basis={self.basis.n_basis}, unfitted)"
-        return (
-            f"IProMP(tasks={list(self.tasks)}, observe={list(self.modality_names)}, "
-            f"P={self.n_human}, Q={self.n_robot}, n_basis={self.basis.n_basis})"
-        )
+        return (f"IProMP(tasks={list(self.tasks)}, observe={list(self.modality_names)}, "
+                f"P={self.n_human}, Q={self.n_robot}, n_basis={self.basis.n_basis})")
 

@@ -25,6 +25,7 @@ from sandbox.core.limits import (
     check_alpha_std,
 )
 from sandbox.core.modality import Modality, check_modalities, default_modalities
+from sandbox.core.posthold import check_post_var
 from sandbox.validation import check_number
 
 FORMAT = "handover-sandbox/iprompt"
@@ -35,7 +36,7 @@ HYPERPARAMETERS = {
     1: {"regularizer", "noise_scale", "noise_floor", "min_alpha_std", "ridge"},
     2: {"regularizer", "noise_scale", "noise_floor", "signal_floor", "noise_floors",
         "jitter_floor", "settle_tol", "arrive_tol", "min_alpha_std", "shrinkage", "ridge",
-        "condition_floor", "span_reg"},
+        "condition_floor", "span_reg", "post_end"},
 }
 TASK_KEYS = {"name", "nominal_duration", "alpha_mean", "alpha_std", "n_demos", "prior"}
 #: Spaces a model's robot dims may be in: joint angles (rad) or a task-space position (m).
@@ -72,7 +73,8 @@ def check_metadata(meta, path: Path) -> dict:
             "session": _session(meta.get("session", {})),
             "floors_used": _floors_used(meta.get("floors_used"), P),
             "condition_noise": _floors_used(meta.get("condition_noise"), P, "condition_noise"),
-            "span_used": _span_used(meta.get("span_used"))}
+            "span_used": _span_used(meta.get("span_used")),
+            "post_var": check_post_var(meta, len(meta["modalities"]) if version >= 2 else 1)}
 
 
 

@@ -140,7 +140,7 @@ def estimate_phase(scorer: Scorer, tasks, times: FloatArray, values: FloatArray,
         Sufficient statistics of exactly these observations on the lattice
         (:mod:`sandbox.core.statistics`); used for the grid when given (joint mode).
     """
-    if stats is not None and mode == "joint":
+    if stats is not None and mode == "joint" and getattr(scorer, "post_var", None) is None:
         loglik, factors_of = stats.grid()                 # every task's pairs, one batch
         layout = stats.layout(tasks)
     else:
