@@ -7,6 +7,7 @@ predictor options, the names of :class:`~sandbox.eval.loocv.EvalConfig`::
     n_basis: 21              # model (IProMP) options
     regularizer: 0.001
     span_reg: auto           # null, a factor, or auto: regulariser from the out-of-span variance
+    post_end: null           # null or a factor: observations past the end share one held offset
     noise_floor: 0.02        # m, or auto: learned per position modality from the demos
     condition_floor: auto    # m, auto or null: the floor conditioning the robot (eq. 7-9)
     jitter_floor: 15         # position floors max(noise_floor, 15 x raw jitter); null: off
@@ -34,9 +35,9 @@ from pathlib import Path
 from typing import Any
 
 #: Options of the model (:class:`~sandbox.core.IProMP`).
-MODEL_KEYS = ("n_basis", "regularizer", "span_reg", "noise_scale", "noise_floor", "condition_floor",
-              "signal_floor", "noise_floors", "jitter_floor", "shrinkage", "settle_tol",
-              "arrive_tol")
+MODEL_KEYS = ("n_basis", "regularizer", "span_reg", "post_end", "noise_scale", "noise_floor",
+              "condition_floor", "signal_floor", "noise_floors", "jitter_floor", "shrinkage",
+              "settle_tol", "arrive_tol")
 #: Options of the predictor (:class:`~sandbox.core.DynamicPredictor`).
 PREDICTOR_KEYS = ("likelihood", "window_mode", "n_candidates", "refine_steps", "blend_rate",
                   "blend_delay", "until_end", "end_prob", "subsample")
@@ -123,6 +124,16 @@ def _check(path: Path, key: str, value: Any) -> Any:
         if isinstance(value, bool) or not (isinstance(value, (int, float))
                                            or isinstance(value, str) and _numeric(value)):
             raise fail("a factor, auto or null")
+        return float(value)
+    if key == "post_end":               # sandbox.core.posthold.check_post_end's range
+        from sandbox.core.posthold import MAX_FACTOR
+
+        if value is None:
+            return None
+        number = (not isinstance(value, bool) and isinstance(value, (int, float))
+                  or isinstance(value, str) and _numeric(value))
+        if not number or not 0.0 <= float(value) <= MAX_FACTOR:
+            raise fail(f"a factor in [0, {MAX_FACTOR:g}] or null")
         return float(value)
     if key == "condition_floor":
         if value is None or value == "auto":

@@ -57,8 +57,8 @@ class EvalConfig:
     likelihood, window_mode, n_candidates, refine_steps, blend_rate, blend_delay, until_end,
     end_prob :
         predictor options (:class:`~sandbox.core.DynamicPredictor`).
-    n_basis, regularizer, span_reg, noise_scale, noise_floor, condition_floor, signal_floor,
-    noise_floors, jitter_floor, shrinkage, settle_tol, arrive_tol, robot_tol :
+    n_basis, regularizer, span_reg, post_end, noise_scale, noise_floor, condition_floor,
+    signal_floor, noise_floors, jitter_floor, shrinkage, settle_tol, arrive_tol, robot_tol :
         model options (:class:`~sandbox.core.IProMP`).
     observe : modalities the models observe (None: all the demonstrations carry).
     goal_tol : distance (m) for time-to-correct.
@@ -79,6 +79,7 @@ class EvalConfig:
     n_basis: int = 21
     regularizer: float = 1e-3
     span_reg: float | str | None = None
+    post_end: float | None = None
     noise_scale: float = 1.0
     noise_floor: float | str = 0.02
     condition_floor: float | str | None = None
@@ -96,8 +97,8 @@ class EvalConfig:
     def model(self) -> IProMP:
         """An unfitted model with these options."""
         return IProMP(n_basis=self.n_basis, regularizer=self.regularizer, span_reg=self.span_reg,
-                      noise_scale=self.noise_scale, noise_floor=self.noise_floor,
-                      condition_floor=self.condition_floor,
+                      post_end=self.post_end, noise_scale=self.noise_scale,
+                      noise_floor=self.noise_floor, condition_floor=self.condition_floor,
                       signal_floor=self.signal_floor, noise_floors=dict(self.noise_floors),
                       jitter_floor=self.jitter_floor, shrinkage=self.shrinkage,
                       settle_tol=self.settle_tol, arrive_tol=self.arrive_tol,

@@ -157,3 +157,19 @@ def test_a_streams_statistics_give_the_held_offsets_grid_not_todays(fitted):
     assert any(s.any() for s in short)
     assert any(not np.allclose(wm[s], wt[s], rtol=1e-6)
                for (_, wm), (_, wt), s in zip(mine.grid, today.grid, short) if s.any())
+
+
+def test_a_settings_file_takes_post_end_and_the_eval_config_passes_it_on(tmp_path):
+    from sandbox.commands._settings import eval_fields, load
+    from sandbox.eval.loocv import EvalConfig
+
+    path = tmp_path / "s.yaml"
+    for text, value in (("null", None), ("1", 1.0), ("0.25", 0.25), ("'2'", 2.0)):
+        path.write_text(f"post_end: {text}\n")
+        settings = load(path)
+        assert settings == {"post_end": value}
+        assert EvalConfig(**eval_fields(settings)).model().post_end == value
+    for text in ("auto", "-1", "11", ".nan", "true", "[]"):
+        path.write_text(f"post_end: {text}\n")
+        with pytest.raises(ValueError, match=r"post_end: expected a factor in \[0, 10\] or null"):
+            load(path)
