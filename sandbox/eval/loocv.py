@@ -117,8 +117,7 @@ class EvalConfig:
 
 
 def kept_observations(model, times, human, subsample: int):
-    """The observations a predictor keeps of this stream (normalised, NaN where a
-    modality is not kept): times (s,), values (s, P)."""
+    """Observations a predictor keeps of this stream: times (s,), values (s, P) (NaN: not kept)."""
     stream = ObservationStream(model, subsample=subsample)
     for ti, yi in zip(times, human):
         stream.accept(ti, yi)
