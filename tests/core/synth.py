@@ -48,6 +48,17 @@ def replay(task: int, duration: float, rate: float = 100.0, noise: float = 0.0,
     return Demo(t, h, r, f"task{task}")
 
 
+def fitted_case():
+    """A model of 2 tasks (6 demos each, N = 11) and a replay of task 0's first 1.5 s,
+    every 5th sample: (model, times (30,), human (30, P))."""
+    from sandbox.core.model import IProMP
+
+    rng = np.random.default_rng(0)
+    model = IProMP(n_basis=11).fit(demos(rng, n_per_task=6, n_tasks=2, noise=0.003))
+    test = replay(0, 2.1, noise=0.003, rng=rng)
+    return model, test.times[:150:5], test.human[:150:5]
+
+
 @dataclass(frozen=True)
 class MultiDemo:
     times: np.ndarray

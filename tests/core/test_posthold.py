@@ -19,10 +19,7 @@ from . import synth
 
 @pytest.fixture(scope="module")
 def fitted():
-    rng = np.random.default_rng(0)
-    model = IProMP(n_basis=11).fit(synth.demos(rng, n_per_task=6, n_tasks=2, noise=0.003))
-    test = synth.replay(0, 2.1, noise=0.003, rng=rng)
-    return model, test.times[:150:5], test.human[:150:5]
+    return synth.fitted_case()
 
 
 def _dense(model, k, t, y, T, s2):
