@@ -18,7 +18,9 @@ the Mahalanobis term is ranked, ``end_prob`` when gated to the ongoing motion) a
 (K, B), and ``familiarity_extra`` (J - 1, K, B, L) with ``components``; without
 ``components`` (before the timing evidence), a calibration of the Mahalanobis term; without
 ``end_prob``, one of every update; ``motion`` (2, n), the calibration motions' lowest answer
-to each question (:mod:`sandbox.core.questions`; without it, compared as they are).
+to each question (:mod:`sandbox.core.questions`; without it, compared as they are);
+``cells`` ("own" or "chosen", :mod:`sandbox.core.cells`), how the cells were filed (without
+it, unknown: ``Calibration.cells`` None; the quantiles rank the same either way).
 
 Optional: a ``session`` object in the metadata (e.g. the meeting geometry,
 :mod:`sandbox.data.geometry`), kept as :attr:`IProMP.session`, never interpreted here.
@@ -154,6 +156,8 @@ def _put_calibration(cal, meta: dict, arrays: dict) -> None:
         meta["familiarity"]["end_prob"] = cal.end_prob
     if cal.motion is not None:
         meta["familiarity"]["motion"] = np.asarray(cal.motion, dtype=float).tolist()
+    if cal.cells is not None:
+        meta["familiarity"]["cells"] = cal.cells
 
 
 def _output_path(path) -> Path:
@@ -255,11 +259,13 @@ def _read_model(path: Path) -> ModelFile:
 def _calibration(archive, entry, n_tasks: int):
     """The familiarity calibration if the file has one (checked), else None."""
     from sandbox.core.calibration import LEVELS, Calibration
+    from sandbox.core.cells import CELLS
 
     if entry is None:
         return None
     keys = {"threshold", "alpha", "likelihood", "subsample", "dow_t", "n_motions"}
-    if not isinstance(entry, dict) or set(entry) - {"components", "end_prob", "motion"} != keys:
+    optional = {"components", "end_prob", "motion", "cells"}
+    if not isinstance(entry, dict) or set(entry) - optional != keys:
         got = sorted(map(str, entry)) if isinstance(entry, dict) else entry
         raise ValueError(f"metadata familiarity: expected the keys {sorted(keys)}, got {got!r}")
     edges = _read(archive, "familiarity_edges", (None,))
@@ -269,6 +275,9 @@ def _calibration(archive, entry, n_tasks: int):
     quantiles = _read(archive, "familiarity_quantiles", (n_tasks, edges.size, LEVELS.size))
     counts = _read(archive, "familiarity_counts", (n_tasks, edges.size))
     entry = dict(entry)
+    if entry.get("cells", "own") not in CELLS:
+        raise ValueError(f"metadata familiarity cells: expected one of {list(CELLS)}, got "
+                         f"{str(entry['cells'])[:80]}")
     names = entry.pop("components", ["mahalanobis"])
     if not isinstance(names, list) or not 1 <= len(names) <= MAX_COMPONENTS:
         raise ValueError(f"metadata familiarity components: expected a list of 1 to "

@@ -278,6 +278,31 @@ def test_files_before_the_timing_evidence_rank_the_mahalanobis_term(model, tmp_p
     np.testing.assert_allclose(fam, [u.familiarity for u in stream(old, demo).updates])
 
 
+def test_the_file_keeps_the_filing_and_older_files_load_it_as_unknown(model, tmp_path):
+    """``cells`` round-trips; a file without it (before own-task cells) loads with None and
+    ranks the same; a filing the code does not know is a one-line ValueError."""
+    path = tmp_path / "m.npz"
+    model.save(path)
+    assert IProMP.load(path).calibration.cells == model.calibration.cells
+    with np.load(path) as data:
+        arrays = {k: data[k] for k in data.files}
+    meta = json.loads(str(arrays["metadata"]))
+    for cells, expected in ((None, None), ("chosen", "chosen"), ("mine", ValueError)):
+        if cells is None:
+            meta["familiarity"].pop("cells", None)
+        else:
+            meta["familiarity"]["cells"] = cells
+        np.savez(tmp_path / "v.npz", **{**arrays, "metadata": np.array(json.dumps(meta))})
+        if expected is ValueError:
+            with pytest.raises(ValueError, match=r"familiarity cells: expected one of "
+                                                 r"\['own', 'chosen'\], got mine"):
+                IProMP.load(tmp_path / "v.npz")
+        else:
+            loaded = IProMP.load(tmp_path / "v.npz").calibration
+            assert loaded.cells == expected
+            np.testing.assert_array_equal(loaded.stack, model.calibration.stack)
+
+
 def test_files_before_the_goal_rank_their_four_statistics(model, tmp_path):
     """A file calibrated on the four timing statistics (before the goal) loads, and the
     predictors rank those four of the five, as the calibration's own ranking does."""
@@ -310,8 +335,8 @@ def test_a_goal_or_position_calibration_ranks_its_statistics_and_round_trips(sco
     loaded = IProMP.load(tmp_path / "m.npz")
     assert loaded.calibration.components == names
     assert cal.motion is None and loaded.calibration.motion is None
-    # the file keeps the own-task cells' quantiles and threshold, not which filing made them
-    assert cal.cells == "own" and loaded.calibration.cells is None
+    # the file keeps the own-task cells' quantiles, threshold and which filing made them
+    assert cal.cells == "own" and loaded.calibration.cells == "own"
     np.testing.assert_array_equal(loaded.calibration.stack, cal.stack)
     assert loaded.calibration.threshold == cal.threshold
     motion = np.array([[0.5, 1.0, 2.0], [0.1, 3.0, 4.0]])    # per_motion=True keeps these
