@@ -95,7 +95,7 @@ _COMPILED: list = []      # [True] once compiled (or loaded from numba's on-disk
 
 def pair_kernel(size: int):
     """The compiled :func:`_pair_stats_py` when
-    :func:`~sandbox.core._kernels.factor_kernel` gives a kernel for augmented matrices of
+    ``sandbox.core._kernels.factor_kernel`` gives a kernel for augmented matrices of
     ``size`` rows; else None. The first such call compiles this module's kernels (or loads
     them from numba's cache): :class:`~sandbox.core.likelihood.Scorer` makes it when built."""
     if _kernels.factor_kernel(size) is None:
