@@ -249,9 +249,13 @@ def loo_records(model: IProMP, demos, streams=None, *, labelled: bool = False,
     if len(streams) != len(demos):
         raise ValueError(f"streams: expected one per demo ({len(demos)}), got {len(streams)}")
     fits = [model.demo_fit(d) for d in demos]
+    # the tasks in all the demos' first-seen order, whichever demo is out: a task index of
+    # a record is then the full model's (interleaved demos would reorder them otherwise)
+    order = {task: j for j, task in enumerate(dict.fromkeys(f.task for f in fits))}
     out = []
     for i, s in enumerate(streams):
-        held_out = copy.copy(model).fit_demo_fits(fits[:i] + fits[i + 1:], demos[0])
+        rest = sorted(fits[:i] + fits[i + 1:], key=lambda f: order[f.task])   # stable
+        held_out = copy.copy(model).fit_demo_fits(rest, demos[0])
         t = np.asarray(s.times, dtype=np.float64)
         own = held_out.task_index(demos[i].task) if labelled else None
         out.append(stream_record(held_out, t - t[0], s.human, own=own, **options))

@@ -468,3 +468,19 @@ def test_the_statistics_under_a_task_are_the_chosen_ones_where_it_was_chosen(mod
     assert np.all(under[0][:, 0] > stats[:, 0])      # ... fits task 0 worse at every update
     with pytest.raises(ValueError, match="own"):
         stream_record(model, t, demo.human, own=2, **OPTIONS)
+
+
+def test_interleaved_demos_keep_the_full_models_task_indices_in_every_record():
+    """Leaving out a task's first demo must not reorder the tasks: a record's task indices
+    (and its own-task statistics) are the full model's, whatever the demos' order."""
+    from sandbox.core.familiarity import loo_records
+
+    train = synth.demos(np.random.default_rng(0), n_per_task=3, n_tasks=2)
+    interleaved = [d for pair in zip(*[[d for d in train if d.task == k]
+                                       for k in ("task0", "task1")]) for d in pair]
+    assert [d.task for d in interleaved[:2]] == ["task0", "task1"]
+    model = IProMP(n_basis=9).fit(interleaved)
+    records = loo_records(model, interleaved, labelled=True, **OPTIONS)
+    for demo, (_, _, chosen, own) in zip(interleaved, records):
+        assert chosen[-1] == model.task_index(demo.task)    # the motion recognised at its end
+        assert own.shape[0] == chosen.size
