@@ -159,14 +159,15 @@ def estimate_phase(scorer: Scorer, tasks, times: FloatArray, values: FloatArray,
     w /= np.repeat(np.add.reduceat(w, starts), lengths)
     grid = [(T[a:b], w[a:b]) for a, b in layout.cuts]
     best_T, best_ll, best_lp = T[best], loglik[best], lp[best]
-    factors = factors_of(best)
+    refined: dict = {}            # task -> the refinement's factor at its new best
     brackets = [None if i in (a, a + n - 1) else
                 (T[i - 1], T[i], T[i + 1], f[i - 1], f[i], f[i + 1])
                 for i, a, n in zip(best.tolist(), starts.tolist(), lengths.tolist())]
     pairs = scorer.joint_pairs if mode == "joint" else _marginal_pairs(scorer)
     for _ in range(refine_steps):
         brackets = _refine(pairs, times, values, tasks, brackets, nominal, a_mean, a_std,
-                           best_T, best_ll, best_lp, factors)
+                           best_T, best_ll, best_lp, refined)
+    factors = _best_factors(factors_of, best, refined)
     return PhaseEstimate(best_T, best_T / nominal, best_ll, best_lp, factors, lengths, grid)
 
 
@@ -216,6 +217,24 @@ class GridLayout:
         return cls(nominal, a_mean, a_std, lengths, starts, T, lp, cuts)
 
 
+def _best_factors(factors_of, best: np.ndarray, refined: dict) -> FloatArray | None:
+    """Each task's augmented factor (K, R+1, R+1) at its best duration: the refinement's
+    where it moved the best (``refined``, task -> factor), else the grid's pair ``best[k]``
+    from ``factors_of``, taken for those tasks only (with the kept factors each is a copy,
+    and a refined task's would be thrown away: 160 demos per task, all four). None
+    without factors (marginal likelihood)."""
+    keep = np.array([k for k in range(best.size) if k not in refined], dtype=np.int64)
+    grid = factors_of(best[keep])
+    if grid is None or not refined:
+        return grid
+    some = next(iter(refined.values()))
+    out = np.empty((best.size,) + some.shape, dtype=some.dtype)
+    out[keep] = grid
+    for k, factor in refined.items():
+        out[k] = factor
+    return out
+
+
 def _picker(factors: FloatArray | None):
     """``index -> factors[index]`` (None without factors)."""
     return lambda index: None if factors is None else factors[index]
@@ -250,7 +269,7 @@ def _vertex(br) -> float | None:
 
 
 def _refine(score_pairs, times, values, tasks, brackets, nominal, a_mean, a_std,
-            best_T, best_ll, best_lp, factors):
+            best_T, best_ll, best_lp, refined):
     trial = [(k, _vertex(br)) for k, br in enumerate(brackets) if br is not None]
     trial = [(k, x) for k, x in trial if x is not None]
     if not trial:
@@ -265,8 +284,8 @@ def _refine(score_pairs, times, values, tasks, brackets, nominal, a_mean, a_std,
         x0, x1, x2, f0, f1, f2 = brackets[k]
         if ll + lp > f1:
             best_T[k], best_ll[k], best_lp[k] = x, ll, lp
-            if factors is not None:
-                factors[k] = facs[j]
+            if facs is not None:
+                refined[k] = facs[j]
             new[k] = (x0, x, x1, f0, ll + lp, f1) if x < x1 else (x1, x, x2, f1, ll + lp, f2)
         else:
             new[k] = (x, x1, x2, ll + lp, f1, f2) if x < x1 else (x0, x1, x, f0, f1, ll + lp)

@@ -105,3 +105,30 @@ def test_the_grid_layout_is_kept_by_the_statistics_and_is_what_the_lattice_gives
     for (Ta, wa), (Tb, wb) in zip(a.grid, b.grid):
         np.testing.assert_array_equal(Ta, Tb)
         np.testing.assert_allclose(wa, wb, rtol=1e-6, atol=1e-12)
+
+
+@pytest.mark.parametrize("refine_steps", [0, 1, 3])
+def test_the_factors_are_each_tasks_at_its_best_duration(model, refine_steps):
+    """Each task's factor is the one of its best duration, whether the refinement moved
+    it (its own factor) or not (the grid's, copied from the stream's statistics only
+    for those tasks): the same as the pair scored alone at that duration."""
+    from sandbox.core.statistics import StreamStatistics
+
+    tasks = model.task_models
+    scorer = Scorer(model)
+    stats = StreamStatistics(scorer, Lattice.for_tasks(tasks, 30))
+    demo = synth.replay(1, 2.07, noise=0.002, rng=np.random.default_rng(4))
+    t, y = demo.times[:60:5] - demo.times[0], demo.human[:60:5]
+    for ti, yi in zip(t, y):
+        stats.add(ti, yi)
+    grid = estimate_phase(scorer, tasks, t, y, n_candidates=30, stats=stats, refine_steps=0)
+    est = estimate_phase(scorer, tasks, t, y, n_candidates=30, stats=stats,
+                         refine_steps=refine_steps)
+    moved = est.durations != grid.durations
+    assert moved.tolist() == [False, refine_steps > 0]      # one task refined, one not
+    ll, alone = scorer.joint_pairs(t, y, est.durations, np.arange(len(tasks)))
+    assert est.factors.shape == alone.shape
+    np.testing.assert_allclose(est.log_likelihood, ll, rtol=1e-10)
+    scale = np.abs(alone).max(axis=(1, 2))[:, None, None]
+    assert np.all(np.abs(est.factors - alone) <= 1e-9 * scale)
+    np.testing.assert_array_equal(est.factors[~moved], grid.factors[~moved])
