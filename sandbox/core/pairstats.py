@@ -131,12 +131,16 @@ def _group_part_py(psi, values, rows, dims, kappa: float, G, beta, yy, Li, W, ab
     for j in range(s):
         if rows[j]:
             for a in range(N):
-                for b in range(N):
-                    G[a, b] += psi[j, a] * psi[j, b]
+                x = psi[j, a]
+                for b in range(a + 1):         # the lower triangle; mirrored below
+                    G[a, b] += x * psi[j, b]
                 for p in range(Pg):
-                    beta[a, p] += psi[j, a] * values[j, dims[p]]
+                    beta[a, p] += x * values[j, dims[p]]
             for p in range(Pg):
                 yy[p] += values[j, dims[p]] ** 2
+    for a in range(N):     # the same products in the same order as the upper entries' own
+        for b in range(a):
+            G[b, a] = G[a, b]
     A = kappa * G
     for a in range(N):
         A[a, a] += 1.0
