@@ -53,6 +53,23 @@ def test_kept_observations_skip_nan_and_subsample(setup):
     np.testing.assert_array_equal(kt, [0, 3, 6, 8])
 
 
+def test_kept_observations_from_a_predictors_stream_equal_a_new_streams(setup):
+    """``like=`` feeds a reset copy of a predictor's stream: the same observations, and the
+    predictor's own stream keeps what it had; a stream of another subsample is refused."""
+    model, demos = setup
+    test = demos[0]
+    t = test.times - test.times[0]
+    pred = DynamicPredictor(model, subsample=2)
+    pred.observe(t[0], test.human[0])
+    want = kept_observations(model, t, test.human, 2)
+    got = kept_observations(model, t, test.human, 2, like=pred.stream)
+    for a, b in zip(got, want):
+        np.testing.assert_array_equal(a, b)
+    assert len(pred.stream) == 1 and pred.stream.observations()[0][0] == t[0]
+    with pytest.raises(ValueError, match="subsample=3"):
+        kept_observations(model, t, test.human, 3, like=pred.stream)
+
+
 def _multimodal(n_per_task=5):
     from sandbox.data import Demonstration
     from tests.core import synth
