@@ -16,7 +16,7 @@ from multiprocessing import get_context
 from sandbox.core.blendkernel import knots_kernel
 from sandbox.eval.progress import bar
 
-#: The BLAS limit :func:`_sigint_blocked` leaves in place (kept alive here).
+#: The BLAS limit the SIGINT block leaves in place (kept alive here).
 _KEPT: dict = {}
 
 
