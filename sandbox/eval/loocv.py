@@ -20,17 +20,13 @@ For each trial this module computes, on the same kept observations
 
 from __future__ import annotations
 
-import signal
+import copy
 import time
-from concurrent.futures import ProcessPoolExecutor
-from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field
-from multiprocessing import get_context
 
 import numpy as np
 
 from sandbox.core import DynamicPredictor, IProMP, familiarity, predict
-from sandbox.core.blendkernel import knots_kernel
 from sandbox.core.inference import conditioned_robot, held_trajectory
 from sandbox.core.jitter import JITTER_FACTOR
 from sandbox.core.model import SIGNAL_FLOOR
@@ -39,6 +35,12 @@ from sandbox.core.statistics import StreamStatistics
 from sandbox.core.stream import ObservationStream
 from sandbox.eval import metrics
 from sandbox.eval.progress import bar
+from sandbox.eval.runner import (  # noqa: F401  (the runner's names, here as before)
+    _init_worker,
+    _sigint_blocked,
+    map_trials,
+    one_blas_thread,
+)
 
 RATIOS = tuple(round(0.1 * i, 1) for i in range(1, 10))
 WINDOWS = (1.0, 0.5, 0.2, 0.1)
@@ -116,9 +118,21 @@ class EvalConfig:
         return asdict(self)
 
 
-def kept_observations(model, times, human, subsample: int):
-    """Observations a predictor keeps of this stream: times (s,), values (s, P) (NaN: not kept)."""
-    stream = ObservationStream(model, subsample=subsample)
+def kept_observations(model, times, human, subsample: int, *, like=None):
+    """Observations a predictor keeps of this stream: times (s,), values (s, P) (NaN: not kept).
+
+    ``like`` is an :class:`~sandbox.core.stream.ObservationStream` of ``model`` with
+    this ``subsample`` (e.g. a predictor's ``stream``): a reset copy of it is fed instead
+    of a new one, which saves computing the model's bounds again. It is left unchanged.
+    """
+    if like is None:
+        stream = ObservationStream(model, subsample=subsample)
+    else:
+        if like.subsample != subsample:
+            raise ValueError(f"like: expected a stream with subsample={subsample}, got "
+                             f"{like.subsample}")
+        stream = copy.copy(like)
+        stream.reset()                   # its own buffers: ``like`` keeps its observations
     for ti, yi in zip(times, human):
         stream.accept(ti, yi)
     return stream.observations()
@@ -144,7 +158,8 @@ def evaluate_trial(model: IProMP, test, config: EvalConfig, fk, truth=None) -> d
     template = DynamicPredictor(model, dow_t=WINDOWS[0], window=config.window_mode,
                                 incremental=False, **config.predictor_options())
     scorer = template.scorer
-    t_obs, y_obs = kept_observations(model, t, test.human, config.subsample)
+    t_obs, y_obs = kept_observations(model, t, test.human, config.subsample,
+                                     like=template.stream)
     opts = dict(likelihood=config.likelihood, n_candidates=config.n_candidates,
                 refine_steps=config.refine_steps)
     oracle = conditioned_robot(model, scorer, t_obs, y_obs, k, T)   # no phase estimate
@@ -176,19 +191,27 @@ def update_times(t, t_obs, window: float) -> list[float]:
 
 
 def predictions_at(model, scorer, t_obs, y_obs, times, config, opts) -> dict:
-    """:func:`~sandbox.core.predict` from the observations up to each time (sorted times)."""
+    """:func:`~sandbox.core.predict` from the observations up to each time (sorted times).
+
+    A prediction depends on the observations only, not on the time asked: times with the
+    same kept observations share one (the same object), made once. On the recorded set
+    a fifth of the times repeat an earlier one's observations, mostly the static ratios'
+    cut times against the windows' update times.
+    """
     stats = None
     if config.likelihood == "joint":
         stats = StreamStatistics(scorer, Lattice.for_tasks(model.task_models,
                                                            config.n_candidates))
-    out, fed = {}, 0
+    out, made, fed = {}, {}, 0
     for tau in times:
         n = int(np.searchsorted(t_obs, tau, side="right"))
-        if stats is not None:
-            for j in range(fed, n):
-                stats.add(t_obs[j], y_obs[j])
-            fed = n
-        out[tau] = predict(model, scorer, t_obs[:n], y_obs[:n], stats=stats, **opts)
+        if n not in made:
+            if stats is not None:
+                for j in range(fed, n):
+                    stats.add(t_obs[j], y_obs[j])
+                fed = n
+            made[n] = predict(model, scorer, t_obs[:n], y_obs[:n], stats=stats, **opts)
+        out[tau] = made[n]
     return out
 
 
@@ -252,44 +275,6 @@ _STATE: dict = {}
 
 def _init(train, test, fits, config) -> None:
     _STATE.update(train=train, test=test, fits=fits, config=config)
-
-
-def _init_worker(init, initargs: tuple) -> None:
-    # Ctrl-C reaches the whole process group: only the parent handles it. It cancels the
-    # trials not started and the pool ends with the running ones; a worker killed by the
-    # signal would break the pool, whose thread then fails on the cancelled trials
-    # (InvalidStateError, printed as a traceback by Python 3.11). The worker was forked
-    # with SIGINT blocked (_sigint_blocked): one sent before this line stays pending and
-    # is discarded here, instead of reaching the parent's handler copied into the worker.
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
-    init(*initargs)
-
-
-@contextmanager
-def _sigint_blocked():
-    """SIGINT held pending in this thread (and in processes forked in the block) until
-    the block ends; then it is delivered here as usual."""
-    before = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-    try:
-        yield
-    finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, before)
-    _STATE["blas"] = one_blas_thread()     # kept for the worker's lifetime
-
-
-def one_blas_thread():
-    """Limit BLAS to one thread until the returned object's ``restore_original_limits()``.
-
-    The matrices of a fold are small (tens to a few hundred rows): on them a
-    multi-threaded BLAS spends more time waking its threads than computing,
-    and two worker processes with a BLAS thread per core oversubscribe the
-    cores. Measured on the 174 recorded trials (6 per task, one process):
-    2.6x less CPU time with one thread. Also a context manager.
-    """
-    from threadpoolctl import threadpool_limits
-
-    return threadpool_limits(limits=1, user_api="blas")
 
 
 def prepare(train, test, config: EvalConfig, *, progress: bool = False) -> tuple[list, list, list]:
@@ -361,40 +346,3 @@ def _run_all(train, test, config: EvalConfig, workers: int, progress: bool) -> l
 def trial_costs(trials) -> list[float]:
     """Each trial's duration (s): a fold's work grows with its updates, so with it."""
     return [d.duration for d in trials]
-
-
-def map_trials(run_one, n: int, init, initargs: tuple, *, workers: int = 1,
-               progress: bool = False, cost=None, meanwhile=None) -> list:
-    """``[run_one(i) for i in range(n)]`` after ``init(*initargs)``, in this process or in
-    ``workers`` forked processes (each initialised once), on one BLAS thread, in order.
-
-    ``progress`` draws a bar of the trials on stderr. ``cost`` (n,) estimates each item's
-    work (e.g. :func:`trial_costs`): the workers then take the items one at a time,
-    costliest first, so that none waits long for the others at the end (in chunks of
-    ``n / (8 workers)`` in index order without it). The results are the same either way.
-    Before forking, this process loads numba's kernel (once for all the workers); a
-    ``meanwhile`` callable is called instead once the workers have started (e.g. loading
-    that kernel while they load data: workers forked later inherit it).
-    """
-    results: list = [None] * n
-    with one_blas_thread(), bar(n, "trials", progress) as shown:
-        init(*initargs)
-        if workers <= 1:
-            for i in range(n):
-                results[i] = run_one(i)
-                shown.update()
-            return results
-        if meanwhile is None:
-            knots_kernel()    # numba's kernels (the blend's too) loaded here, not per worker
-        order = list(range(n)) if cost is None else sorted(range(n), key=lambda i: -cost[i])
-        chunk = max(1, n // (8 * workers)) if cost is None else 1
-        with ProcessPoolExecutor(workers, mp_context=get_context("fork"),
-                                 initializer=_init_worker, initargs=(init, initargs)) as pool:
-            with _sigint_blocked():      # the workers are forked here, by the first submit
-                answers = pool.map(run_one, order, chunksize=chunk)
-            if meanwhile is not None:
-                meanwhile()
-            for i, res in zip(order, answers):
-                results[i] = res
-                shown.update()
-    return results

@@ -53,6 +53,23 @@ def test_kept_observations_skip_nan_and_subsample(setup):
     np.testing.assert_array_equal(kt, [0, 3, 6, 8])
 
 
+def test_kept_observations_from_a_predictors_stream_equal_a_new_streams(setup):
+    """``like=`` feeds a reset copy of a predictor's stream: the same observations, and the
+    predictor's own stream keeps what it had; a stream of another subsample is refused."""
+    model, demos = setup
+    test = demos[0]
+    t = test.times - test.times[0]
+    pred = DynamicPredictor(model, subsample=2)
+    pred.observe(t[0], test.human[0])
+    want = kept_observations(model, t, test.human, 2)
+    got = kept_observations(model, t, test.human, 2, like=pred.stream)
+    for a, b in zip(got, want):
+        np.testing.assert_array_equal(a, b)
+    assert len(pred.stream) == 1 and pred.stream.observations()[0][0] == t[0]
+    with pytest.raises(ValueError, match="subsample=3"):
+        kept_observations(model, t, test.human, 3, like=pred.stream)
+
+
 def _multimodal(n_per_task=5):
     from sandbox.data import Demonstration
     from tests.core import synth
@@ -172,3 +189,39 @@ def test_oracle_is_the_robot_predict_conditions_at_the_true_task_and_duration(se
         for got, want in zip(held_trajectory(robot, T, model.basis, t),
                              expected.trajectory(model.basis, t)):
             np.testing.assert_array_equal(got, want)
+
+
+def test_times_with_the_same_observations_share_one_prediction(setup, monkeypatch):
+    """predictions_at makes one prediction per distinct count of kept observations (a time
+    between two kept observations asks what the earlier one did), each equal, bit for bit,
+    to what predicting again at every time from the same growing statistics gives."""
+    from sandbox.core import predict
+    from sandbox.core.likelihood import Scorer
+    from sandbox.core.phase import Lattice
+    from sandbox.core.statistics import StreamStatistics
+    from sandbox.eval import loocv
+
+    model, demos = setup
+    test = demos[0]
+    t_obs, y_obs = kept_observations(model, test.times - test.times[0], test.human, 2)
+    between = [0.5 * (t_obs[i] + t_obs[i + 1]) for i in (3, 8)]
+    times = [float(t_obs[3]), between[0], float(t_obs[8]), between[1], float(t_obs[12])]
+    config = EvalConfig(n_basis=15)
+    opts = dict(likelihood="joint", n_candidates=config.n_candidates, refine_steps=1)
+    calls = []
+    monkeypatch.setattr(loocv, "predict", lambda *a, **k: (calls.append(a[2].size),
+                                                           predict(*a, **k))[1])
+    scorer = Scorer(model)
+    got = loocv.predictions_at(model, scorer, t_obs, y_obs, times, config, opts)
+    assert calls == [4, 9, 13]
+    assert got[times[0]] is got[times[1]] and got[times[2]] is got[times[3]]
+    stats, fed = StreamStatistics(scorer, Lattice.for_tasks(model.task_models, 50)), 0
+    for tau, n in zip(times, (4, 4, 9, 9, 13)):      # a prediction at every time
+        for j in range(fed, n):
+            stats.add(t_obs[j], y_obs[j])
+        fed = n
+        want = predict(model, scorer, t_obs[:n], y_obs[:n], stats=stats, **opts)
+        np.testing.assert_array_equal(got[tau].task_posterior, want.task_posterior)
+        np.testing.assert_array_equal(got[tau].durations, want.durations)
+        np.testing.assert_array_equal(got[tau].robot.mean, want.robot.mean)
+        np.testing.assert_array_equal(got[tau].robot.factor, want.robot.factor)
