@@ -20,7 +20,10 @@ one offset :math:`b_p` shared by the samples, with :math:`s_m^2 = c\\, v_m` and
 demos (:func:`post_end_variance`): the mean over the demos and m's dims of the
 squared mean departure of a demo's samples after its motion's end (its recording's
 tail, which the fit otherwise drops) from its value at the end. ``c = 1`` is that
-estimate; ``c = 0`` is today's likelihood exactly.
+estimate; ``c = 0`` is today's likelihood exactly. ``post_end="span"`` takes
+:math:`s_m^2 = v_m + u_m`, :math:`u_m` the end state's out-of-span variance
+(:func:`end_span_variance`): a new trial's held samples depart from the model's end state,
+which its task's demos place only within their span (issue 21, ninth pass).
 
 This is still a likelihood of every observation (so candidates of different
 durations stay comparable): the post-end samples' scatter about their own mean is
