@@ -7,7 +7,7 @@ predictor options, the names of :class:`~sandbox.eval.loocv.EvalConfig`::
     n_basis: 21              # model (IProMP) options
     regularizer: 0.001
     span_reg: auto           # null, a factor, or auto: regulariser from the out-of-span variance
-    post_end: null           # null or a factor: observations past the end share one held offset
+    post_end: null           # null, a factor or span: observations past the end share one offset
     noise_floor: 0.02        # m, or auto: learned per position modality from the demos
     condition_floor: auto    # m, auto or null: the floor conditioning the robot (eq. 7-9)
     jitter_floor: 15         # position floors max(noise_floor, 15 x raw jitter); null: off
@@ -126,14 +126,14 @@ def _check(path: Path, key: str, value: Any) -> Any:
             raise fail("a factor, auto or null")
         return float(value)
     if key == "post_end":               # sandbox.core.posthold.check_post_end's range
-        from sandbox.core.posthold import MAX_FACTOR
+        from sandbox.core.posthold import MAX_FACTOR, SPAN
 
-        if value is None:
-            return None
+        if value is None or value == SPAN:
+            return value
         number = (not isinstance(value, bool) and isinstance(value, (int, float))
                   or isinstance(value, str) and _numeric(value))
         if not number or not 0.0 <= float(value) <= MAX_FACTOR:
-            raise fail(f"a factor in [0, {MAX_FACTOR:g}] or null")
+            raise fail(f"a factor in [0, {MAX_FACTOR:g}], {SPAN} or null")
         return float(value)
     if key == "condition_floor":
         if value is None or value == "auto":

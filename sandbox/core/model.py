@@ -122,9 +122,9 @@ class IProMP:
         Raise each modality's regulariser to a factor of its weights' out-of-span variance
         (:mod:`sandbox.core.spanreg`; :attr:`span_report`); ``"auto"``: the factor per
         modality by a held-out score on the training demos; None: the regulariser alone.
-    post_end : float or None
-        Observations past a candidate's end share a held offset, c x the demos' post-end
-        offset variance (:mod:`sandbox.core.posthold`; :attr:`post_var`); None: today's.
+    post_end : float, "span" or None
+        Observations past a candidate's end share a held offset (:mod:`sandbox.core.posthold`,
+        :attr:`post_var`): c x its learned variance, "span" adding the end's; None: today's.
     noise_scale : float
         Multiplies the estimated observation noise :math:`\\Sigma_y`.
     noise_floor : float
@@ -191,7 +191,7 @@ class IProMP:
         normalized_basis: bool = True,
         regularizer: float = 1e-3,
         span_reg: float | str | None = None,
-        post_end: float | None = None,
+        post_end: float | str | None = None,
         noise_scale: float = 1.0,
         noise_floor: float | str = 0.02,
         condition_floor: float | str | None = None,

@@ -20,7 +20,10 @@ one offset :math:`b_p` shared by the samples, with :math:`s_m^2 = c\\, v_m` and
 demos (:func:`post_end_variance`): the mean over the demos and m's dims of the
 squared mean departure of a demo's samples after its motion's end (its recording's
 tail, which the fit otherwise drops) from its value at the end. ``c = 1`` is that
-estimate; ``c = 0`` is today's likelihood exactly.
+estimate; ``c = 0`` is today's likelihood exactly. ``post_end="span"`` takes
+:math:`s_m^2 = v_m + u_m`, :math:`u_m` the end state's out-of-span variance
+(:func:`end_span_variance`): a new trial's held samples depart from the model's end state,
+which its task's demos place only within their span (issue 21, ninth pass).
 
 This is still a likelihood of every observation (so candidates of different
 durations stay comparable): the post-end samples' scatter about their own mean is
@@ -56,12 +59,16 @@ if TYPE_CHECKING:
 
 #: The largest factor ``post_end`` may be (10 x the learned offset variance).
 MAX_FACTOR = 10.0
+#: The ``post_end`` that adds the end state's out-of-span variance (:func:`end_span_variance`)
+#: to the tail's (factor 1 on both: issue 21, ninth pass).
+SPAN = "span"
 
 
-def check_post_end(value) -> float | None:
-    """``post_end``: None (today's likelihood) or a factor in [0, :data:`MAX_FACTOR`]."""
-    if value is None:
-        return None
+def check_post_end(value) -> float | str | None:
+    """``post_end``: None (today's likelihood), a factor in [0, :data:`MAX_FACTOR`] or
+    :data:`SPAN`."""
+    if value is None or value == SPAN:
+        return value
     if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)):
         raise ValueError(f"post_end: expected a number or None, got {value!r}")
     v = float(value)
@@ -256,12 +263,64 @@ def with_tail(fit: DemoFit, human: FloatArray, end: int) -> TailFit:
     return TailFit(**fields, tail=offset if n else None)
 
 
+def end_span_variance(fits: Sequence[DemoFit], scale: FloatArray, end: FloatArray,
+                      modality_sizes: Sequence[int]) -> FloatArray:
+    """:math:`u_m`: mean squared departure of a left-out demo's **end state** from its task's
+    other demos' span, per modality (normalised units squared).
+
+    Each demo of a task with at least :data:`~sandbox.core.floorsearch.MIN_TASK_DEMOS` is
+    left out in turn; its human weights' deviation from the other demos' mean is projected
+    off their span within modality m's weights (as
+    :func:`~sandbox.core.spanreg.out_of_span_variance` does), and the remainder is taken to
+    the end phase, :math:`\\phi(1)^T r_p` per dim: what the other demos' weight covariance
+    cannot place of where this demo's motion ended. The squares are averaged over m's dims
+    and the demos of every task (0 when no task has enough demos).
+
+    Parameters
+    ----------
+    fits : sequence of DemoFit
+    scale : ndarray, shape (P,)
+        The normalisation of the human dims.
+    end : ndarray, shape (N,)
+        The basis at phase 1, :math:`\\phi(1)`.
+    modality_sizes : sequence of int
+        Dims per modality, in order (summing to P).
+    """
+    from sandbox.core.fitting import by_task
+    from sandbox.core.floorsearch import MIN_TASK_DEMOS
+
+    N, P = end.size, int(np.sum(modality_sizes))
+    bounds = np.cumsum([0, *modality_sizes]) * N
+    divide = np.repeat(np.asarray(scale, dtype=np.float64), N)
+    sums, counts = np.zeros(len(modality_sizes)), np.zeros(len(modality_sizes))
+    for w in by_task(fits)[0].values():
+        x = np.asarray(w, dtype=np.float64)[:, : P * N] / divide
+        if len(x) < MIN_TASK_DEMOS:
+            continue
+        for m in range(len(modality_sizes)):
+            block = x[:, bounds[m]:bounds[m + 1]]
+            for i in range(len(block)):
+                rest = np.delete(block, i, axis=0)
+                mean = rest.mean(axis=0)
+                _, s, vt = np.linalg.svd(rest - mean, full_matrices=False)
+                span = vt[s > 1e-10 * max(float(s.max(initial=0.0)), 1e-300)]
+                d = block[i] - mean
+                r = (d - span.T @ (span @ d)).reshape(-1, N) @ end      # (dims of m,)
+                sums[m] += float(r @ r)
+                counts[m] += r.size
+    return np.divide(sums, counts, out=np.zeros_like(sums), where=counts > 0)
+
+
 def model_post_var(model: IProMP, fits: Sequence[DemoFit], scale: FloatArray
                    ) -> FloatArray | None:
-    """:math:`s_m^2 = c\\, v_m` per modality of ``model`` (its ``post_end`` c and
-    modalities) from the training fits (module docstring); None when c is None."""
+    """:math:`s_m^2` per modality of ``model`` from the training fits (module docstring):
+    :math:`c\\, v_m` for a factor ``post_end`` c, :math:`v_m + u_m` for :data:`SPAN`
+    (:func:`end_span_variance`); None when ``post_end`` is None."""
     if model.post_end is None:
         return None
-    v = post_end_variance([getattr(f, "tail", None) for f in fits], scale,
-                          [m.size for m in model.modalities])
-    return model.post_end * v
+    sizes = [m.size for m in model.modalities]
+    v = post_end_variance([getattr(f, "tail", None) for f in fits], scale, sizes)
+    if model.post_end == SPAN:
+        end = np.asarray(model.basis.evaluate(np.array([1.0])), dtype=np.float64)[0]
+        return v + end_span_variance(fits, scale, end, sizes)
+    return float(model.post_end) * v

@@ -12,7 +12,12 @@ from sandbox.core.factor import condition_robot
 from sandbox.core.interaction import observation_matrix
 from sandbox.core.likelihood import Scorer
 from sandbox.core.model import IProMP
-from sandbox.core.posthold import check_post_end, demo_offsets, post_end_variance
+from sandbox.core.posthold import (
+    check_post_end,
+    demo_offsets,
+    end_span_variance,
+    post_end_variance,
+)
 
 from . import synth
 
@@ -95,6 +100,32 @@ def test_the_variance_pools_a_modalitys_dims_and_demos_in_normalised_units():
     np.testing.assert_array_equal(post_end_variance([None], np.ones(3), [3]), [0.0])
 
 
+def test_the_end_states_out_of_span_variance_has_its_known_answer():
+    """Three demos of one dim, two weights, phi(1) = (0, 1): left out in turn, each one's
+    deviation from the other two's mean off their span is (-.5, -.5), (1, 0) and (0, 1),
+    whose end states are -.5, 0 and 1 (raw weights twice these, scale 2)."""
+    from types import SimpleNamespace
+
+    raw = 2.0 * np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    fits = [SimpleNamespace(task="a", weights=np.r_[w, 7.0], duration=1.0) for w in raw]
+    fits += [SimpleNamespace(task="b", weights=np.r_[w, 7.0], duration=1.0) for w in raw[:2]]
+    u = end_span_variance(fits, np.array([2.0]), np.array([0.0, 1.0]), [1])
+    np.testing.assert_allclose(u, [(0.25 + 0.0 + 1.0) / 3])       # task b: too few demos
+    assert end_span_variance(fits[3:], np.array([2.0]), np.array([0.0, 1.0]), [1]) == [0.0]
+
+
+def test_span_adds_the_end_states_variance_to_the_tails():
+    rng = np.random.default_rng(1)
+    demos = synth.demos(rng, n_per_task=5, n_tasks=2, noise=0.003)
+    tail = IProMP(n_basis=9, post_end=1.0).fit(demos)
+    span = IProMP(n_basis=9, post_end="span").fit(demos)
+    fits = [IProMP(n_basis=9).demo_fit(d) for d in demos]
+    end = span.basis.evaluate(np.array([1.0]))[0]
+    u = end_span_variance(fits, span.scale, end, [m.size for m in span.modalities])
+    assert u[0] > 0
+    np.testing.assert_allclose(span.post_var, tail.post_var + u)
+
+
 def test_the_fit_learns_it_from_the_training_tails_only():
     rng = np.random.default_rng(1)
     demos = synth.demos(rng, n_per_task=5, n_tasks=2, noise=0.003)
@@ -119,11 +150,12 @@ def test_a_bad_post_end_is_refused(bad):
 def test_the_file_keeps_it_and_an_older_file_has_none(tmp_path):
     rng = np.random.default_rng(2)
     demos = synth.demos(rng, n_per_task=4, n_tasks=2, noise=0.003)
-    model = IProMP(n_basis=9, post_end=0.5).fit(demos)
-    model.save(tmp_path / "m.npz")
-    back = IProMP.load(tmp_path / "m.npz")
-    assert back.post_end == 0.5
-    np.testing.assert_array_equal(back.post_var, model.post_var)
+    for value in (0.5, "span"):
+        model = IProMP(n_basis=9, post_end=value).fit(demos)
+        model.save(tmp_path / "m.npz")
+        back = IProMP.load(tmp_path / "m.npz")
+        assert back.post_end == value
+        np.testing.assert_array_equal(back.post_var, model.post_var)
     plain = IProMP(n_basis=9).fit(demos)
     plain.save(tmp_path / "p.npz")
     again = IProMP.load(tmp_path / "p.npz")
@@ -161,12 +193,14 @@ def test_a_settings_file_takes_post_end_and_the_eval_config_passes_it_on(tmp_pat
     from sandbox.eval.loocv import EvalConfig
 
     path = tmp_path / "s.yaml"
-    for text, value in (("null", None), ("1", 1.0), ("0.25", 0.25), ("'2'", 2.0)):
+    for text, value in (("null", None), ("1", 1.0), ("0.25", 0.25), ("'2'", 2.0),
+                        ("span", "span")):
         path.write_text(f"post_end: {text}\n")
         settings = load(path)
         assert settings == {"post_end": value}
         assert EvalConfig(**eval_fields(settings)).model().post_end == value
     for text in ("auto", "-1", "11", ".nan", "true", "[]"):
         path.write_text(f"post_end: {text}\n")
-        with pytest.raises(ValueError, match=r"post_end: expected a factor in \[0, 10\] or null"):
+        expected = r"post_end: expected a factor in \[0, 10\], span or null"
+        with pytest.raises(ValueError, match=expected):
             load(path)
