@@ -24,6 +24,10 @@ name                   range               unit    why
 ``signal_floor``       [1e-12, 100]        -       normalised units (training std)
 ``noise_floors``       [1e-12, 100]        -       per modality: m or normalised units
 ``jitter_floor``       (0, 1e6]            -       relative: k x the data's jitter, or null
+``span_reg``           [0, 10]             -       a factor of the learned out-of-span variance,
+                                                   or auto, or null (:func:`check_factor`)
+``post_end``           [0, 10]             -       a factor of the learned post-end variance,
+                                                   or span, or null (:func:`check_factor`)
 ``settle_tol``         (0, 10]             rad     or null
 ``arrive_tol``         (0, 10]             m       or null
 ``blend_rate``         [0.1, 1e6]          1/s     sigmoid rate of the blending: its span
@@ -155,6 +159,8 @@ BOUNDS: dict[str, Bound] = {
     "signal_floor": Bound(1e-12, 100.0),
     "noise_floors": Bound(1e-12, 100.0),
     "jitter_floor": Bound(0, 1e6, open_low=True),
+    "span_reg": Bound(0, 10.0),
+    "post_end": Bound(0, 10.0),
     "settle_tol": Bound(0, 10.0, open_low=True, unit="rad"),
     "arrive_tol": Bound(0, 10.0, open_low=True, unit="m"),
     "blend_rate": Bound(0.1, 1e6, unit="1/s"),
@@ -181,3 +187,22 @@ BOUNDS: dict[str, Bound] = {
 def check(name: str, value: Any, label: str | None = None, *, or_null: bool = False) -> Any:
     """``value`` checked against ``BOUNDS[name]``; ``label`` (default ``name``) names it."""
     return BOUNDS[name].check(value, label or name, or_null=or_null)
+
+
+def check_factor(name: str, value: Any, keyword: str, label: str | None = None) -> Any:
+    """None, the word ``keyword``, or a number in ``BOUNDS[name]`` (as a float).
+
+    For the options that take a factor of a variance learned in the fit, a word that has
+    it learned otherwise, or null (``span_reg``, ``post_end``): the core, the settings
+    files and the model files check them here alike. ``label`` (default ``name``) names
+    the value in the ``ValueError``.
+    """
+    if value is None or value == keyword:
+        return value
+    number = _as_number(value)
+    bound = BOUNDS[name]
+    if number is None or not bound.contains(number):
+        low, high = f"{bound.low:g}", f"{bound.high:g}"
+        raise ValueError(f"{label or name}: expected a factor in [{low}, {high}], {keyword} or "
+                         f"null, got {_show(value)} (sandbox.limits)")
+    return float(number)

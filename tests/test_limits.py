@@ -352,3 +352,24 @@ def test_the_table_is_documented():
     doc = module.__doc__ or ""
     for name in BOUNDS:
         assert f"``{name}``" in doc, name
+
+
+@pytest.mark.parametrize("name, word", [("span_reg", "auto"), ("post_end", "span")])
+def test_the_factor_options_agree_with_the_table_in_the_core_and_settings(tmp_path, name, word):
+    """``span_reg`` and ``post_end``: a factor in the table's range, their word or null, one
+    check for the model and settings files (sandbox.limits.check_factor)."""
+    from sandbox.commands._settings import FACTORS, load
+    from sandbox.core import IProMP
+
+    assert FACTORS[name] == word
+    path = tmp_path / "s.json"
+    for value in (*inside(BOUNDS[name]), word, None):
+        assert getattr(IProMP(**{name: value}), name) == value
+        path.write_text(json.dumps({name: value}))
+        assert load(path)[name] == value
+    for value in (*outside(BOUNDS[name]), "other", True, [1.0]):
+        with pytest.raises(ValueError, match=f"{name}: expected a factor in .0, 10., {word} or"):
+            IProMP(**{name: value})
+        path.write_text(json.dumps({name: value}))
+        with pytest.raises(ValueError, match=f"settings {path}: {name}: expected a factor"):
+            load(path)

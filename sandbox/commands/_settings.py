@@ -54,6 +54,8 @@ NUMBERS = ("n_basis", "n_candidates", "refine_steps", "subsample", "regularizer"
            "noise_floor", "signal_floor", "blend_rate", "blend_delay", "end_prob",
            "settle_tol", "arrive_tol", "jitter_floor")
 OPTIONAL = ("settle_tol", "arrive_tol", "jitter_floor")
+#: Keys that take a factor in their range of :data:`sandbox.limits.BOUNDS`, this word, or null.
+FACTORS = {"span_reg": "auto", "post_end": "span"}     # spanreg.AUTO, posthold.SPAN
 
 
 def add_argument(parser: argparse.ArgumentParser) -> None:
@@ -118,23 +120,15 @@ def _check(path: Path, key: str, value: Any) -> Any:
         if value != "auto":
             raise fail("a number (m) or auto")
         return value
-    if key == "span_reg":
-        if value is None or value == "auto":
-            return value
-        if isinstance(value, bool) or not (isinstance(value, (int, float))
-                                           or isinstance(value, str) and _numeric(value)):
-            raise fail("a factor, auto or null")
-        return float(value)
-    if key == "post_end":               # sandbox.core.posthold.check_post_end's range
-        from sandbox.core.posthold import MAX_FACTOR, SPAN
+    if key in FACTORS:                  # sandbox.limits.check_factor's range and words
+        from sandbox.limits import check_factor
 
-        if value is None or value == SPAN:
-            return value
-        number = (not isinstance(value, bool) and isinstance(value, (int, float))
-                  or isinstance(value, str) and _numeric(value))
-        if not number or not 0.0 <= float(value) <= MAX_FACTOR:
-            raise fail(f"a factor in [0, {MAX_FACTOR:g}], {SPAN} or null")
-        return float(value)
+        if isinstance(value, str) and _numeric(value):
+            value = float(value)
+        try:
+            return check_factor(key, value, FACTORS[key])
+        except ValueError as error:
+            raise ValueError(f"settings {path}: {error}") from None
     if key == "condition_floor":
         if value is None or value == "auto":
             return value

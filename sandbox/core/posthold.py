@@ -51,6 +51,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from sandbox.core.fitting import DemoFit
+from sandbox.limits import BOUNDS, check_factor
 from sandbox.validation import FloatArray
 
 if TYPE_CHECKING:
@@ -58,7 +59,7 @@ if TYPE_CHECKING:
     from sandbox.core.model import IProMP
 
 #: The largest factor ``post_end`` may be (10 x the learned offset variance).
-MAX_FACTOR = 10.0
+MAX_FACTOR = BOUNDS["post_end"].high
 #: The ``post_end`` that adds the end state's out-of-span variance (:func:`end_span_variance`)
 #: to the tail's (factor 1 on both: issue 21, ninth pass).
 SPAN = "span"
@@ -66,15 +67,8 @@ SPAN = "span"
 
 def check_post_end(value) -> float | str | None:
     """``post_end``: None (today's likelihood), a factor in [0, :data:`MAX_FACTOR`] or
-    :data:`SPAN`."""
-    if value is None or value == SPAN:
-        return value
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)):
-        raise ValueError(f"post_end: expected a number or None, got {value!r}")
-    v = float(value)
-    if not 0.0 <= v <= MAX_FACTOR:
-        raise ValueError(f"post_end: expected a factor in [0, {MAX_FACTOR:g}], got {value!r}")
-    return v
+    :data:`SPAN` (:func:`sandbox.limits.check_factor`)."""
+    return check_factor("post_end", value, SPAN)
 
 
 def check_post_var(meta: dict, n_modalities: int) -> list | None:

@@ -45,6 +45,7 @@ from sandbox.core.basis import GaussianBasis
 from sandbox.core.floorscore import HeldOut, _equal, _general
 from sandbox.core.floorsearch import MIN_TASK_DEMOS, _per_demo, held_out_demos
 from sandbox.core.promp import WeightDistribution
+from sandbox.limits import BOUNDS, check_factor
 from sandbox.validation import FloatArray
 
 #: The value of ``span_reg`` that asks for the search.
@@ -55,26 +56,16 @@ GRID = (0.0, 0.01, 0.03, 0.1, 0.3, 1.0)
 #: the whole motion (where the late decay is).
 RATIOS = (0.25, 0.5, 0.75, 1.0)
 #: The largest factor a number may give (10 x the empirical-Bayes estimate).
-MAX_FACTOR = 10.0
+MAX_FACTOR = BOUNDS["span_reg"].high
 #: What a model loaded from a file written before ``span_reg`` says (its ``span_note``).
 SPAN_NOTE = ("this model file predates span_reg: loaded with the weight regulariser alone "
              "(span_reg None, today's default)")
 
 
 def check_span_reg(value) -> float | str | None:
-    """``span_reg``: None, :data:`AUTO`, or a factor in [0, :data:`MAX_FACTOR`]."""
-    if value is None:
-        return None
-    if isinstance(value, str):
-        if value != AUTO:
-            raise ValueError(f"span_reg: expected a number, {AUTO!r} or None, got {value!r}")
-        return AUTO
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)):
-        raise ValueError(f"span_reg: expected a number, {AUTO!r} or None, got {value!r}")
-    v = float(value)
-    if not 0.0 <= v <= MAX_FACTOR:
-        raise ValueError(f"span_reg: expected a factor in [0, {MAX_FACTOR:g}], got {value!r}")
-    return v
+    """``span_reg``: None, :data:`AUTO`, or a factor in [0, :data:`MAX_FACTOR`]
+    (:func:`sandbox.limits.check_factor`)."""
+    return check_factor("span_reg", value, AUTO)
 
 
 def out_of_span_variance(weights: Mapping[str, FloatArray], rows: slice) -> float | None:
