@@ -25,6 +25,7 @@ def pytest_sessionfinish(session, exitstatus) -> None:
     shutil.rmtree(_CACHE, ignore_errors=True)
 
 
+@pytest.hookimpl(trylast=True)    # after -k/-m have deselected: only what runs is ordered
 def pytest_collection_modifyitems(config, items) -> None:
     """Order the tests so that no worker is left alone with a minute-long test at the end
     (session 11: the time of the test command). Only the order changes: every test runs,
