@@ -25,6 +25,38 @@ def pytest_sessionfinish(session, exitstatus) -> None:
     shutil.rmtree(_CACHE, ignore_errors=True)
 
 
+@pytest.hookimpl(trylast=True)    # after -k/-m have deselected: only what runs is ordered
+def pytest_collection_modifyitems(config, items) -> None:
+    """Order the tests so that no worker is left alone with a minute-long test at the end
+    (session 11: the time of the test command). Only the order changes: every test runs,
+    with the same fixtures.
+
+    A module that holds a test marked ``slow`` is heavy. ``--dist worksteal`` (pyproject)
+    first gives each of the n workers an equal run of this order, then an idle worker takes
+    half of a busy one's unstarted tests, from the end of its run. So the heavy modules are
+    dealt to the n runs, one each in turn, at the start of each run, and the light tests fill
+    the runs up: every run ends with light tests, where the workers meet. In file order the
+    docs' blocks, the notebooks and the browser came last. A module moves whole, so its
+    module-scoped fixtures are still made once per worker that runs it. With ``-n 0`` (one
+    run) the heavy modules simply go first.
+    """
+    lanes = max(1, int(getattr(config, "workerinput", {}).get("workercount", 1)))
+    modules: dict[Path, list] = {}
+    for item in items:
+        modules.setdefault(item.path, []).append(item)
+    heavy = [tests for tests in modules.values()
+             if any(t.get_closest_marker("slow") for t in tests)]
+    light = [t for tests in modules.values() if tests not in heavy for t in tests]
+    ordered, left = [], len(items)
+    for lane in range(lanes):
+        size = left // (lanes - lane)     # worksteal's first share of the tests left
+        run = [t for tests in heavy[lane::lanes] for t in tests]
+        fill, light = light[:max(size - len(run), 0)], light[max(size - len(run), 0):]
+        ordered += run + fill
+        left -= len(run) + len(fill)
+    items[:] = ordered + light
+
+
 @pytest.fixture(autouse=True)
 def _sigint_restored():
     """A test that runs ``sandbox.cli.run`` in-process leaves its "Ctrl-C ends the

@@ -10,6 +10,8 @@ import sys
 from argparse import Namespace
 from pathlib import Path
 
+import pytest
+
 from sandbox.bench.evaluate import read_terminal
 from sandbox.commands.bench import _stages
 
@@ -26,6 +28,7 @@ def test_stages_follow_the_skip_options():
     assert names(skip_env=True, skip_vector=False, methods=True) == [*core, "methods"]
 
 
+@pytest.mark.slow
 def test_json_bench_draws_its_bar_on_stderr_only():
     """Issue 27: ``bench --json`` was silent for a minute."""
     env = {**os.environ, "PYTHONPATH": str(REPO)}

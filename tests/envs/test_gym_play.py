@@ -74,6 +74,7 @@ def test_keys_map_to_handover_poses_within_the_action_space(diverging_env):
     assert min(np.linalg.norm(p - Q_HOME) for p in poses) > 0.1  # the keys do move the arm
 
 
+@pytest.mark.slow
 def test_play_steps_the_key_actions_and_the_arm_follows(played):
     mapping, noop = keys_to_action("diverging")
     actions = np.array([step["action"] for step in played])

@@ -11,6 +11,8 @@ import pytest
 
 from sandbox.viz import Viewer
 
+#: Every test here renders pages in headless Chromium (about 10 s a screenshot).
+pytestmark = pytest.mark.slow
 SIZE = (640, 480)
 
 

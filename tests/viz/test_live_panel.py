@@ -97,6 +97,7 @@ def after_new_episode(chromium, tmp_path_factory):
         env.close()
 
 
+@pytest.mark.slow
 def test_the_panel_resets_with_a_new_episode(after_new_episode):
     env, model, before, pages = after_new_episode
     board = env.viewer.overlay.board
@@ -109,6 +110,7 @@ def test_the_panel_resets_with_a_new_episode(after_new_episode):
         np.testing.assert_allclose(page["bars"], [*prior, 0.5], atol=1e-9)   # alpha 1: 1 / 2
 
 
+@pytest.mark.slow
 def test_a_tab_gets_the_framed_camera_before_any_mesh(after_new_episode):
     env, _, _, pages = after_new_episode
     x, y, z = env.viewer.camera - env.viewer.target
