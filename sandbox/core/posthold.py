@@ -282,6 +282,7 @@ def end_span_variance(fits: Sequence[DemoFit], scale: FloatArray, end: FloatArra
     """
     from sandbox.core.fitting import by_task
     from sandbox.core.floorsearch import MIN_TASK_DEMOS
+    from sandbox.core.spanreg import left_out_residuals
 
     N, P = end.size, int(np.sum(modality_sizes))
     bounds = np.cumsum([0, *modality_sizes]) * N
@@ -292,14 +293,8 @@ def end_span_variance(fits: Sequence[DemoFit], scale: FloatArray, end: FloatArra
         if len(x) < MIN_TASK_DEMOS:
             continue
         for m in range(len(modality_sizes)):
-            block = x[:, bounds[m]:bounds[m + 1]]
-            for i in range(len(block)):
-                rest = np.delete(block, i, axis=0)
-                mean = rest.mean(axis=0)
-                _, s, vt = np.linalg.svd(rest - mean, full_matrices=False)
-                span = vt[s > 1e-10 * max(float(s.max(initial=0.0)), 1e-300)]
-                d = block[i] - mean
-                r = (d - span.T @ (span @ d)).reshape(-1, N) @ end      # (dims of m,)
+            for res in left_out_residuals(x[:, bounds[m]:bounds[m + 1]]):
+                r = res.reshape(-1, N) @ end                            # (dims of m,)
                 sums[m] += float(r @ r)
                 counts[m] += r.size
     return np.divide(sums, counts, out=np.zeros_like(sums), where=counts > 0)

@@ -90,14 +90,23 @@ def out_of_span_variance(weights: Mapping[str, FloatArray], rows: slice) -> floa
         x = np.asarray(w, dtype=np.float64)[:, rows]
         if len(x) < MIN_TASK_DEMOS:
             continue
-        for i in range(len(x)):
-            rest = np.delete(x, i, axis=0)
-            mean = rest.mean(axis=0)
-            _, s, vt = np.linalg.svd(rest - mean, full_matrices=False)
-            span = vt[s > 1e-10 * max(float(s.max(initial=0.0)), 1e-300)]
-            d = x[i] - mean
-            out.append(float(np.mean((d - span.T @ (span @ d)) ** 2)))
+        out += [float(np.mean(r ** 2)) for r in left_out_residuals(x)]
     return float(np.mean(out)) if out else None
+
+
+def left_out_residuals(x: FloatArray) -> FloatArray:
+    """Each row of ``x`` (n, D) left out in turn: its departure from the other rows' mean,
+    less its projection on their span (the right singular vectors above 1e-10 of the
+    largest), shape (n, D). What the other demos' weight covariance cannot place of it."""
+    out = np.empty_like(x)
+    for i in range(len(x)):
+        rest = np.delete(x, i, axis=0)
+        mean = rest.mean(axis=0)
+        _, s, vt = np.linalg.svd(rest - mean, full_matrices=False)
+        span = vt[s > 1e-10 * max(float(s.max(initial=0.0)), 1e-300)]
+        d = x[i] - mean
+        out[i] = d - span.T @ (span @ d)
+    return out
 
 
 def span_floors(choice, weights: Mapping[str, FloatArray], modalities: Sequence,
