@@ -36,8 +36,9 @@ from pathlib import Path
 import numpy as np
 
 from sandbox.eval import metrics
-from sandbox.eval.loocv import CURVE, EvalConfig, _score, map_trials, prepare
+from sandbox.eval.loocv import CURVE, EvalConfig, _score, prepare
 from sandbox.eval.report import _section
+from sandbox.eval.runner import map_trials
 
 #: Fractions of the recording the table reports recognition at.
 TABLE_FRACTIONS = (0.3, 0.5, 1.0)
@@ -261,7 +262,7 @@ def run_compare(train, test, config: CompareConfig, out: str | Path, *, workers:
     each finishes (a re-run skips those whose key matches) and returns the comparison
     (what :func:`write_outputs` writes)."""
     from sandbox.eval.evaluation import data_token, write_atomic
-    from sandbox.eval.loocv import one_blas_thread
+    from sandbox.eval.runner import one_blas_thread
 
     out = Path(out)
     token = data_token(train, test)

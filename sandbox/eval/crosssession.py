@@ -31,7 +31,8 @@ from pathlib import Path
 import numpy as np
 
 from sandbox.eval import heldout
-from sandbox.eval.loocv import EvalConfig, one_blas_thread, prepare
+from sandbox.eval.loocv import EvalConfig, prepare
+from sandbox.eval.runner import one_blas_thread
 
 #: ``report["config"]["mode"]`` of ``--data A --test B``.
 CROSS_SESSION = "cross-session"

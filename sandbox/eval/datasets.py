@@ -55,7 +55,7 @@ def _folder_pair(data, kw: dict) -> tuple[list, list, list[str]]:
     loads numba's kernel, which the leave-one-out's workers then inherit. Returns
     ``(train, test, warnings)``: the workers' warnings (skipped files) as text."""
     from sandbox.core.blendkernel import knots_kernel
-    from sandbox.eval.loocv import map_trials
+    from sandbox.eval.runner import map_trials
 
     kw = {**kw, "on_trial": None}
     try:
@@ -85,7 +85,7 @@ def _synthetic_pair(data: str, kw: dict, workers: int = 1) -> tuple[list, list]:
     ``workers`` > 1 the trials are preprocessed in that many forked processes (the
     generated set is inherited, not sent; each returns its trials both ways)."""
     from sandbox.data.datasets import load_dataset
-    from sandbox.eval.loocv import map_trials
+    from sandbox.eval.runner import map_trials
 
     raw = load_dataset(data, preprocess="none", **kw)
     pairs = map_trials(_both_ways, len(raw), _RAW.__setitem__, ("demos", raw),

@@ -15,7 +15,8 @@ from __future__ import annotations
 import time
 from dataclasses import replace
 
-from sandbox.eval.loocv import EvalConfig, evaluate_trial, map_trials, trial_costs
+from sandbox.eval.loocv import EvalConfig, evaluate_trial, trial_costs
+from sandbox.eval.runner import map_trials
 
 #: The value of ``report["config"]["mode"]`` of a test-only evaluation.
 MODE = "test-only"

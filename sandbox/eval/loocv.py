@@ -35,12 +35,7 @@ from sandbox.core.statistics import StreamStatistics
 from sandbox.core.stream import ObservationStream
 from sandbox.eval import metrics
 from sandbox.eval.progress import bar
-from sandbox.eval.runner import (  # noqa: F401  (the runner's names, here as before)
-    _init_worker,
-    _sigint_blocked,
-    map_trials,
-    one_blas_thread,
-)
+from sandbox.eval.runner import map_trials, one_blas_thread
 
 RATIOS = tuple(round(0.1 * i, 1) for i in range(1, 10))
 WINDOWS = (1.0, 0.5, 0.2, 0.1)

@@ -27,8 +27,9 @@ from dataclasses import replace
 import numpy as np
 
 from sandbox.core.familiarity import stream_record
-from sandbox.eval.loocv import EvalConfig, map_trials, prepare
+from sandbox.eval.loocv import EvalConfig, prepare
 from sandbox.eval.progress import bar
+from sandbox.eval.runner import map_trials
 
 #: Group of the normal records when OOD sets are scored (they are shared by every set).
 NORMAL = "normal"

@@ -273,7 +273,7 @@ def test_a_worker_drops_a_ctrl_c_sent_before_it_set_its_handler():
     with SIGINT blocked: the pending signal is dropped when the initializer ignores it."""
     code = (   # the worker: forked (one thread) from a blocked thread, as map_trials does
         "import os, signal, sys\n"
-        "from sandbox.eval.loocv import _init_worker, _sigint_blocked\n"
+        "from sandbox.eval.runner import _init_worker, _sigint_blocked\n"
         "signal.signal(signal.SIGINT, lambda *a: os._exit(3))\n"
         "with _sigint_blocked():\n"
         "    pid = os.fork()\n"

@@ -158,7 +158,7 @@ def _square(i: int) -> tuple[int, int]:
 def test_map_trials_with_costs_returns_the_results_in_index_order():
     """Costliest first across two workers, one item at a time: the results still come back
     by index, as without costs and in one process."""
-    from sandbox.eval.loocv import map_trials
+    from sandbox.eval.runner import map_trials
 
     cost = [3.0, 9.0, 1.0, 7.0, 7.0, 0.5]
     want = [(i, i * i) for i in range(6)]
